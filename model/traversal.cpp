@@ -1,0 +1,162 @@
+#include "traversal.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <glm/geometric.hpp>
+
+namespace rtu {
+
+void TraversalThread::start(const Ray& ray, const ImageHeader& header, TraversalOrder order) {
+    ray_ = ray;
+    order_ = order;
+    hit_ = Hit{};
+    stack_.clear();
+    has_next_ = false;
+    nodes_visited_ = max_stack_ = 0;
+    space_inst_ = kNoId;
+    org_ = ray.org;
+    dir_ = ray.dir;
+    world_box_ray_ = box_ray_ = make_box_test_ray(org_, dir_);
+    if (intersect_box(world_box_ray_, header.root_box, ray_.tnear, ray_.tfar, nullptr)) {
+        next_ = StackEntry{header.root, NodeType::Internal, kNoId};
+        has_next_ = true;
+    }
+}
+
+void TraversalThread::select_space(const BvhImage& image, uint32_t inst_block) {
+    if (inst_block == space_inst_) return;
+    space_inst_ = inst_block;
+    if (inst_block == kNoId) {
+        org_ = ray_.org;
+        dir_ = ray_.dir;
+        box_ray_ = world_box_ray_;
+        return;
+    }
+    // Functional side read of the instance's transform (its fetch was timed when the instance
+    // leaf itself was visited). An affine map keeps the ray parameter t unchanged.
+    const InstanceLeaf inst =
+        decode_instance(image.at(uint64_t(inst_block) * kBlockBytes, node_bytes(NodeType::Instance)));
+    org_ = transform_point(inst.world_to_object, ray_.org);
+    dir_ = transform_vector(inst.world_to_object, ray_.dir);
+    box_ray_ = make_box_test_ray(org_, dir_);
+}
+
+glm::vec3 TraversalThread::normal_to_world(const BvhImage& image, const glm::vec3& n) const {
+    if (space_inst_ == kNoId) return n;
+    // Normals transform with the inverse transpose of object_to_world, which is the transpose
+    // of world_to_object's linear part.
+    const Affine w = decode_instance(image.at(uint64_t(space_inst_) * kBlockBytes,
+                                              node_bytes(NodeType::Instance)))
+                         .world_to_object;
+    return glm::vec3(w[0] * n.x + w[4] * n.y + w[8] * n.z, w[1] * n.x + w[5] * n.y + w[9] * n.z,
+                     w[2] * n.x + w[6] * n.y + w[10] * n.z);
+}
+
+StepInfo TraversalThread::step(const BvhImage& image) {
+    StepInfo info;
+    StackEntry e;
+    if (has_next_) {
+        e = next_;
+        has_next_ = false;
+    } else if (order_ == TraversalOrder::DFS) {
+        e = stack_.back();
+        stack_.pop_back();
+        info.from_stack = true;
+    } else {
+        e = stack_.front();
+        stack_.pop_front();
+        info.from_stack = true;
+    }
+    info.type = e.type;
+    ++nodes_visited_;
+    select_space(image, e.inst_block);
+    const uint8_t* bytes = image.at(e.addr, node_bytes(e.type));
+
+    switch (e.type) {
+        case NodeType::Internal: {
+            const InternalNode n = decode_internal(bytes);
+            bool first = true;
+            for (int i = 0; i < n.count; ++i) {
+                if (n.type[i] == NodeType::Empty) continue;
+                float tentry;
+                // Culls children whose entry lies beyond the closest hit so far (ray_.tfar).
+                if (!intersect_box(box_ray_, n.box[i], ray_.tnear, ray_.tfar, &tentry)) continue;
+                StackEntry child{n.addr[i], n.type[i], e.inst_block};
+                if (first && order_ == TraversalOrder::DFS) {
+                    next_ = child;
+                    has_next_ = true;
+                } else {
+                    stack_.push_back(child);
+                    ++info.pushed;
+                }
+                first = false;
+            }
+            break;
+        }
+        case NodeType::Instance: {
+            const InstanceLeaf inst = decode_instance(bytes);
+            StackEntry root{inst.blas_root, NodeType::Internal, uint32_t(e.addr / kBlockBytes)};
+            if (order_ == TraversalOrder::DFS) {
+                next_ = root;
+                has_next_ = true;
+            } else {
+                stack_.push_back(root);
+                ++info.pushed;
+            }
+            break;
+        }
+        case NodeType::Triangle: {
+            const TriangleLeaf t = decode_triangle(bytes);
+            TriangleHit th;
+            if (intersect_triangle(org_, dir_, t.v0, t.v1, t.v2, ray_.tnear, ray_.tfar, &th)) {
+                info.hit = true;
+                ray_.tfar = th.t;
+                hit_.hit = true;
+                hit_.t = th.t;
+                hit_.u = th.u;
+                hit_.v = th.v;
+                hit_.geom = t.geom;
+                hit_.prim = t.prim;
+                hit_.ng = normal_to_world(image, glm::cross(t.v1 - t.v0, t.v2 - t.v0));
+            }
+            break;
+        }
+        case NodeType::Procedural: {
+            const SphereLeaf s = decode_sphere(bytes);
+            float th;
+            if (intersect_sphere(org_, dir_, s.center, s.radius, ray_.tnear, ray_.tfar, &th)) {
+                info.hit = true;
+                ray_.tfar = th;
+                hit_.hit = true;
+                hit_.t = th;
+                hit_.u = hit_.v = 0.0f;
+                hit_.geom = s.geom;
+                hit_.prim = s.prim;
+                hit_.ng = normal_to_world(image, (org_ + th * dir_) - s.center);  // outward
+            }
+            break;
+        }
+        case NodeType::Empty:
+            break;
+    }
+    if (info.hit && ray_.query == Query::Any) finish();
+    max_stack_ = std::max<uint32_t>(max_stack_, uint32_t(stack_.size()));
+    return info;
+}
+
+TraceResult trace_ray(const BvhImage& image, const Ray& ray, TraversalOrder order) {
+    TraceResult r;
+    if (!is_valid_ray(ray)) return r;
+    Ray scaled = ray;
+    const int k = scale_direction(scaled);
+    TraversalThread th;
+    th.start(scaled, image.header(), order);
+    while (!th.done()) th.step(image);
+    r.hit = th.hit();
+    if (r.hit.hit) r.hit.t = std::ldexp(r.hit.t, -k);
+    r.nodes_visited = th.nodes_visited();
+    return r;
+}
+
+}  // namespace rtu

@@ -1,0 +1,75 @@
+// Per-thread BVH traversal that reads node bytes from the image (the RT unit's warp-buffer
+// entry for one thread: ray, traversal stack or queue, closest hit so far).
+//
+// DFS follows Vulkan-sim's RT unit: of the children an internal node's ray-box tests hit, the
+// first in child order is taken next (kept in a "next node" register, not on the stack) and the
+// others are pushed in child order; a child whose entry distance is beyond the closest hit so far
+// is culled. BFS keeps a FIFO queue: every hit child is appended in child order.
+#pragma once
+#include <cstdint>
+#include <deque>
+
+#include "bvh_image.h"
+#include "ray.h"
+
+namespace rtu {
+
+enum class TraversalOrder : uint8_t { DFS, BFS };
+
+struct StackEntry {
+    uint64_t addr = 0;
+    NodeType type = NodeType::Empty;
+    uint32_t inst_block = kNoId;  // instance leaf (block index) whose BLAS this node is in
+};
+
+struct StepInfo {
+    NodeType type = NodeType::Empty;  // what was fetched and tested
+    uint32_t pushed = 0;              // entries pushed on the stack / queue
+    bool from_stack = false;          // popped from the stack (false: taken from the next register)
+    bool hit = false;                 // a primitive test accepted a hit
+};
+
+class TraversalThread {
+public:
+    // Prepares the ray and tests the root box (a register in the RT unit, not a memory read).
+    // The ray must be valid (is_valid_ray).
+    void start(const Ray& ray, const ImageHeader& header, TraversalOrder order);
+    bool done() const { return !has_next_ && stack_.empty(); }
+    // The node the thread reads next; only when !done().
+    const StackEntry& peek() const { return has_next_ ? next_ : (order_ == TraversalOrder::DFS ? stack_.back() : stack_.front()); }
+    // Takes the next node, reads its bytes from the image and runs its tests.
+    StepInfo step(const BvhImage& image);
+
+    const Hit& hit() const { return hit_; }
+    const Ray& ray() const { return ray_; }
+    uint32_t nodes_visited() const { return nodes_visited_; }
+    uint32_t max_stack() const { return max_stack_; }
+    const std::deque<StackEntry>& stack() const { return stack_; }
+
+private:
+    void select_space(const BvhImage& image, uint32_t inst_block);
+    void finish() { has_next_ = false; stack_.clear(); }
+    glm::vec3 normal_to_world(const BvhImage& image, const glm::vec3& n) const;
+
+    Ray ray_;
+    TraversalOrder order_ = TraversalOrder::DFS;
+    Hit hit_;
+    std::deque<StackEntry> stack_;
+    StackEntry next_;
+    bool has_next_ = false;
+    uint32_t nodes_visited_ = 0, max_stack_ = 0;
+
+    // Ray in the space of the node being processed (world, or an instance's object space).
+    uint32_t space_inst_ = kNoId;
+    glm::vec3 org_, dir_;
+    BoxTestRay box_ray_, world_box_ray_;
+};
+
+// Traces one ray to completion. Invalid rays return a miss without touching the image.
+struct TraceResult {
+    Hit hit;
+    uint32_t nodes_visited = 0;
+};
+TraceResult trace_ray(const BvhImage& image, const Ray& ray, TraversalOrder order);
+
+}  // namespace rtu

@@ -1,0 +1,96 @@
+#include "functional_run.h"
+
+#include <chrono>
+#include <cmath>
+#include <iostream>
+
+namespace rtu {
+namespace {
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+// Embree gets the same power-of-two-scaled ray as our traversal (an exact change of units), so
+// tiny and huge directions stay within what Debian's Embree accepts (|component| <= 1.8e18).
+bool embree_can_take(const Ray& scaled) {
+    constexpr float kLarge = 1.0e18f;
+    for (int i = 0; i < 3; ++i)
+        if (std::fabs(scaled.org[i]) > kLarge || std::fabs(scaled.dir[i]) > kLarge) return false;
+    return std::isfinite(scaled.tnear) && scaled.tnear >= 0.0f && !std::isnan(scaled.tfar);
+}
+
+Hit embree_trace_scaled(const EmbreeReference& ref, const Ray& ray, Query q) {
+    Ray s = ray;
+    s.query = q;
+    const int k = scale_direction(s);
+    Hit h = ref.trace(s);
+    if (h.hit) h.t = std::ldexp(h.t, -k);
+    return h;
+}
+}  // namespace
+
+FunctionalResult run_functional(const Scene& scene, const BvhImage& image, Workload& workload, const FunctionalOptions& opt,
+                                const EmbreeReference* reference) {
+    FunctionalResult res;
+    std::vector<WorkRay> wave, next;
+    workload.begin(wave);
+    auto last_report = Clock::now();
+    const auto start = Clock::now();
+    while (!wave.empty()) {
+        next.clear();
+        for (const WorkRay& w : wave) {
+            const uint64_t index = res.rays.size();
+            const bool valid = is_valid_ray(w.ray);
+            const TraceResult tr = trace_ray(image, w.ray, opt.order);
+            res.rays.push_back(w.ray);
+            res.hits.push_back(tr.hit);
+            if (!valid) ++res.invalid_rays;
+            res.nodes_visited += tr.nodes_visited;
+            res.max_nodes_per_ray = std::max(res.max_nodes_per_ray, tr.nodes_visited);
+            res.hit_count += tr.hit.hit;
+            if (reference && valid) {
+                Ray scaled = w.ray;
+                scale_direction(scaled);
+                if (!embree_can_take(scaled)) {
+                    ++res.verify.skipped;
+                } else {
+                    const Hit ref = embree_trace_scaled(*reference, w.ray, w.ray.query);
+                    Hit ref_closest = ref;
+                    if (w.ray.query == Query::Any && ref.hit != tr.hit.hit)
+                        ref_closest = embree_trace_scaled(*reference, w.ray, Query::Closest);
+                    const Agreement a = classify(scene, w.ray, tr.hit, ref, ref_closest);
+                    ++res.verify.by_class[size_t(a)];
+                    ++res.verify.rays;
+                    if (a == Agreement::Mismatch && res.mismatch_rays.size() < 100) res.mismatch_rays.push_back(index);
+                }
+            }
+            workload.complete(w, tr.hit, next);
+            if (opt.progress && (index & 1023) == 0 && seconds_since(last_report) > 2.0) {
+                last_report = Clock::now();
+                std::cerr << "\r  traced " << res.rays.size() << " rays (" << wave.size() << " in this wave), "
+                          << uint64_t(res.rays.size() / std::max(1e-9, seconds_since(start))) << " rays/s   " << std::flush;
+            }
+        }
+        wave.swap(next);
+    }
+    if (opt.progress && seconds_since(start) > 2.0) std::cerr << "\n";
+    if (opt.measure_speed) {
+        // Both traversals over the same recorded rays in tight loops, one after the other.
+        uint64_t sink = 0;
+        auto t0 = Clock::now();
+        for (const Ray& r : res.rays) sink += trace_ray(image, r, opt.order).hit.hit;
+        res.trace_seconds = seconds_since(t0);
+        if (reference) {
+            t0 = Clock::now();
+            for (const Ray& r : res.rays) {
+                Ray s = r;
+                scale_direction(s);
+                if (is_valid_ray(r) && embree_can_take(s)) sink += reference->trace(s).hit;
+            }
+            res.embree_seconds = seconds_since(t0);
+        }
+        res.speed_checksum = sink;
+    }
+    return res;
+}
+
+}  // namespace rtu

@@ -1,0 +1,39 @@
+// The functional fidelity: every ray traced to completion by our per-thread traversal over the
+// BVH image, wave by wave (a workload's follow-up rays form the next wave), optionally checked
+// ray by ray against Embree.
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "model/bvh_image.h"
+#include "model/traversal.h"
+#include "workloads/embree_reference.h"
+#include "workloads/rays.h"
+#include "workloads/verify.h"
+
+namespace rtu {
+
+struct FunctionalOptions {
+    TraversalOrder order = TraversalOrder::DFS;
+    bool progress = false;        // rays done and rate on stderr every few seconds
+    bool measure_speed = false;   // afterwards, re-trace all rays with ours (and Embree's, if given) for rays/s
+};
+
+struct FunctionalResult {
+    std::vector<Ray> rays;        // in trace order (the hits file's ray index)
+    std::vector<Hit> hits;
+    uint64_t invalid_rays = 0;
+    uint64_t nodes_visited = 0;
+    uint32_t max_nodes_per_ray = 0;
+    uint64_t hit_count = 0;
+    VerifyCounts verify;
+    std::vector<uint64_t> mismatch_rays;  // indices of rays in class Mismatch (first 100)
+    double trace_seconds = 0.0, embree_seconds = 0.0;  // measure_speed passes only
+    uint64_t speed_checksum = 0;
+};
+
+// `reference` may be null (no verification).
+FunctionalResult run_functional(const Scene& scene, const BvhImage& image, Workload& workload, const FunctionalOptions& opt,
+                                const EmbreeReference* reference);
+
+}  // namespace rtu

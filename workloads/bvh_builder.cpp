@@ -1,0 +1,275 @@
+#include "bvh_builder.h"
+
+#include <cmath>
+#include <cstring>
+#include <stdexcept>
+
+#include <embree3/rtcore.h>
+#include <glm/common.hpp>
+
+namespace rtu {
+namespace {
+
+// Node of the tree Embree's builder hands back through our callbacks.
+struct BuildNode {
+    bool leaf = false;
+    uint32_t count = 0;
+    BuildNode* child[kMaxChildren] = {};
+    Aabb box[kMaxChildren];
+    uint32_t geom = 0, prim = 0;  // leaf: which primitive (geom = index into the build's item list)
+};
+
+Aabb to_aabb(const RTCBounds& b) {
+    Aabb a;
+    a.lo = {b.lower_x, b.lower_y, b.lower_z};
+    a.hi = {b.upper_x, b.upper_y, b.upper_z};
+    return a;
+}
+
+struct EmbreeDevice {
+    RTCDevice dev = rtcNewDevice("threads=0");
+    EmbreeDevice() {
+        if (!dev) throw std::runtime_error("Embree device creation failed");
+    }
+    ~EmbreeDevice() { rtcReleaseDevice(dev); }
+};
+
+// Builds a 6-wide tree over `prims`; returns the root (never a bare leaf) and the root box.
+BuildNode* build_tree(RTCDevice dev, RTCBVH bvh, std::vector<RTCBuildPrimitive>& prims) {
+    RTCBuildArguments args = rtcDefaultBuildArguments();
+    args.byteSize = sizeof(args);
+    args.buildQuality = RTC_BUILD_QUALITY_MEDIUM;
+    args.maxBranchingFactor = kMaxChildren;
+    args.maxDepth = 32;
+    args.minLeafSize = 1;
+    args.maxLeafSize = 1;
+    args.bvh = bvh;
+    args.primitives = prims.data();
+    args.primitiveCount = prims.size();
+    args.primitiveArrayCapacity = prims.size();
+    args.createNode = [](RTCThreadLocalAllocator alloc, unsigned n, void*) -> void* {
+        void* p = rtcThreadLocalAlloc(alloc, sizeof(BuildNode), 16);
+        BuildNode* node = new (p) BuildNode();
+        node->count = n;
+        return node;
+    };
+    args.setNodeChildren = [](void* node, void** children, unsigned n, void*) {
+        for (unsigned i = 0; i < n; ++i) static_cast<BuildNode*>(node)->child[i] = static_cast<BuildNode*>(children[i]);
+    };
+    args.setNodeBounds = [](void* node, const RTCBounds** bounds, unsigned n, void*) {
+        for (unsigned i = 0; i < n; ++i) static_cast<BuildNode*>(node)->box[i] = to_aabb(*bounds[i]);
+    };
+    args.createLeaf = [](RTCThreadLocalAllocator alloc, const RTCBuildPrimitive* p, size_t n, void*) -> void* {
+        if (n != 1) throw std::logic_error("Embree made a leaf with more than one primitive");
+        void* mem = rtcThreadLocalAlloc(alloc, sizeof(BuildNode), 16);
+        BuildNode* node = new (mem) BuildNode();
+        node->leaf = true;
+        node->geom = p[0].geomID;
+        node->prim = p[0].primID;
+        return node;
+    };
+    (void)dev;
+    BuildNode* root = static_cast<BuildNode*>(rtcBuildBVH(&args));
+    if (!root) throw std::runtime_error("Embree rtcBuildBVH failed");
+    return root;
+}
+
+Aabb union_of(const BuildNode* n) {
+    Aabb b;
+    for (uint32_t i = 0; i < n->count; ++i) {
+        b.lo = glm::min(b.lo, n->box[i].lo);
+        b.hi = glm::max(b.hi, n->box[i].hi);
+    }
+    return b;
+}
+
+class ImageWriter {
+public:
+    std::vector<uint8_t> bytes;
+    BvhStats stats;
+
+    uint64_t alloc(uint64_t n) {
+        const uint64_t at = bytes.size();
+        bytes.resize(at + n, 0);
+        return at;
+    }
+
+    // Writes the internal node `n` (whose own box is `box`) at `addr`, then its child block and
+    // the subtrees below it depth-first. `leaf_type` is the node type of this tree's leaves;
+    // `write_leaf` encodes leaf `n` at a given address. Returns the subtree's internal depth.
+    template <typename LeafWriter>
+    uint32_t write_internal(const BuildNode* n, const Aabb& box, uint64_t addr, NodeType leaf_type,
+                            LeafWriter& write_leaf) {
+        ++stats.internal_nodes;
+        NodeType types[kMaxChildren];
+        uint64_t block = 0;
+        for (uint32_t i = 0; i < n->count; ++i) {
+            types[i] = n->child[i]->leaf ? leaf_type : NodeType::Internal;
+            block += node_bytes(types[i]);
+        }
+        const uint64_t base = alloc(block);
+        encode_internal(box, int(n->count), types, n->box, base, &bytes[addr]);
+        uint32_t depth = 0;
+        uint64_t at = base;
+        for (uint32_t i = 0; i < n->count; ++i) {
+            if (types[i] == NodeType::Internal)
+                depth = std::max(depth, write_internal(n->child[i], n->box[i], at, leaf_type, write_leaf));
+            else
+                write_leaf(n->child[i], at);
+            at += node_bytes(types[i]);
+        }
+        return depth + 1;
+    }
+};
+
+// A bare leaf root (one primitive) is wrapped in an internal node with one child.
+BuildNode* ensure_internal_root(BuildNode* root, const Aabb& box, BuildNode& holder) {
+    if (!root->leaf) return root;
+    holder.count = 1;
+    holder.child[0] = root;
+    holder.box[0] = box;
+    return &holder;
+}
+
+std::vector<RTCBuildPrimitive> mesh_primitives(const Mesh& m, uint32_t geom) {
+    std::vector<RTCBuildPrimitive> prims;
+    prims.reserve(m.primitives());
+    for (size_t i = 0; i < m.primitives(); ++i) {
+        const Aabb b = m.prim_bounds(i);
+        prims.push_back({b.lo.x, b.lo.y, b.lo.z, geom, b.hi.x, b.hi.y, b.hi.z, uint32_t(i)});
+    }
+    return prims;
+}
+
+// World box of a transformed object box: corners transformed in double, rounded outward, then
+// widened by a relative 2^-20 of the extent to cover the transformed ray's rounding.
+Aabb transformed_box(const Aabb& b, const Affine& m) {
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (int c = 0; c < 8; ++c) {
+        const double p[3] = {(c & 1) ? b.hi.x : b.lo.x, (c & 2) ? b.hi.y : b.lo.y, (c & 4) ? b.hi.z : b.lo.z};
+        for (int i = 0; i < 3; ++i) {
+            const double v = double(m[4 * i]) * p[0] + double(m[4 * i + 1]) * p[1] + double(m[4 * i + 2]) * p[2] + m[4 * i + 3];
+            lo[i] = std::min(lo[i], v);
+            hi[i] = std::max(hi[i], v);
+        }
+    }
+    Aabb r;
+    for (int i = 0; i < 3; ++i) {
+        const double pad = (hi[i] - lo[i]) * 0x1p-20 + (std::fabs(lo[i]) + std::fabs(hi[i])) * 0x1p-22;
+        r.lo[i] = std::nextafter(float(lo[i] - pad), -INFINITY);
+        r.hi[i] = std::nextafter(float(hi[i] + pad), INFINITY);
+    }
+    return r;
+}
+
+}  // namespace
+
+BvhImage build_bvh_image(const Scene& scene) {
+    EmbreeDevice device;
+    ImageWriter w;
+    ImageHeader header;
+    w.alloc(kBlockBytes);  // header block
+
+    // Leaf writer for a mesh's own primitives.
+    auto mesh_leaf_writer = [&](const Mesh& mesh, uint32_t geom) {
+        return [&w, &mesh, geom](const BuildNode* leaf, uint64_t at) {
+            if (mesh.procedural()) {
+                const Sphere& s = mesh.spheres[leaf->prim];
+                encode_sphere({s.center, s.radius, geom, leaf->prim}, &w.bytes[at]);
+                ++w.stats.procedural_leaves;
+            } else {
+                const glm::uvec3& t = mesh.triangles[leaf->prim];
+                encode_triangle({mesh.vertices[t[0]], mesh.vertices[t[1]], mesh.vertices[t[2]], geom, leaf->prim}, &w.bytes[at]);
+                ++w.stats.triangle_leaves;
+            }
+        };
+    };
+
+    if (!scene.two_level()) {
+        const uint32_t geom = scene.instances.front().mesh;
+        const Mesh& mesh = scene.meshes[geom];
+        auto prims = mesh_primitives(mesh, geom);
+        RTCBVH bvh = rtcNewBVH(device.dev);
+        BuildNode holder;
+        BuildNode* root = build_tree(device.dev, bvh, prims);
+        const Aabb box = mesh.bounds();
+        root = ensure_internal_root(root, box, holder);
+        header.root = w.alloc(kBlockBytes);
+        header.root_box = box;
+        auto writer = mesh_leaf_writer(mesh, geom);
+        w.stats.depth = w.write_internal(root, union_of(root), header.root, mesh.procedural() ? NodeType::Procedural : NodeType::Triangle, writer);
+        rtcReleaseBVH(bvh);
+    } else {
+        // TLAS over the instances of non-empty meshes.
+        std::vector<RTCBuildPrimitive> inst_prims;
+        std::vector<Aabb> inst_boxes(scene.instances.size());
+        for (uint32_t i = 0; i < scene.instances.size(); ++i) {
+            const Mesh& m = scene.meshes[scene.instances[i].mesh];
+            if (m.primitives() == 0) continue;
+            inst_boxes[i] = transformed_box(m.bounds(), scene.instances[i].object_to_world);
+            const Aabb& b = inst_boxes[i];
+            inst_prims.push_back({b.lo.x, b.lo.y, b.lo.z, 0, b.hi.x, b.hi.y, b.hi.z, i});
+        }
+        RTCBVH tlas_bvh = rtcNewBVH(device.dev);
+        BuildNode holder;
+        BuildNode* troot = build_tree(device.dev, tlas_bvh, inst_prims);
+        Aabb world;
+        for (const auto& p : inst_prims) {
+            world.lo = glm::min(world.lo, glm::vec3(p.lower_x, p.lower_y, p.lower_z));
+            world.hi = glm::max(world.hi, glm::vec3(p.upper_x, p.upper_y, p.upper_z));
+        }
+        troot = ensure_internal_root(troot, world, holder);
+        header.root = w.alloc(kBlockBytes);
+        header.root_box = world;
+        header.has_instances = true;
+        std::vector<std::pair<uint32_t, uint64_t>> inst_leaves;  // instance, leaf address
+        auto inst_writer = [&](const BuildNode* leaf, uint64_t at) {
+            inst_leaves.push_back({leaf->prim, at});
+            ++w.stats.instance_leaves;
+        };
+        w.stats.tlas_depth = w.write_internal(troot, union_of(troot), header.root, NodeType::Instance, inst_writer);
+        rtcReleaseBVH(tlas_bvh);
+
+        // One BLAS per mesh that is instanced, laid out after the TLAS.
+        std::vector<uint64_t> blas_root(scene.meshes.size(), 0);
+        std::vector<uint32_t> blas_depth(scene.meshes.size(), 0);
+        for (const auto& [inst, at] : inst_leaves) {
+            const uint32_t geom = scene.instances[inst].mesh;
+            if (blas_root[geom] != 0) continue;
+            const Mesh& mesh = scene.meshes[geom];
+            auto prims = mesh_primitives(mesh, geom);
+            RTCBVH bvh = rtcNewBVH(device.dev);
+            BuildNode bholder;
+            BuildNode* root = ensure_internal_root(build_tree(device.dev, bvh, prims), mesh.bounds(), bholder);
+            blas_root[geom] = w.alloc(kBlockBytes);
+            auto writer = mesh_leaf_writer(mesh, geom);
+            blas_depth[geom] = w.write_internal(root, union_of(root), blas_root[geom],
+                                                mesh.procedural() ? NodeType::Procedural : NodeType::Triangle, writer);
+            rtcReleaseBVH(bvh);
+            ++w.stats.blas_count;
+        }
+        uint32_t deepest = 0;
+        for (const auto& [inst, at] : inst_leaves) {
+            const Instance& in = scene.instances[inst];
+            InstanceLeaf leaf;
+            leaf.object_to_world = in.object_to_world;
+            leaf.world_to_object = invert_affine(in.object_to_world);
+            leaf.blas_root = blas_root[in.mesh];
+            leaf.instance = inst;
+            leaf.geom = in.mesh;
+            encode_instance(leaf, &w.bytes[at]);
+            deepest = std::max(deepest, blas_depth[in.mesh]);
+        }
+        w.stats.depth = w.stats.tlas_depth + deepest;
+    }
+    header.has_procedural = scene.has_procedural();
+    header.leaves = uint32_t(w.stats.triangle_leaves + w.stats.procedural_leaves + w.stats.instance_leaves);
+    encode_header(header, w.bytes.data());
+    BvhStats stats = w.stats;
+    stats.image_bytes = w.bytes.size();
+    BvhImage image(std::move(w.bytes));
+    image.stats = stats;
+    return image;
+}
+
+}  // namespace rtu

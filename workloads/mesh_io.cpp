@@ -1,0 +1,449 @@
+#include "mesh_io.h"
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <iostream>
+#include <map>
+#include <sstream>
+
+#include <assimp/Importer.hpp>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+#include <zlib.h>
+
+#include "input_error.h"
+
+namespace fs = std::filesystem;
+
+namespace rtu {
+namespace {
+
+std::string lower(std::string s) {
+    std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::tolower(c); });
+    return s;
+}
+
+// Extension without a trailing ".gz", lower case, e.g. "obj" for "a.OBJ.gz".
+std::string mesh_extension(const std::string& path) {
+    std::string p = lower(fs::path(path).filename().string());
+    if (p.size() > 3 && p.compare(p.size() - 3, 3, ".gz") == 0) p.resize(p.size() - 3);
+    const auto dot = p.rfind('.');
+    return dot == std::string::npos ? std::string() : p.substr(dot + 1);
+}
+
+// Parses a whole token as a float; false if it is not a number.
+bool parse_float(const std::string& tok, float* out) {
+    if (tok.empty()) return false;
+    char* end = nullptr;
+    errno = 0;
+    const float v = std::strtof(tok.c_str(), &end);
+    if (end != tok.c_str() + tok.size()) return false;
+    *out = v;
+    return true;
+}
+
+void check_finite(const std::string& file, size_t line, const std::string& tok, float v) {
+    if (!std::isfinite(v))
+        throw input_error(file, line, "vertex coordinate '" + tok + "' is not finite (NaN or infinity)");
+}
+
+std::vector<std::string> split(const std::string& s) {
+    std::vector<std::string> out;
+    std::istringstream in(s);
+    std::string t;
+    while (in >> t) out.push_back(t);
+    return out;
+}
+
+void fan(Mesh& m, const std::vector<uint32_t>& poly, uint32_t material) {
+    for (size_t k = 1; k + 1 < poly.size(); ++k) {
+        m.triangles.push_back({poly[0], poly[k], poly[k + 1]});
+        m.material.push_back(material);
+    }
+}
+
+// --- OBJ -------------------------------------------------------------------------------------
+
+void load_mtl(Scene& scene, const std::string& path, std::map<std::string, uint32_t>& by_name) {
+    std::error_code ec;
+    if (!fs::is_regular_file(path, ec)) {
+        std::cerr << "warning: " << path << ": material library not found, using default materials\n";
+        return;
+    }
+    std::istringstream in(read_file_maybe_gz(path));
+    std::string line;
+    Material* cur = nullptr;
+    std::vector<Material> mats;
+    std::vector<int> illum;
+    std::vector<float> dissolve;
+    size_t lineno = 0;
+    auto vec = [&](const std::vector<std::string>& t) {
+        glm::vec3 v(0.0f);
+        for (int i = 0; i < 3 && i + 1 < int(t.size()); ++i)
+            if (!parse_float(t[i + 1], &v[i])) throw input_error(path, lineno, "bad number '" + t[i + 1] + "'");
+        return v;
+    };
+    while (std::getline(in, line)) {
+        ++lineno;
+        const auto hash = line.find('#');
+        if (hash != std::string::npos) line.resize(hash);
+        const auto t = split(line);
+        if (t.empty()) continue;
+        if (t[0] == "newmtl") {
+            mats.push_back(Material{});
+            mats.back().name = t.size() > 1 ? t[1] : "";
+            illum.push_back(2);
+            dissolve.push_back(1.0f);
+            cur = &mats.back();
+        } else if (!cur) {
+            continue;
+        } else if (t[0] == "Kd") {
+            cur->albedo = vec(t);
+        } else if (t[0] == "Ke") {
+            cur->emission = vec(t);
+        } else if (t[0] == "Ni" && t.size() > 1) {
+            parse_float(t[1], &cur->ior);
+        } else if (t[0] == "d" && t.size() > 1) {
+            parse_float(t[1], &dissolve.back());
+        } else if (t[0] == "illum" && t.size() > 1) {
+            illum.back() = std::atoi(t[1].c_str());
+        }
+    }
+    for (size_t i = 0; i < mats.size(); ++i) {
+        Material& m = mats[i];
+        if (m.emission.x > 0 || m.emission.y > 0 || m.emission.z > 0)
+            m.kind = Material::Kind::Emitter;
+        else if (illum[i] == 5 || illum[i] == 7 || (dissolve[i] < 1.0f && m.ior > 1.0f))
+            m.kind = Material::Kind::Glass;
+        else if (illum[i] == 3)
+            m.kind = Material::Kind::Metal;
+        by_name[m.name] = add_material(scene, m);
+    }
+}
+
+void load_obj(Scene& scene, Mesh& mesh, const std::string& path) {
+    std::istringstream in(read_file_maybe_gz(path));
+    std::map<std::string, uint32_t> materials;
+    const uint32_t default_material = add_material(scene, Material{});
+    uint32_t current = default_material;
+    std::string line;
+    size_t lineno = 0;
+    std::vector<uint32_t> poly;
+    while (std::getline(in, line)) {
+        ++lineno;
+        const auto hash = line.find('#');
+        if (hash != std::string::npos) line.resize(hash);
+        if (!line.empty() && line.back() == '\r') line.pop_back();
+        const auto t = split(line);
+        if (t.empty()) continue;
+        if (t[0] == "v") {
+            if (t.size() < 4) throw input_error(path, lineno, "vertex needs 3 coordinates: '" + line + "'");
+            glm::vec3 v;
+            for (int a = 0; a < 3; ++a) {
+                if (!parse_float(t[a + 1], &v[a]))
+                    throw input_error(path, lineno, "bad vertex coordinate '" + t[a + 1] + "'");
+                check_finite(path, lineno, t[a + 1], v[a]);
+            }
+            mesh.vertices.push_back(v);
+        } else if (t[0] == "f") {
+            if (t.size() < 4) throw input_error(path, lineno, "face needs at least 3 vertices: '" + line + "'");
+            poly.clear();
+            for (size_t k = 1; k < t.size(); ++k) {
+                const std::string idx = t[k].substr(0, t[k].find('/'));
+                char* end = nullptr;
+                const long v = std::strtol(idx.c_str(), &end, 10);
+                if (idx.empty() || *end != '\0')
+                    throw input_error(path, lineno, "bad face index '" + t[k] + "'");
+                const long n = long(mesh.vertices.size());
+                const long i = v > 0 ? v - 1 : n + v;
+                if (v == 0 || i < 0 || i >= n)
+                    throw input_error(path, lineno, "face index '" + t[k] + "' out of range (1.." + std::to_string(n) + ")");
+                poly.push_back(uint32_t(i));
+            }
+            fan(mesh, poly, current);
+        } else if (t[0] == "usemtl") {
+            const std::string name = t.size() > 1 ? t[1] : "";
+            auto it = materials.find(name);
+            current = it == materials.end() ? default_material : it->second;
+        } else if (t[0] == "mtllib" && t.size() > 1) {
+            load_mtl(scene, (fs::path(path).parent_path() / t[1]).string(), materials);
+        }
+    }
+}
+
+// --- PLY -------------------------------------------------------------------------------------
+
+struct PlyProperty {
+    std::string name, type, count_type;  // count_type non-empty for lists
+};
+struct PlyElement {
+    std::string name;
+    size_t count = 0;
+    std::vector<PlyProperty> props;
+};
+
+size_t ply_type_size(const std::string& t) {
+    if (t == "char" || t == "uchar" || t == "int8" || t == "uint8") return 1;
+    if (t == "short" || t == "ushort" || t == "int16" || t == "uint16") return 2;
+    if (t == "int" || t == "uint" || t == "float" || t == "int32" || t == "uint32" || t == "float32") return 4;
+    if (t == "double" || t == "float64") return 8;
+    return 0;
+}
+
+class PlyReader {
+public:
+    PlyReader(const std::string& path, std::string data) : path_(path), data_(std::move(data)) {}
+
+    void load(Mesh& mesh, uint32_t material) {
+        parse_header();
+        for (const PlyElement& e : elements_) {
+            const bool vertex = e.name == "vertex", face = e.name == "face";
+            int ix = -1, iy = -1, iz = -1, ilist = -1;
+            for (size_t p = 0; p < e.props.size(); ++p) {
+                const auto& n = e.props[p].name;
+                if (vertex && n == "x") ix = int(p);
+                if (vertex && n == "y") iy = int(p);
+                if (vertex && n == "z") iz = int(p);
+                if (face && (n == "vertex_indices" || n == "vertex_index") && !e.props[p].count_type.empty()) ilist = int(p);
+            }
+            if (vertex && (ix < 0 || iy < 0 || iz < 0)) throw input_error(path_, 0, "vertex element lacks x, y or z");
+            if (face && ilist < 0) throw input_error(path_, 0, "face element lacks a vertex_indices list");
+            std::vector<double> list;
+            std::vector<uint32_t> poly;
+            for (size_t i = 0; i < e.count; ++i) {
+                glm::vec3 v(0.0f);
+                begin_record();
+                for (size_t p = 0; p < e.props.size(); ++p) {
+                    const PlyProperty& pr = e.props[p];
+                    if (!pr.count_type.empty()) {
+                        const double n = read_value(pr.count_type);
+                        if (n < 0 || n > 1e6 || n != std::floor(n)) fail("bad list length " + std::to_string(n));
+                        list.resize(size_t(n));
+                        for (double& x : list) x = read_value(pr.type);
+                        if (int(p) == ilist) {
+                            if (list.size() < 3) fail("face with fewer than 3 vertices");
+                            poly.clear();
+                            for (double x : list) {
+                                if (x < 0 || x >= double(mesh.vertices.size()) || x != std::floor(x))
+                                    fail("face index " + std::to_string(x) + " out of range (0.." +
+                                         std::to_string(mesh.vertices.size()) + ")");
+                                poly.push_back(uint32_t(x));
+                            }
+                            fan(mesh, poly, material);
+                        }
+                    } else {
+                        const double x = read_value(pr.type);
+                        if (int(p) == ix || int(p) == iy || int(p) == iz) {
+                            const float f = float(x);
+                            if (!std::isfinite(f)) fail("vertex coordinate " + std::to_string(x) + " is not finite (NaN or infinity)");
+                            v[int(p) == ix ? 0 : int(p) == iy ? 1 : 2] = f;
+                        }
+                    }
+                }
+                end_record();
+                if (vertex) mesh.vertices.push_back(v);
+            }
+        }
+    }
+
+private:
+    [[noreturn]] void fail(const std::string& msg) const {
+        if (ascii_) throw input_error(path_, line_, msg);
+        throw input_error(path_, 0, "byte " + std::to_string(pos_) + ": " + msg);
+    }
+
+    std::string next_line() {
+        if (pos_ >= data_.size()) fail("unexpected end of file");
+        const size_t nl = data_.find('\n', pos_);
+        const size_t end = nl == std::string::npos ? data_.size() : nl;
+        std::string l = data_.substr(pos_, end - pos_);
+        pos_ = end + (nl == std::string::npos ? 0 : 1);
+        ++line_;
+        if (!l.empty() && l.back() == '\r') l.pop_back();
+        return l;
+    }
+
+    void parse_header() {
+        if (next_line() != "ply") fail("not a PLY file (first line must be 'ply')");
+        for (;;) {
+            const auto t = split(next_line());
+            if (t.empty() || t[0] == "comment" || t[0] == "obj_info") continue;
+            if (t[0] == "end_header") break;
+            if (t[0] == "format") {
+                if (t.size() < 2) fail("format line incomplete");
+                ascii_ = t[1] == "ascii";
+                big_endian_ = t[1] == "binary_big_endian";
+                if (!ascii_ && !big_endian_ && t[1] != "binary_little_endian") fail("unknown PLY format '" + t[1] + "'");
+            } else if (t[0] == "element") {
+                if (t.size() < 3) fail("element line incomplete");
+                PlyElement e;
+                e.name = t[1];
+                char* end = nullptr;
+                e.count = std::strtoull(t[2].c_str(), &end, 10);
+                if (*end) fail("bad element count '" + t[2] + "'");
+                elements_.push_back(e);
+            } else if (t[0] == "property") {
+                if (elements_.empty()) fail("property before any element");
+                PlyProperty p;
+                if (t.size() >= 5 && t[1] == "list") {
+                    p.count_type = t[2];
+                    p.type = t[3];
+                    p.name = t[4];
+                    if (!ply_type_size(p.count_type)) fail("unknown PLY type '" + p.count_type + "'");
+                } else if (t.size() >= 3) {
+                    p.type = t[1];
+                    p.name = t[2];
+                } else {
+                    fail("property line incomplete");
+                }
+                if (!ply_type_size(p.type)) fail("unknown PLY type '" + p.type + "'");
+                elements_.back().props.push_back(p);
+            } else {
+                fail("unexpected header line starting with '" + t[0] + "'");
+            }
+        }
+    }
+
+    void begin_record() {
+        if (!ascii_) return;
+        std::string l;
+        do {
+            l = next_line();
+        } while (l.find_first_not_of(" \t") == std::string::npos);
+        tokens_ = split(l);
+        tok_ = 0;
+    }
+    void end_record() {
+        if (ascii_ && tok_ != tokens_.size()) fail("extra values on the line");
+    }
+
+    double read_value(const std::string& type) {
+        if (ascii_) {
+            if (tok_ >= tokens_.size()) fail("too few values on the line");
+            const std::string& s = tokens_[tok_++];
+            char* end = nullptr;
+            const double v = std::strtod(s.c_str(), &end);
+            if (*end) fail("bad number '" + s + "'");
+            return v;
+        }
+        const size_t n = ply_type_size(type);
+        if (pos_ + n > data_.size()) fail("unexpected end of file");
+        unsigned char b[8];
+        std::memcpy(b, data_.data() + pos_, n);
+        pos_ += n;
+        if (big_endian_) std::reverse(b, b + n);
+        auto as = [&](auto v) { std::memcpy(&v, b, sizeof(v)); return double(v); };
+        if (type == "char" || type == "int8") return as(int8_t());
+        if (type == "uchar" || type == "uint8") return as(uint8_t());
+        if (type == "short" || type == "int16") return as(int16_t());
+        if (type == "ushort" || type == "uint16") return as(uint16_t());
+        if (type == "int" || type == "int32") return as(int32_t());
+        if (type == "uint" || type == "uint32") return as(uint32_t());
+        if (type == "float" || type == "float32") return as(float());
+        return as(double());
+    }
+
+    std::string path_, data_;
+    size_t pos_ = 0, line_ = 0;
+    bool ascii_ = true, big_endian_ = false;
+    std::vector<PlyElement> elements_;
+    std::vector<std::string> tokens_;
+    size_t tok_ = 0;
+};
+
+// --- Assimp (glTF/GLB, OFF, ...) ---------------------------------------------------------------
+
+void load_assimp(Scene& scene, Mesh& mesh, const std::string& path) {
+    Assimp::Importer imp;
+    const aiScene* sc = imp.ReadFile(path, aiProcess_Triangulate | aiProcess_PreTransformVertices);
+    if (!sc) throw input_error(path, 0, std::string("cannot read mesh: ") + imp.GetErrorString());
+    std::vector<uint32_t> mat_index(sc->mNumMaterials);
+    for (unsigned i = 0; i < sc->mNumMaterials; ++i) {
+        Material m;
+        aiColor3D c;
+        if (sc->mMaterials[i]->Get(AI_MATKEY_COLOR_DIFFUSE, c) == AI_SUCCESS) m.albedo = {c.r, c.g, c.b};
+        if (sc->mMaterials[i]->Get(AI_MATKEY_COLOR_EMISSIVE, c) == AI_SUCCESS && (c.r > 0 || c.g > 0 || c.b > 0)) {
+            m.emission = {c.r, c.g, c.b};
+            m.kind = Material::Kind::Emitter;
+        }
+        mat_index[i] = add_material(scene, m);
+    }
+    const uint32_t fallback = add_material(scene, Material{});
+    for (unsigned mi = 0; mi < sc->mNumMeshes; ++mi) {
+        const aiMesh* am = sc->mMeshes[mi];
+        const uint32_t base = uint32_t(mesh.vertices.size());
+        for (unsigned v = 0; v < am->mNumVertices; ++v) {
+            const aiVector3D& p = am->mVertices[v];
+            if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+                throw input_error(path, 0, "vertex " + std::to_string(v) + " of mesh " + std::to_string(mi) + " is not finite");
+            mesh.vertices.push_back({p.x, p.y, p.z});
+        }
+        const uint32_t mat = am->mMaterialIndex < mat_index.size() ? mat_index[am->mMaterialIndex] : fallback;
+        std::vector<uint32_t> poly;
+        for (unsigned f = 0; f < am->mNumFaces; ++f) {
+            const aiFace& face = am->mFaces[f];
+            if (face.mNumIndices < 3) continue;  // points and lines carry no surface
+            poly.assign(face.mIndices, face.mIndices + face.mNumIndices);
+            for (uint32_t& i : poly) i += base;
+            fan(mesh, poly, mat);
+        }
+    }
+}
+
+}  // namespace
+
+std::string read_file_maybe_gz(const std::string& path) {
+    std::error_code ec;
+    if (!fs::exists(path, ec)) throw input_error(path, 0, "file not found");
+    if (!fs::is_regular_file(path, ec)) throw input_error(path, 0, "not a regular file");
+    gzFile f = gzopen(path.c_str(), "rb");  // reads plain files unchanged
+    if (!f) throw input_error(path, 0, std::string("cannot open: ") + std::strerror(errno));
+    std::string out;
+    char buf[1 << 16];
+    int n;
+    while ((n = gzread(f, buf, sizeof buf)) > 0) out.append(buf, size_t(n));
+    int err = Z_OK;
+    const char* msg = gzerror(f, &err);
+    const bool bad = n < 0 || (err != Z_OK && err != Z_STREAM_END);
+    const std::string why = bad ? std::string(msg ? msg : "read error") : std::string();
+    gzclose(f);
+    if (bad) throw input_error(path, 0, "cannot read (corrupt gzip?): " + why);
+    return out;
+}
+
+bool is_mesh_file(const std::string& path) {
+    const std::string ext = mesh_extension(path);
+    if (ext == "obj" || ext == "ply") return true;
+    const std::string name = lower(path);
+    const bool gz = name.size() > 3 && name.compare(name.size() - 3, 3, ".gz") == 0;
+    if (ext.empty() || gz) return false;  // only OBJ and PLY are read through zlib
+    Assimp::Importer imp;
+    return imp.IsExtensionSupported("." + ext);
+}
+
+uint32_t load_mesh_file(Scene& scene, const std::string& path) {
+    std::error_code ec;
+    if (!fs::exists(path, ec)) throw input_error(path, 0, "file not found");
+    if (!is_mesh_file(path))
+        throw input_error(path, 0, "unknown mesh format '" + mesh_extension(path) +
+                                       "' (allowed: .obj, .ply, optionally .gz; .gltf, .glb, .off and other Assimp formats)");
+    Mesh mesh;
+    mesh.name = path;
+    const std::string ext = mesh_extension(path);
+    if (ext == "obj") {
+        load_obj(scene, mesh, path);
+    } else if (ext == "ply") {
+        const uint32_t mat = add_material(scene, Material{});
+        PlyReader(path, read_file_maybe_gz(path)).load(mesh, mat);
+    } else {
+        load_assimp(scene, mesh, path);
+    }
+    scene.meshes.push_back(std::move(mesh));
+    return uint32_t(scene.meshes.size() - 1);
+}
+
+}  // namespace rtu

@@ -1,0 +1,84 @@
+// Scenes as the workload sees them: meshes (triangles or procedural spheres), materials,
+// instances placing meshes in the world, a camera and lights.
+#pragma once
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "model/node_format.h"
+#include "model/robust.h"
+
+namespace rtu {
+
+struct Material {
+    enum class Kind : uint8_t { Diffuse, Metal, Glass, Emitter } kind = Kind::Diffuse;
+    glm::vec3 albedo{0.7f};
+    float fuzz = 0.0f;  // metal
+    float ior = 1.5f;   // glass
+    glm::vec3 emission{0.0f};
+    std::string name;
+};
+
+struct Sphere {
+    glm::vec3 center;
+    float radius;
+};
+
+// One geometry (one `geom` number): triangles or spheres, never both.
+struct Mesh {
+    std::string name;
+    std::vector<glm::vec3> vertices;
+    std::vector<glm::uvec3> triangles;  // indices into vertices, in file order
+    std::vector<Sphere> spheres;        // procedural primitives
+    std::vector<uint32_t> material;     // per primitive, index into Scene::materials
+    bool procedural() const { return !spheres.empty(); }
+    size_t primitives() const { return procedural() ? spheres.size() : triangles.size(); }
+    Aabb prim_bounds(size_t i) const;
+    Aabb bounds() const;
+};
+
+struct Instance {
+    uint32_t mesh;
+    Affine object_to_world;
+};
+
+struct Camera {
+    glm::vec3 eye{0.0f, 0.0f, 1.0f}, lookat{0.0f}, up{0.0f, 1.0f, 0.0f};
+    float vfov = 45.0f;  // degrees
+    float aperture = 0.0f, focus_dist = 1.0f;
+};
+
+struct Scene {
+    std::string name;
+    std::vector<Mesh> meshes;
+    std::vector<Material> materials;
+    std::vector<Instance> instances;  // every mesh appears in at least one instance
+    Camera camera;
+    bool sky = true;                  // rays that miss see a sky (else black)
+    std::optional<glm::vec3> light;   // point light for shadow rays
+    float light_radius = 0.0f;
+
+    // Two-level (TLAS of instance leaves over one BLAS per mesh) when there is more than one
+    // instance or any non-identity transform; otherwise a single-level BVH over the one mesh.
+    bool two_level() const;
+    bool has_procedural() const;
+    uint64_t triangle_count() const;
+    uint64_t primitive_count() const;
+    Aabb world_bounds() const;
+    // Index of the first instance of a mesh (used to map hits back to world space).
+    const Instance& instance_of(uint32_t mesh) const;
+    // Checks invariants (non-empty, finite vertices, valid indices); throws InputError.
+    void validate() const;
+};
+
+// Adds a material and returns its index.
+uint32_t add_material(Scene& s, Material m);
+// Places every mesh once with an identity transform (if no instances were given).
+void add_identity_instances(Scene& s);
+// A camera framing the scene's bounding box, looking down -Z.
+Camera default_camera(const Aabb& bounds);
+
+}  // namespace rtu

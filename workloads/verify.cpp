@@ -1,0 +1,117 @@
+#include "verify.h"
+
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+namespace rtu {
+
+const char* agreement_name(Agreement a) {
+    switch (a) {
+        case Agreement::Agree: return "agree";
+        case Agreement::TUlps: return "t_within_ulps";
+        case Agreement::SameTOtherPrim: return "other_prim_same_t";
+        case Agreement::BoundaryT: return "hit_at_tnear_tfar";
+        case Agreement::VertexEmbreeMiss: return "vertex_hit_embree_misses";
+        case Agreement::ZeroDirFace: return "zero_dir_in_face_plane";
+        case Agreement::SphereFloatError: return "embree_sphere_float_error";
+        case Agreement::Mismatch: return "mismatch";
+        case Agreement::Count: break;
+    }
+    return "?";
+}
+
+uint32_t ulp_distance(float a, float b) {
+    if (a == b) return 0;
+    if (std::isnan(a) || std::isnan(b) || std::signbit(a) != std::signbit(b)) return std::numeric_limits<uint32_t>::max();
+    int32_t ia, ib;
+    std::memcpy(&ia, &a, 4);
+    std::memcpy(&ib, &b, 4);
+    const int64_t d = int64_t(ia) - int64_t(ib);
+    return uint32_t(d < 0 ? -d : d);
+}
+
+namespace {
+bool near_bound(const Ray& r, float t) {
+    return ulp_distance(t, r.tnear) <= kUlpTolerance || (std::isfinite(r.tfar) && ulp_distance(t, r.tfar) <= kUlpTolerance);
+}
+bool has_zero_dir(const Ray& r) { return r.dir.x == 0.0f || r.dir.y == 0.0f || r.dir.z == 0.0f; }
+bool at_vertex(const Hit& h) {
+    const float w = 1.0f - h.u - h.v;
+    const float eps = 1e-6f;
+    return (std::fabs(h.u) < eps) + (std::fabs(h.v) < eps) + (std::fabs(w) < eps) >= 2;
+}
+
+bool is_sphere(const Scene& scene, const Hit& h) { return h.hit && scene.meshes.at(h.geom).procedural(); }
+
+// One side hits (`h`), the other misses.
+Agreement one_sided(const Scene& scene, const Ray& r, const Hit& h, bool ours_hit) {
+    if (near_bound(r, h.t)) return Agreement::BoundaryT;
+    if (has_zero_dir(r)) return Agreement::ZeroDirFace;
+    if (ours_hit && !is_sphere(scene, h) && at_vertex(h)) return Agreement::VertexEmbreeMiss;
+    return Agreement::Mismatch;
+}
+
+// For a disagreement involving a sphere: true when a long-double solve agrees with our answer
+// (our t to 1e-6 relative, and Embree's primitive no nearer than ours / not hit at all).
+bool long_double_confirms_ours(const Scene& scene, const Ray& ray, const Hit& ours, const Hit& ref) {
+    if (!is_sphere(scene, ours) && !is_sphere(scene, ref)) return false;
+    std::optional<long double> eo;
+    if (ours.hit) {
+        if (!is_sphere(scene, ours)) return false;
+        eo = exact_sphere_t(scene, ray, ours.geom, ours.prim);
+        if (!eo || std::fabs(*eo - ours.t) > 1e-6L * std::fabs(*eo)) return false;
+    }
+    if (ref.hit) {
+        if (!is_sphere(scene, ref)) return false;
+        const auto er = exact_sphere_t(scene, ray, ref.geom, ref.prim);
+        if (er && (!eo || *er < *eo)) return false;
+    }
+    return true;
+}
+}  // namespace
+
+std::optional<long double> exact_sphere_t(const Scene& scene, const Ray& ray, uint32_t geom, uint32_t prim) {
+    const Mesh& m = scene.meshes.at(geom);
+    if (!m.procedural() || !is_identity(scene.instance_of(geom).object_to_world)) return std::nullopt;
+    const Sphere& s = m.spheres.at(prim);
+    using LD = long double;
+    const LD f[3] = {LD(ray.org.x) - s.center.x, LD(ray.org.y) - s.center.y, LD(ray.org.z) - s.center.z};
+    const LD d[3] = {ray.dir.x, ray.dir.y, ray.dir.z};
+    const LD a = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+    const LD b = f[0] * d[0] + f[1] * d[1] + f[2] * d[2];
+    const LD c = f[0] * f[0] + f[1] * f[1] + f[2] * f[2] - LD(s.radius) * s.radius;
+    const LD disc = b * b - a * c;
+    if (disc < 0) return std::nullopt;
+    const LD q = -(b + std::copysign(std::sqrt(disc), b));
+    LD t0 = q / a, t1 = q != 0 ? c / q : t0;
+    if (t0 > t1) std::swap(t0, t1);
+    for (LD t : {t0, t1})
+        if (t >= ray.tnear && t <= ray.tfar) return t;
+    return std::nullopt;
+}
+
+Agreement classify(const Scene& scene, const Ray& ray, const Hit& ours, const Hit& ref, const Hit& ref_closest) {
+    Agreement a;
+    const Hit& other = ray.query == Query::Any ? ref_closest : ref;
+    if (ray.query == Query::Any) {
+        if (ours.hit == ref.hit) return Agreement::Agree;
+        a = ours.hit ? one_sided(scene, ray, ours, true) : one_sided(scene, ray, ref_closest, false);
+    } else if (!ours.hit && !ref.hit) {
+        return Agreement::Agree;
+    } else if (ours.hit != ref.hit) {
+        a = ours.hit ? one_sided(scene, ray, ours, true) : one_sided(scene, ray, ref, false);
+    } else {
+        const uint32_t d = ulp_distance(ours.t, ref.t);
+        if (ours.geom == ref.geom && ours.prim == ref.prim) {
+            if (d == 0) return Agreement::Agree;
+            a = d <= kUlpTolerance ? Agreement::TUlps : Agreement::Mismatch;
+        } else {
+            a = d <= kUlpTolerance ? Agreement::SameTOtherPrim : Agreement::Mismatch;
+        }
+    }
+    if (a == Agreement::Mismatch && long_double_confirms_ours(scene, ray, ours, other)) return Agreement::SphereFloatError;
+    return a;
+}
+
+}  // namespace rtu
