@@ -54,7 +54,7 @@ bool intersect_triangle(const glm::vec3& org, const glm::vec3& dir, const glm::v
     if (dir[kz] < 0.0f) std::swap(kx, ky);
 
     // Shear so that the ray points along +z from the origin.
-    const float sx = dir[kx] / dir[kz], sy = dir[ky] / dir[kz], sz = 1.0f / dir[kz];
+    const float sx = dir[kx] / dir[kz], sy = dir[ky] / dir[kz];
     const glm::vec3 a = v0 - org, b = v1 - org, c = v2 - org;
     const float ax = a[kx] - sx * a[kz], ay = a[ky] - sy * a[kz];
     const float bx = b[kx] - sx * b[kz], by = b[ky] - sy * b[kz];
@@ -74,9 +74,17 @@ bool intersect_triangle(const glm::vec3& org, const glm::vec3& dir, const glm::v
     const float det = u + v + w;
     if (det == 0.0f) return false;  // degenerate triangle, or ray in its plane
 
-    const float az = sz * a[kz], bz = sz * b[kz], cz = sz * c[kz];
-    const float tscaled = u * az + v * bz + w * cz;
-    const float t = tscaled / det;
+    // The hit decision above is Woop's and watertight. The distance is then taken from the
+    // plane equation in double, t = n.(v0 - o) / n.d, and rounded once: Woop's sheared float
+    // distance loses hundreds of ulps on long thin triangles far from the origin (LumiBench's
+    // ship), while the products and sums here are exact or nearly so in double.
+    const double e1[3] = {double(v1.x) - v0.x, double(v1.y) - v0.y, double(v1.z) - v0.z};
+    const double e2[3] = {double(v2.x) - v0.x, double(v2.y) - v0.y, double(v2.z) - v0.z};
+    const double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+    const double dn = n[0] * dir.x + n[1] * dir.y + n[2] * dir.z;
+    if (dn == 0.0) return false;
+    const double tp = (n[0] * (double(v0.x) - org.x) + n[1] * (double(v0.y) - org.y) + n[2] * (double(v0.z) - org.z)) / dn;
+    const float t = float(tp);
     if (!(t >= tmin && t <= tmax)) return false;  // also rejects NaN
     if (out) {
         const float inv = 1.0f / det;

@@ -129,6 +129,11 @@ Surface surface_at(const Scene& scene, const Ray& ray, const Hit& h) {
         const glm::vec3 po = (1.0f - h.u - h.v) * mesh.vertices[t[0]] + h.u * mesh.vertices[t[1]] + h.v * mesh.vertices[t[2]];
         p = transform_point(inst.object_to_world, po);
     }
+    // A non-identity instance transform mixes the components: the rounding of the largest
+    // coordinate reaches all of them (in object space, where the next ray is tested), which
+    // Wachter-Binder's per-component offset does not cover.
+    if (!is_identity(inst.object_to_world))
+        err = std::max(err, std::max({std::fabs(p.x), std::fabs(p.y), std::fabs(p.z)}) * 0x1p-20f);
     Surface s;
     s.p = p;
     s.err = err;

@@ -1,6 +1,7 @@
 #include "verify.h"
 
 #include <cmath>
+#include <algorithm>
 #include <cstring>
 #include <limits>
 
@@ -15,6 +16,7 @@ const char* agreement_name(Agreement a) {
         case Agreement::VertexEmbreeMiss: return "vertex_hit_embree_misses";
         case Agreement::ZeroDirFace: return "zero_dir_in_face_plane";
         case Agreement::SphereFloatError: return "embree_sphere_float_error";
+        case Agreement::InstanceRounding: return "instance_transform_rounding";
         case Agreement::Mismatch: return "mismatch";
         case Agreement::Count: break;
     }
@@ -35,6 +37,22 @@ namespace {
 bool near_bound(const Ray& r, float t) {
     return ulp_distance(t, r.tnear) <= kUlpTolerance || (std::isfinite(r.tfar) && ulp_distance(t, r.tfar) <= kUlpTolerance);
 }
+float max_abs(const glm::vec3& v) { return std::max({std::fabs(v.x), std::fabs(v.y), std::fabs(v.z)}); }
+
+// Two distances name the same point when they are within kUlpTolerance ulps of each other, or
+// when the points o + t d differ by at most kUlpTolerance ulps of the coordinates involved:
+// float hit distances are only as exact as (vertex - origin), whose error scales with the
+// coordinates, not with t (a short hit near a wall at x = 555 carries 555's ulps).
+bool same_point(const Ray& r, long double t1, long double t2, int ulps = kUlpTolerance) {
+    if (ulp_distance(float(t1), float(t2)) <= uint32_t(ulps)) return true;
+    const float scale = std::max(max_abs(r.org), max_abs(r.org + float(t1) * r.dir));
+    return std::fabs(t1 - t2) * max_abs(r.dir) <= ulps * 0x1p-24L * scale;
+}
+
+bool instanced(const Scene& scene, const Hit& h) {
+    return h.hit && !is_identity(scene.instance_of(h.geom).object_to_world);
+}
+
 bool has_zero_dir(const Ray& r) { return r.dir.x == 0.0f || r.dir.y == 0.0f || r.dir.z == 0.0f; }
 bool at_vertex(const Hit& h) {
     const float w = 1.0f - h.u - h.v;
@@ -91,6 +109,32 @@ std::optional<long double> exact_sphere_t(const Scene& scene, const Ray& ray, ui
     return std::nullopt;
 }
 
+std::optional<long double> exact_triangle_t(const Scene& scene, const Ray& ray, uint32_t geom, uint32_t prim,
+                                            long double* cosine) {
+    using LD = long double;
+    const Mesh& m = scene.meshes.at(geom);
+    if (m.procedural()) return std::nullopt;
+    const Affine& x = scene.instance_of(geom).object_to_world;
+    const glm::uvec3& tri = m.triangles.at(prim);
+    LD v[3][3];
+    for (int k = 0; k < 3; ++k) {
+        const glm::vec3& p = m.vertices[tri[k]];
+        for (int i = 0; i < 3; ++i) v[k][i] = LD(x[4 * i]) * p.x + LD(x[4 * i + 1]) * p.y + LD(x[4 * i + 2]) * p.z + LD(x[4 * i + 3]);
+    }
+    const LD e1[3] = {v[1][0] - v[0][0], v[1][1] - v[0][1], v[1][2] - v[0][2]};
+    const LD e2[3] = {v[2][0] - v[0][0], v[2][1] - v[0][1], v[2][2] - v[0][2]};
+    const LD n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+    const LD dn = n[0] * ray.dir.x + n[1] * ray.dir.y + n[2] * ray.dir.z;
+    if (dn == 0) return std::nullopt;
+    const LD t = (n[0] * (v[0][0] - ray.org.x) + n[1] * (v[0][1] - ray.org.y) + n[2] * (v[0][2] - ray.org.z)) / dn;
+    if (cosine) {
+        const LD nn = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        const LD dd = std::sqrt(LD(ray.dir.x) * ray.dir.x + LD(ray.dir.y) * ray.dir.y + LD(ray.dir.z) * ray.dir.z);
+        *cosine = std::fabs(dn) / (nn * dd);
+    }
+    return t;  // plane distance (inside-ness is not checked)
+}
+
 Agreement classify(const Scene& scene, const Ray& ray, const Hit& ours, const Hit& ref, const Hit& ref_closest) {
     Agreement a;
     const Hit& other = ray.query == Query::Any ? ref_closest : ref;
@@ -102,12 +146,24 @@ Agreement classify(const Scene& scene, const Ray& ray, const Hit& ours, const Hi
     } else if (ours.hit != ref.hit) {
         a = ours.hit ? one_sided(scene, ray, ours, true) : one_sided(scene, ray, ref, false);
     } else {
-        const uint32_t d = ulp_distance(ours.t, ref.t);
+        const bool inst = instanced(scene, ours) || instanced(scene, ref);
+        const bool same = same_point(ray, ours.t, ref.t, inst ? kInstanceUlpTolerance : kUlpTolerance);
         if (ours.geom == ref.geom && ours.prim == ref.prim) {
-            if (d == 0) return Agreement::Agree;
-            a = d <= kUlpTolerance ? Agreement::TUlps : Agreement::Mismatch;
+            if (ours.t == ref.t) return Agreement::Agree;
+            a = Agreement::Mismatch;
+            if (same_point(ray, ours.t, ref.t)) {
+                a = Agreement::TUlps;
+            } else if (inst) {
+                // Both answers must lie near the long-double hit on the placed triangle.
+                // A position error e along the normal moves t by e / cos(incidence).
+                long double cosine = 1;
+                const auto exact = exact_triangle_t(scene, ray, ours.geom, ours.prim, &cosine);
+                const int tol = int(std::min<long double>(kInstanceUlpTolerance / std::max<long double>(cosine, 1e-3L), 1 << 20));
+                if (exact && same_point(ray, *exact, ours.t, tol) && same_point(ray, *exact, ref.t, tol))
+                    a = Agreement::InstanceRounding;
+            }
         } else {
-            a = d <= kUlpTolerance ? Agreement::SameTOtherPrim : Agreement::Mismatch;
+            a = same ? Agreement::SameTOtherPrim : Agreement::Mismatch;
         }
     }
     if (a == Agreement::Mismatch && long_double_confirms_ours(scene, ray, ours, other)) return Agreement::SphereFloatError;

@@ -13,16 +13,20 @@ namespace rtu {
 
 enum class Agreement : uint8_t {
     Agree,            // same answer (same primitive and t, or both miss; any-hit: both hit)
-    TUlps,            // same primitive, t within kUlpTolerance ulps
-    SameTOtherPrim,   // different primitive at equal t (within kUlpTolerance ulps): shared edge/vertex
+    TUlps,            // same primitive, same point: t within kUlpTolerance ulps of t or of the coordinates
+    SameTOtherPrim,   // different primitive at the same point (as TUlps): a shared edge or vertex
     BoundaryT,        // one hits, one misses, and the hit lies within kUlpTolerance ulps of tnear or tfar
     VertexEmbreeMiss, // we hit a triangle at a vertex (two barycentrics ~0) that Embree's robust mode misses
     ZeroDirFace,      // one side misses a ray with an exactly-zero direction component (box face plane, sign of zero)
     SphereFloatError, // a sphere where Embree's float solver errs: a long-double solve confirms our answer
+    InstanceRounding, // same primitive of a mesh placed by a non-identity transform; both hit points within
+                      // kInstanceUlpTolerance ulps of the coordinates / cos(incidence) of the long-double
+                      // hit (the ray is transformed to object space in float, by us as by Embree)
     Mismatch,
     Count
 };
 constexpr int kUlpTolerance = 8;
+constexpr int kInstanceUlpTolerance = 128;
 const char* agreement_name(Agreement a);
 
 // Distance in float ulps between a and b (0 if equal, huge if signs differ or NaN).
@@ -34,6 +38,11 @@ Agreement classify(const Scene& scene, const Ray& ray, const Hit& ours, const Hi
 
 // Nearest root in [tnear, tfar] of the ray with sphere `prim` of mesh `geom`, solved in long
 // double; nullopt if there is none, or if the sphere is not a procedural one in world space.
+// Distance to the plane of triangle `prim` of mesh `geom` (placed by its instance transform),
+// in long double; nullopt for a ray parallel to the plane. `cosine` receives |cos| of the
+// angle between the ray and the plane's normal.
+std::optional<long double> exact_triangle_t(const Scene& scene, const Ray& ray, uint32_t geom, uint32_t prim,
+                                            long double* cosine = nullptr);
 std::optional<long double> exact_sphere_t(const Scene& scene, const Ray& ray, uint32_t geom, uint32_t prim);
 
 struct VerifyCounts {
