@@ -16,7 +16,7 @@ const char* agreement_name(Agreement a) {
         case Agreement::VertexEmbreeMiss: return "vertex_hit_embree_misses";
         case Agreement::ZeroDirFace: return "zero_dir_in_face_plane";
         case Agreement::SphereFloatError: return "embree_sphere_float_error";
-        case Agreement::InstanceRounding: return "instance_transform_rounding";
+        case Agreement::TErrorBound: return "t_within_error_bound";
         case Agreement::Mismatch: return "mismatch";
         case Agreement::Count: break;
     }
@@ -147,20 +147,20 @@ Agreement classify(const Scene& scene, const Ray& ray, const Hit& ours, const Hi
         a = ours.hit ? one_sided(scene, ray, ours, true) : one_sided(scene, ray, ref, false);
     } else {
         const bool inst = instanced(scene, ours) || instanced(scene, ref);
-        const bool same = same_point(ray, ours.t, ref.t, inst ? kInstanceUlpTolerance : kUlpTolerance);
+        const bool same = same_point(ray, ours.t, ref.t, inst ? kLooseUlpTolerance : kUlpTolerance);
         if (ours.geom == ref.geom && ours.prim == ref.prim) {
             if (ours.t == ref.t) return Agreement::Agree;
             a = Agreement::Mismatch;
             if (same_point(ray, ours.t, ref.t)) {
                 a = Agreement::TUlps;
-            } else if (inst) {
+            } else if (!scene.meshes.at(ours.geom).procedural()) {
                 // Both answers must lie near the long-double hit on the placed triangle.
                 // A position error e along the normal moves t by e / cos(incidence).
                 long double cosine = 1;
                 const auto exact = exact_triangle_t(scene, ray, ours.geom, ours.prim, &cosine);
-                const int tol = int(std::min<long double>(kInstanceUlpTolerance / std::max<long double>(cosine, 1e-3L), 1 << 20));
+                const int tol = int(std::min<long double>(kLooseUlpTolerance / std::max<long double>(cosine, 1e-3L), 1 << 20));
                 if (exact && same_point(ray, *exact, ours.t, tol) && same_point(ray, *exact, ref.t, tol))
-                    a = Agreement::InstanceRounding;
+                    a = Agreement::TErrorBound;
             }
         } else {
             a = same ? Agreement::SameTOtherPrim : Agreement::Mismatch;

@@ -19,14 +19,14 @@ enum class Agreement : uint8_t {
     VertexEmbreeMiss, // we hit a triangle at a vertex (two barycentrics ~0) that Embree's robust mode misses
     ZeroDirFace,      // one side misses a ray with an exactly-zero direction component (box face plane, sign of zero)
     SphereFloatError, // a sphere where Embree's float solver errs: a long-double solve confirms our answer
-    InstanceRounding, // same primitive of a mesh placed by a non-identity transform; both hit points within
-                      // kInstanceUlpTolerance ulps of the coordinates / cos(incidence) of the long-double
-                      // hit (the ray is transformed to object space in float, by us as by Embree)
+    TErrorBound,      // same triangle; both hit points within kLooseUlpTolerance ulps of the coordinates,
+                      // divided by cos(incidence), of the long-double plane hit: grazing rays, and rays
+                      // transformed to an instance's object space in float (by us as by Embree)
     Mismatch,
     Count
 };
 constexpr int kUlpTolerance = 8;
-constexpr int kInstanceUlpTolerance = 128;
+constexpr int kLooseUlpTolerance = 128;
 const char* agreement_name(Agreement a);
 
 // Distance in float ulps between a and b (0 if equal, huge if signs differ or NaN).
