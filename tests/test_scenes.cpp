@@ -1,2 +1,311 @@
+// Scenes: built-in procedural scenes, mesh readers (numbering, fans, errors), folders, BVH image.
 #include <gtest/gtest.h>
-TEST(Placeholder, Builds) {}
+
+#include <algorithm>
+#include <set>
+
+#include <glm/common.hpp>
+#include <glm/geometric.hpp>
+
+#include "model/traversal.h"
+#include "test_util.h"
+#include "workloads/bvh_builder.h"
+#include "workloads/input_error.h"
+#include "workloads/mesh_io.h"
+#include "workloads/rays.h"
+#include "workloads/scenes.h"
+
+using namespace rtu;
+using rtu::test::TempDir;
+using rtu::test::write_text;
+
+// shared/scenes/README.md: 483 small spheres (393 diffuse, 64 metal, 26 glass), the first kept
+// at (-10.144357, 0.2, -10.283112); plus the ground and three large spheres.
+TEST(Scenes, WkndIsBuiltExactlyAsLumiBench) {
+    const Scene s = make_wknd();
+    ASSERT_EQ(s.meshes.size(), 1u);
+    const Mesh& m = s.meshes[0];
+    ASSERT_TRUE(m.procedural());
+    ASSERT_EQ(m.spheres.size(), 1u + 483u + 3u);
+    EXPECT_EQ(m.spheres[0].radius, 1000.0f);
+    EXPECT_NEAR(m.spheres[1].center.x, -10.144357f, 1e-5f);
+    EXPECT_EQ(m.spheres[1].center.y, 0.2f);
+    EXPECT_NEAR(m.spheres[1].center.z, -10.283112f, 1e-5f);
+    int diffuse = 0, metal = 0, glass = 0;
+    for (size_t i = 1; i <= 483; ++i) {
+        EXPECT_EQ(m.spheres[i].radius, 0.2f);
+        switch (s.materials[m.material[i]].kind) {
+            case Material::Kind::Diffuse: ++diffuse; break;
+            case Material::Kind::Metal: ++metal; break;
+            case Material::Kind::Glass: ++glass; break;
+            default: break;
+        }
+    }
+    EXPECT_EQ(diffuse, 393);
+    EXPECT_EQ(metal, 64);
+    EXPECT_EQ(glass, 26);
+    EXPECT_EQ(s.materials[m.material[484]].kind, Material::Kind::Glass);  // (0,1,0)
+    EXPECT_EQ(m.spheres[486].center, glm::vec3(4, 1, 0));
+    EXPECT_FALSE(s.two_level());
+    EXPECT_TRUE(s.has_procedural());
+}
+
+TEST(Scenes, CornellBoxFollowsTheDocumentedNumbering) {
+    const Scene s = make_cornell();
+    ASSERT_EQ(s.meshes.size(), 1u);
+    const Mesh& m = s.meshes[0];
+    ASSERT_EQ(m.triangles.size(), 12u);
+    const Aabb b = m.bounds();
+    EXPECT_EQ(b.lo, glm::vec3(0, 0, -555));
+    EXPECT_EQ(b.hi, glm::vec3(555, 555, 0));
+    // Prim 0/1: left wall x = 0; 10/11: light at y = 553.89.
+    for (int k = 0; k < 3; ++k) EXPECT_EQ(m.vertices[m.triangles[0][k]].x, 0.0f);
+    for (int k = 0; k < 3; ++k) EXPECT_EQ(m.vertices[m.triangles[11][k]].y, 553.89f);
+    EXPECT_EQ(s.materials[m.material[10]].kind, Material::Kind::Emitter);
+}
+
+TEST(MeshFiles, ObjTrianglesAreNumberedInFileOrderAndPolygonsFanned) {
+    TempDir dir;
+    const std::string obj = write_text(dir.file("a.obj"),
+                                       "# comment\n"
+                                       "mtllib a.mtl\n"
+                                       "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0.5 2 0\n"
+                                       "g first\nusemtl red\n"
+                                       "f 1 2 3 4\n"                 // quad -> prims 0, 1
+                                       "o second\nusemtl light\n"
+                                       "f -5/1/1 -4//2 -1 3 4\n"     // pentagon, relative indices -> 2, 3, 4
+                                       "usemtl red\nf 1/1 2/2 3/3\n");  // -> prim 5
+    write_text(dir.file("a.mtl"), "newmtl red\nKd 0.8 0.1 0.1\nnewmtl light\nKd 1 1 1\nKe 5 5 5\n");
+    Scene s;
+    ASSERT_EQ(load_mesh_file(s, obj), 0u);
+    const Mesh& m = s.meshes[0];
+    ASSERT_EQ(m.triangles.size(), 6u);
+    EXPECT_EQ(m.triangles[0], glm::uvec3(0, 1, 2));
+    EXPECT_EQ(m.triangles[1], glm::uvec3(0, 2, 3));
+    EXPECT_EQ(m.triangles[2], glm::uvec3(0, 1, 4));
+    EXPECT_EQ(m.triangles[3], glm::uvec3(0, 4, 2));
+    EXPECT_EQ(m.triangles[4], glm::uvec3(0, 2, 3));
+    EXPECT_EQ(m.triangles[5], glm::uvec3(0, 1, 2));
+    EXPECT_EQ(s.materials[m.material[0]].albedo, glm::vec3(0.8f, 0.1f, 0.1f));
+    EXPECT_EQ(s.materials[m.material[2]].kind, Material::Kind::Emitter);
+    EXPECT_EQ(m.material[5], m.material[0]);
+}
+
+namespace {
+std::string load_error(const std::string& path) {
+    Scene s;
+    try {
+        load_mesh_file(s, path);
+    } catch (const InputError& e) {
+        return e.what();
+    }
+    return "(no error)";
+}
+}  // namespace
+
+TEST(MeshFiles, BadInputNamesFileLineAndValue) {
+    TempDir dir;
+    EXPECT_NE(load_error(write_text(dir.file("nan.obj"), "v 0 0 0\nv 1 0 0\nv nan 1 0\nf 1 2 3\n")).find("nan.obj:3"), std::string::npos);
+    EXPECT_NE(load_error(write_text(dir.file("inf.obj"), "v 0 0 0\nv 1 -inf 0\n")).find("'-inf'"), std::string::npos);
+    EXPECT_NE(load_error(write_text(dir.file("bad.obj"), "v 0 0 0\nv 1 x 0\n")).find("bad.obj:2: bad vertex coordinate 'x'"), std::string::npos);
+    EXPECT_NE(load_error(write_text(dir.file("short.obj"), "v 0 0\n")).find("short.obj:1"), std::string::npos);
+    EXPECT_NE(load_error(write_text(dir.file("idx.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n")).find("idx.obj:4: face index '7' out of range"), std::string::npos);
+    EXPECT_NE(load_error(write_text(dir.file("zero.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n")).find("zero.obj:4"), std::string::npos);
+    EXPECT_NE(load_error(dir.file("missing.obj")).find("file not found"), std::string::npos);
+    EXPECT_NE(load_error(write_text(dir.file("x.xyz123"), "hello")).find("unknown mesh format 'xyz123'"), std::string::npos);
+    EXPECT_NE(load_error(write_text(dir.file("p.ply"), "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\nend_header\n0 0 0\n1 nan 0\n")).find("p.ply:9"), std::string::npos);
+    EXPECT_NE(load_error(write_text(dir.file("q.ply"), "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\nend_header\n0 0\n")).find("too few values"), std::string::npos);
+    EXPECT_NE(load_error(write_text(dir.file("gz.ply.gz"), "this is not gzip but not a ply either")).find("not a PLY file"), std::string::npos);
+    // An empty scene is an error of the scene, not of the reader.
+    Scene s;
+    load_mesh_file(s, write_text(dir.file("empty.obj"), "# nothing\nv 0 0 0\n"));
+    add_identity_instances(s);
+    EXPECT_THROW(s.validate(), InputError);
+}
+
+namespace {
+// The same quad + triangle as PLY: one quad (fanned into two) and one triangle.
+std::string ascii_ply() {
+    return "ply\nformat ascii 1.0\ncomment test\nelement vertex 5\nproperty float x\nproperty float y\nproperty float z\n"
+           "property uchar red\nelement face 2\nproperty list uchar int vertex_indices\nend_header\n"
+           "0 0 0 1\n1 0 0 2\n1 1 0 3\n0 1 0 4\n0.5 2 0 5\n4 0 1 2 3\n3 3 2 4\n";
+}
+std::string binary_ply(bool big_endian) {
+    std::string h = std::string("ply\nformat ") + (big_endian ? "binary_big_endian" : "binary_little_endian") +
+                    " 1.0\nelement vertex 5\nproperty float x\nproperty float y\nproperty float z\n"
+                    "element face 2\nproperty list uchar int vertex_indices\nend_header\n";
+    auto put = [&](const void* p, size_t n) {
+        std::string b(static_cast<const char*>(p), n);
+        if (big_endian) std::reverse(b.begin(), b.end());
+        h += b;
+    };
+    const float v[5][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0.5f, 2, 0}};
+    for (auto& p : v)
+        for (float f : p) put(&f, 4);
+    const int quad[4] = {0, 1, 2, 3}, tri[3] = {3, 2, 4};
+    uint8_t n = 4;
+    put(&n, 1);
+    for (int i : quad) put(&i, 4);
+    n = 3;
+    put(&n, 1);
+    for (int i : tri) put(&i, 4);
+    return h;
+}
+}  // namespace
+
+TEST(MeshFiles, PlyAsciiBinaryAndGzipAgree) {
+    TempDir dir;
+    std::vector<std::string> files = {write_text(dir.file("a.ply"), ascii_ply()), write_text(dir.file("le.ply"), binary_ply(false)),
+                                      write_text(dir.file("be.ply"), binary_ply(true)),
+                                      rtu::test::write_gz(dir.file("a.ply.gz"), ascii_ply())};
+    for (const auto& f : files) {
+        Scene s;
+        load_mesh_file(s, f);
+        const Mesh& m = s.meshes[0];
+        ASSERT_EQ(m.vertices.size(), 5u) << f;
+        ASSERT_EQ(m.triangles.size(), 3u) << f;
+        EXPECT_EQ(m.triangles[1], glm::uvec3(0, 2, 3)) << f;
+        EXPECT_EQ(m.triangles[2], glm::uvec3(3, 2, 4)) << f;
+        EXPECT_EQ(m.vertices[4], glm::vec3(0.5f, 2, 0)) << f;
+    }
+}
+
+TEST(MeshFiles, GltfThroughAssimp) {
+    TempDir dir;
+    // One triangle; buffer: 3 float3 positions (36 bytes) as a base64 data URI.
+    const std::string gltf = R"({"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0}],
+"meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}],
+"buffers":[{"byteLength":36,"uri":"data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA"}],
+"bufferViews":[{"buffer":0,"byteLength":36}],
+"accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}]})";
+    Scene s;
+    load_mesh_file(s, write_text(dir.file("t.gltf"), gltf));
+    ASSERT_EQ(s.meshes[0].triangles.size(), 1u);
+    const Aabb b = s.meshes[0].bounds();
+    EXPECT_EQ(b.hi, glm::vec3(1, 1, 0));
+}
+
+TEST(Scenes, FolderNumbersMeshesByByteWiseSortedNameAndReadsCamera) {
+    TempDir dir;
+    write_text(dir.file("b.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    write_text(dir.file("B.obj"), "v 0 0 1\nv 1 0 1\nv 0 1 1\nf 1 2 3\nf 1 3 2\n");
+    write_text(dir.file("a.obj"), "v 0 0 2\nv 1 0 2\nv 0 1 2\nf 1 2 3\n");
+    write_text(dir.file("notes.txt"), "ignored");
+    write_text(dir.file("view.camera"), "1 2 10\n0.5 0.5 0\n");
+    const Scene s = load_scene(dir.path().string(), "");
+    ASSERT_EQ(s.meshes.size(), 3u);
+    EXPECT_EQ(s.meshes[0].triangles.size(), 2u);  // "B.obj" < "a.obj" < "b.obj" byte-wise
+    EXPECT_EQ(s.meshes[1].vertices[0].z, 2.0f);
+    EXPECT_EQ(s.meshes[2].vertices[0].z, 0.0f);
+    EXPECT_EQ(s.camera.eye, glm::vec3(1, 2, 10));
+    EXPECT_EQ(s.camera.lookat, glm::vec3(0.5f, 0.5f, 0));
+    EXPECT_TRUE(s.two_level());
+}
+
+TEST(Scenes, UnknownNamesAndMissingAssetsAreInputErrors) {
+    EXPECT_THROW(load_scene("no-such-scene", ""), InputError);
+    EXPECT_THROW(load_scene("bunny", ""), InputError);
+    EXPECT_THROW(load_scene("bunny", "/nonexistent/folder"), InputError);
+    TempDir dir;
+    EXPECT_THROW(load_scene("ship", dir.path().string()), InputError);  // folder without karimSchooner.obj
+}
+
+namespace {
+// Walks the image: every node is reached once, every primitive of every instanced mesh appears in
+// exactly one leaf, child boxes contain their subtrees' primitives, and the image has no holes.
+void check_image(const Scene& s, const BvhImage& img) {
+    const ImageHeader& h = img.header();
+    std::set<std::pair<uint32_t, uint32_t>> prims;
+    uint64_t nodes_bytes = kBlockBytes;  // header
+    uint64_t internal = 0;
+    std::vector<std::pair<uint64_t, uint32_t>> todo = {{h.root, kNoId}};
+    std::set<uint64_t> seen_blas;
+    while (!todo.empty()) {
+        auto [addr, inst] = todo.back();
+        todo.pop_back();
+        const InternalNode n = decode_internal(img.at(addr, kBlockBytes));
+        ++internal;
+        nodes_bytes += kBlockBytes;
+        ASSERT_GE(n.count, 1);
+        for (int i = 0; i < n.count; ++i) {
+            ASSERT_EQ(n.addr[i] % kBlockBytes, 0u);
+            if (i > 0) {
+                EXPECT_EQ(n.addr[i], n.addr[i - 1] + node_bytes(n.type[i - 1])) << "siblings are contiguous";
+            }
+            switch (n.type[i]) {
+                case NodeType::Internal: todo.push_back({n.addr[i], inst}); break;
+                case NodeType::Triangle: {
+                    const TriangleLeaf t = decode_triangle(img.at(n.addr[i], kBlockBytes));
+                    nodes_bytes += kBlockBytes;
+                    EXPECT_TRUE(prims.insert({t.geom, t.prim}).second) << "primitive in two leaves";
+                    Aabb tb;
+                    for (const glm::vec3& v : {t.v0, t.v1, t.v2}) {
+                        tb.lo = glm::min(tb.lo, v);
+                        tb.hi = glm::max(tb.hi, v);
+                    }
+                    EXPECT_TRUE(n.box[i].contains(tb));
+                    break;
+                }
+                case NodeType::Procedural: {
+                    const SphereLeaf sp = decode_sphere(img.at(n.addr[i], kBlockBytes));
+                    nodes_bytes += kBlockBytes;
+                    EXPECT_TRUE(prims.insert({sp.geom, sp.prim}).second);
+                    EXPECT_TRUE(n.box[i].contains(s.meshes[sp.geom].prim_bounds(sp.prim)));
+                    break;
+                }
+                case NodeType::Instance: {
+                    const InstanceLeaf il = decode_instance(img.at(n.addr[i], 2 * kBlockBytes));
+                    nodes_bytes += 2 * kBlockBytes;
+                    if (seen_blas.insert(il.blas_root).second) todo.push_back({il.blas_root, il.instance});
+                    break;
+                }
+                case NodeType::Empty: ADD_FAILURE() << "empty child slot inside count"; break;
+            }
+        }
+    }
+    EXPECT_EQ(internal, img.stats.internal_nodes);
+    EXPECT_EQ(nodes_bytes, img.size()) << "every byte of the image belongs to one node";
+    EXPECT_EQ(prims.size(), s.primitive_count());
+}
+}  // namespace
+
+TEST(BvhImage, WkndAndCornellImagesAreCompleteAndConservative) {
+    for (const Scene& s : {make_wknd(), make_cornell()}) {
+        const BvhImage img = build_bvh_image(s);
+        check_image(s, img);
+        EXPECT_EQ(img.size(), img.stats.image_bytes);
+        EXPECT_FALSE(img.header().has_instances);
+        EXPECT_LE(img.stats.depth, 32u);
+    }
+}
+
+TEST(BvhImage, TwoLevelImageForSeveralMeshes) {
+    TempDir dir;
+    write_text(dir.file("a.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nf 1 2 3\nf 2 4 3\n");
+    write_text(dir.file("b.obj"), "v 0 0 2\nv 1 0 2\nv 0 1 2\nf 1 2 3\n");
+    const Scene s = load_scene(dir.path().string(), "");
+    const BvhImage img = build_bvh_image(s);
+    EXPECT_TRUE(img.header().has_instances);
+    EXPECT_EQ(img.stats.instance_leaves, 2u);
+    EXPECT_EQ(img.stats.blas_count, 2u);
+    check_image(s, img);
+}
+
+TEST(BvhImage, SharedScenesBunnyAndShip) {
+    for (const std::string name : {"bunny", "ship"}) {
+        const Scene s = load_scene(name, rtu::test::shared_dir() + "/scenes/" + name);
+        const BvhImage img = build_bvh_image(s);
+        check_image(s, img);
+        EXPECT_GT(img.stats.depth, 5u);
+    }
+}
+
+TEST(Scenes, DefaultCameraFramesARawMesh) {
+    TempDir dir;
+    const std::string f = write_text(dir.file("far.obj"), "v 1000 1000 1000\nv 1010 1000 1000\nv 1010 1010 1003\nv 1000 1010 1003\nf 1 2 3 4\n");
+    const Scene s = load_scene(f, "");
+    const BvhImage img = build_bvh_image(s);
+    // The centre pixel's primary ray hits the mesh.
+    const Ray r = camera_ray(s.camera, 0, 0, 1, 1, 0.5f, 0.5f, 0.5f, 0.5f);
+    EXPECT_TRUE(trace_ray(img, r, TraversalOrder::DFS).hit.hit);
+}

@@ -1,0 +1,50 @@
+// Small helpers shared by the tests: a temporary folder and file writers.
+#pragma once
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <stdexcept>
+#include <string>
+
+#include <zlib.h>
+
+namespace rtu::test {
+
+class TempDir {
+public:
+    TempDir() {
+        std::string tmpl = (std::filesystem::temp_directory_path() / "rtunit-test-XXXXXX").string();
+        if (!mkdtemp(tmpl.data())) throw std::runtime_error("mkdtemp failed");
+        path_ = tmpl;
+    }
+    ~TempDir() {
+        std::error_code ec;
+        std::filesystem::remove_all(path_, ec);
+    }
+    std::string file(const std::string& name) const { return (path_ / name).string(); }
+    const std::filesystem::path& path() const { return path_; }
+
+private:
+    std::filesystem::path path_;
+};
+
+inline std::string write_text(const std::string& path, const std::string& content) {
+    std::ofstream(path, std::ios::binary) << content;
+    return path;
+}
+
+inline std::string write_gz(const std::string& path, const std::string& content) {
+    gzFile f = gzopen(path.c_str(), "wb");
+    gzwrite(f, content.data(), unsigned(content.size()));
+    gzclose(f);
+    return path;
+}
+
+inline std::string read_text(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+inline std::string shared_dir() { return RTU_SHARED_DIR; }
+
+}  // namespace rtu::test
