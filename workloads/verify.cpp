@@ -12,6 +12,7 @@ const char* agreement_name(Agreement a) {
         case Agreement::Agree: return "agree";
         case Agreement::TUlps: return "t_within_ulps";
         case Agreement::SameTOtherPrim: return "other_prim_same_t";
+        case Agreement::Coincident: return "coincident_duplicate";
         case Agreement::BoundaryT: return "hit_at_tnear_tfar";
         case Agreement::VertexEmbreeMiss: return "vertex_hit_embree_misses";
         case Agreement::ZeroDirFace: return "zero_dir_in_face_plane";
@@ -47,6 +48,22 @@ bool same_point(const Ray& r, long double t1, long double t2, int ulps = kUlpTol
     if (ulp_distance(float(t1), float(t2)) <= uint32_t(ulps)) return true;
     const float scale = std::max(max_abs(r.org), max_abs(r.org + float(t1) * r.dir));
     return std::fabs(t1 - t2) * max_abs(r.dir) <= ulps * 0x1p-24L * scale;
+}
+
+// Two triangles with the same three vertex positions (duplicated faces: 909 of the ship's 6,255).
+bool coincident(const Scene& scene, const Hit& a, const Hit& b) {
+    const Mesh &ma = scene.meshes.at(a.geom), &mb = scene.meshes.at(b.geom);
+    if (ma.procedural() || mb.procedural() || a.geom != b.geom) return false;
+    auto corners = [](const Mesh& m, uint32_t prim) {
+        std::array<std::array<float, 3>, 3> c;
+        for (int k = 0; k < 3; ++k) {
+            const glm::vec3& v = m.vertices[m.triangles.at(prim)[k]];
+            c[k] = {v.x, v.y, v.z};
+        }
+        std::sort(c.begin(), c.end());
+        return c;
+    };
+    return corners(ma, a.prim) == corners(mb, b.prim);
 }
 
 bool instanced(const Scene& scene, const Hit& h) {
@@ -163,7 +180,8 @@ Agreement classify(const Scene& scene, const Ray& ray, const Hit& ours, const Hi
                     a = Agreement::TErrorBound;
             }
         } else {
-            a = same ? Agreement::SameTOtherPrim : Agreement::Mismatch;
+            a = !same ? Agreement::Mismatch
+                      : coincident(scene, ours, ref) ? Agreement::Coincident : Agreement::SameTOtherPrim;
         }
     }
     if (a == Agreement::Mismatch && long_double_confirms_ours(scene, ray, ours, other)) return Agreement::SphereFloatError;

@@ -15,6 +15,7 @@ enum class Agreement : uint8_t {
     Agree,            // same answer (same primitive and t, or both miss; any-hit: both hit)
     TUlps,            // same primitive, same point: t within kUlpTolerance ulps of t or of the coordinates
     SameTOtherPrim,   // different primitive at the same point (as TUlps): a shared edge or vertex
+    Coincident,       // different triangle with the same three vertex positions (a duplicated face)
     BoundaryT,        // one hits, one misses, and the hit lies within kUlpTolerance ulps of tnear or tfar
     VertexEmbreeMiss, // we hit a triangle at a vertex (two barycentrics ~0) that Embree's robust mode misses
     ZeroDirFace,      // one side misses a ray with an exactly-zero direction component (box face plane, sign of zero)
