@@ -1,2 +1,157 @@
+// The rtsim program as users and scripts see it: file formats, exit status, messages.
 #include <gtest/gtest.h>
-TEST(Placeholder, Builds) {}
+
+#include <sys/wait.h>
+
+#include <filesystem>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "test_util.h"
+
+using rtu::test::read_text;
+using rtu::test::TempDir;
+using rtu::test::write_text;
+
+namespace {
+
+struct Result {
+    int status;
+    std::string out, err;
+};
+
+Result rtsim(const TempDir& dir, const std::string& args) {
+    const std::string out = dir.file("stdout.txt"), err = dir.file("stderr.txt");
+    const std::string cmd = std::string(RTU_RTSIM) + " " + args + " > " + out + " 2> " + err + " < /dev/null";
+    const int rc = std::system(cmd.c_str());
+    return {WIFEXITED(rc) ? WEXITSTATUS(rc) : -1, read_text(out), read_text(err)};
+}
+
+std::vector<std::string> lines(const std::string& s) {
+    std::vector<std::string> v;
+    std::istringstream in(s);
+    std::string l;
+    while (std::getline(in, l)) v.push_back(l);
+    return v;
+}
+
+bool exists(const std::string& p) { return std::filesystem::exists(p); }
+
+}  // namespace
+
+// Cornell box: a ray from the camera straight down -z meets the back wall z = -555 at
+// t = 800 + 555 = 1355 (prims 4/5), whatever the form the numbers are written in.
+TEST(Rtsim, RayFileToHitsFile) {
+    TempDir dir;
+    const std::string rays = write_text(dir.file("rays.txt"),
+                                        "# header comment\n"
+                                        "278 278 800 0 0 -1 0 inf\n"                       // 0: back wall, t 1355
+                                        "\n"
+                                        "0x1.16p+8\t278 800  0 0 -1e-20 0 infinity closest  # 1: tiny direction\n"
+                                        "278 278 800 0 0 -1 0 1000\n"                      // 2: tfar before the wall: miss
+                                        "278 278 800 0 0 -1 0 inf any\n"                   // 3: any-hit
+                                        "278 278 800 0 0 1 0 inf\n"                        // 4: away from the box: miss
+                                        "nan 278 800 0 0 -1 0 inf\n"                       // 5: invalid
+                                        "278 278 800 0 0 0 0 inf\n"                        // 6: zero direction
+                                        "278 278 800 0 0 -1 -1 inf\n"                      // 7: tnear < 0
+                                        "278 278 800 0 0 -1 5 4\n"                         // 8: tnear > tfar
+                                        "278 278 800 0 0 -1 0 inf sideways\n"              // 9: bad query
+                                        "1 2 3\n");                                        // 10: too few fields
+    const std::string hits = dir.file("hits.csv"), stats = dir.file("stats.json");
+    const Result r = rtsim(dir, "--scene cornell --rays " + rays + " --hits " + hits + " --stats " + stats + " --verify");
+    ASSERT_EQ(r.status, 0) << r.err;
+    const auto h = lines(read_text(hits));
+    ASSERT_EQ(h.size(), 12u);
+    EXPECT_EQ(h[0], "ray,hit,t,geom,prim");
+    auto field = [&](int ray, int col) {
+        std::istringstream in(h[ray + 1]);
+        std::string f;
+        for (int i = 0; i <= col; ++i) std::getline(in, f, ',');
+        return f;
+    };
+    EXPECT_EQ(field(0, 0), "0");
+    EXPECT_EQ(field(0, 1), "1");
+    EXPECT_EQ(field(0, 2), "1355");
+    EXPECT_EQ(field(0, 3), "0");
+    EXPECT_TRUE(field(0, 4) == "4" || field(0, 4) == "5") << h[1];
+    EXPECT_EQ(field(1, 2), "1.355e+23");  // t in units of the given (tiny) direction
+    EXPECT_EQ(h[3], "2,0,-1,-1,-1");
+    EXPECT_EQ(field(3, 1), "1");
+    EXPECT_EQ(h[5], "4,0,-1,-1,-1");
+    for (int i = 5; i <= 10; ++i) EXPECT_EQ(h[i + 1], std::to_string(i) + ",0,-1,-1,-1");
+    const auto j = nlohmann::json::parse(read_text(stats));
+    EXPECT_EQ(j["rays"], 11);
+    EXPECT_EQ(j["invalid_rays"], 6);
+    EXPECT_EQ(j["verify"]["mismatches"], 0);
+    EXPECT_GT(j["nodes_visited"].get<int>(), 0);
+    EXPECT_NE(r.err.find("rays.txt:8: "), std::string::npos) << "warning names the line of the first invalid ray: " << r.err;
+}
+
+TEST(Rtsim, BadInputExitsWithStatus2AndWritesNothing) {
+    TempDir dir;
+    const std::string stats = dir.file("s.json"), hits = dir.file("h.csv");
+    const std::string outs = " --stats " + stats + " --hits " + hits;
+    const std::string obj = write_text(dir.file("bad.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 nan\nf 1 2 3\n");
+    const std::string empty = write_text(dir.file("empty.obj"), "# no faces\nv 0 0 0\n");
+    const std::string unknown = write_text(dir.file("mesh.abc123"), "?");
+    struct Case {
+        std::string args, expect;
+    } cases[] = {
+        {"--scene " + dir.file("missing.obj"), "missing.obj"},
+        {"--scene " + obj, "bad.obj:3"},
+        {"--scene " + empty, "empty scene"},
+        {"--scene " + unknown, "unknown mesh format"},
+        {"--scene cornell --workload xyz", "--workload 'xyz'"},
+        {"--scene cornell --width 0", "--width"},
+        {"--scene cornell --traversal sideways", "--traversal"},
+        {"--scene cornell --fidelity at", "not built yet"},
+        {"--scene cornell --rays " + dir.file("no-rays.txt"), "no-rays.txt"},
+        {"--scene bunny", "--assets"},
+        {"--scene cornell --bogus-option", "unrecognised"},
+    };
+    for (const Case& c : cases) {
+        const Result r = rtsim(dir, c.args + outs);
+        EXPECT_EQ(r.status, 2) << c.args << "\n" << r.err;
+        EXPECT_NE(r.err.find(c.expect), std::string::npos) << c.args << "\n" << r.err;
+        EXPECT_FALSE(exists(stats)) << c.args;
+        EXPECT_FALSE(exists(hits)) << c.args;
+    }
+    // An output in a folder that does not exist: status 2, and no stray temporary files.
+    const Result r = rtsim(dir, "--scene cornell --width 8 --height 8 --hits " + dir.file("nodir/h.csv"));
+    EXPECT_EQ(r.status, 2) << r.err;
+    EXPECT_NE(r.err.find("nodir/h.csv"), std::string::npos);
+}
+
+TEST(Rtsim, MainJobWritesStatsAndImage) {
+    TempDir dir;
+    const std::string stats = dir.file("s.json"), png = dir.file("f.png");
+    const Result r = rtsim(dir, "--scene wknd --workload pt --width 32 --height 24 --spp 1 --verify --stats " + stats + " --image " + png);
+    ASSERT_EQ(r.status, 0) << r.err;
+    const auto j = nlohmann::json::parse(read_text(stats));
+    EXPECT_EQ(j["scene"], "wknd");
+    EXPECT_GE(j["rays"].get<int>(), 32 * 24);
+    EXPECT_EQ(j["verify"]["mismatches"], 0);
+    EXPECT_TRUE(j["verify"].contains("classes"));
+    EXPECT_EQ(j["bvh"]["procedural_leaves"], 487);
+    const std::string img = read_text(png);
+    ASSERT_GT(img.size(), 8u);
+    EXPECT_EQ(img.substr(1, 3), "PNG");
+    EXPECT_NE(r.out.find("verify against Embree"), std::string::npos);
+    // Nothing else is left in the folder (no temporary files).
+    int files = 0;
+    for (const auto& e : std::filesystem::directory_iterator(dir.path())) files += e.path().filename().string()[0] == '.';
+    EXPECT_EQ(files, 0);
+}
+
+TEST(Rtsim, SameSeedSameStatistics) {
+    TempDir dir;
+    const std::string a = dir.file("a.json"), b = dir.file("b.json");
+    ASSERT_EQ(rtsim(dir, "--scene cornell --width 16 --height 16 --seed 5 --stats " + a).status, 0);
+    ASSERT_EQ(rtsim(dir, "--scene cornell --width 16 --height 16 --seed 5 --stats " + b).status, 0);
+    auto ja = nlohmann::json::parse(read_text(a)), jb = nlohmann::json::parse(read_text(b));
+    ja.erase("time_s");
+    jb.erase("time_s");
+    EXPECT_EQ(ja, jb);
+    EXPECT_EQ(rtsim(dir, "--help").status, 0);
+}

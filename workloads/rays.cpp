@@ -370,8 +370,16 @@ std::vector<RayFileEntry> read_ray_file(const std::string& path) {
         e.ray.dir = {v[3], v[4], v[5]};
         e.ray.tnear = v[6];
         e.ray.tfar = v[7];
-        if (e.problem.empty() && !is_valid_ray(e.ray))
-            e.problem = "invalid ray (NaN, infinite origin/direction, zero direction, tnear < 0 or tnear > tfar)";
+        if (e.problem.empty() && !is_valid_ray(e.ray)) {
+            static const char* names[8] = {"ox", "oy", "oz", "dx", "dy", "dz", "tnear", "tfar"};
+            for (int i = 0; i < 8 && e.problem.empty(); ++i)
+                if (std::isnan(v[i]) || (i < 7 && std::isinf(v[i])) || (i == 7 && v[i] < 0 && std::isinf(v[i])))
+                    e.problem = std::string("invalid ray: ") + names[i] + " = '" + tok[i] + "' (must be finite" +
+                                (i == 7 ? " or +inf)" : ")");
+            if (e.problem.empty() && v[3] == 0.0f && v[4] == 0.0f && v[5] == 0.0f) e.problem = "invalid ray: zero direction";
+            if (e.problem.empty() && v[6] < 0.0f) e.problem = "invalid ray: tnear = '" + tok[6] + "' is negative";
+            if (e.problem.empty()) e.problem = "invalid ray: tnear = '" + tok[6] + "' > tfar = '" + tok[7] + "'";
+        }
         e.valid = e.problem.empty();
         if (!e.valid) e.ray.org.x = NAN;  // an unparsed line must never be traced as a ray
         rays.push_back(e);
