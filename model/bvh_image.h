@@ -11,8 +11,9 @@ namespace rtu {
 
 struct BvhStats {
     uint64_t internal_nodes = 0, triangle_leaves = 0, procedural_leaves = 0, instance_leaves = 0;
-    uint32_t depth = 0;       // levels of internal nodes on the longest root-to-leaf path, TLAS + BLAS
-    uint32_t tlas_depth = 0;  // 0 for a single-level BVH
+    uint32_t depth = 0;       // nodes on the longest root-to-leaf path, leaves included; two-level:
+                              // TLAS internal levels + instance leaf + BLAS internal levels + leaf
+    uint32_t tlas_depth = 0;  // internal levels of the TLAS (0 for a single-level BVH)
     uint64_t image_bytes = 0;
     uint32_t blas_count = 0;
 };

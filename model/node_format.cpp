@@ -14,21 +14,41 @@ void put(uint8_t* p, const T& v) { std::memcpy(p, &v, sizeof(T)); }
 template <typename T>
 T get(const uint8_t* p) { T v; std::memcpy(&v, p, sizeof(T)); return v; }
 
+// The next float above x (x finite, not NaN); inline bit arithmetic instead of libm's nextafter,
+// since decoding a node does this up to 36 times.
+inline float next_up(float x) {
+    if (x == 0.0f) return std::numeric_limits<float>::denorm_min();
+    uint32_t b;
+    std::memcpy(&b, &x, 4);
+    b += x > 0.0f ? 1 : -1;
+    std::memcpy(&x, &b, 4);
+    return x;
+}
+inline float next_down(float x) { return -next_up(-x); }
+
 // origin + x rounded toward -inf (lo) or +inf (hi). x = q * 2^k is exact; the sum is rounded to
 // nearest, and Knuth's TwoSum recovers the rounding error exactly, which tells which way to step.
-float add_outward(float origin, float x, bool round_up) {
+inline float add_outward(float origin, float x, bool round_up) {
     const float s = origin + x;
     const float bb = s - origin;
     const float err = (origin - (s - bb)) + (x - bb);
-    if (round_up && err > 0.0f) return std::nextafter(s, std::numeric_limits<float>::infinity());
-    if (!round_up && err < 0.0f) return std::nextafter(s, -std::numeric_limits<float>::infinity());
+    if (round_up && err > 0.0f) return next_up(s);
+    if (!round_up && err < 0.0f) return next_down(s);
     return s;
 }
 
 constexpr int kMinExp = -100, kMaxExp = 127;
 
-float decode_bound(float origin, int exp, uint8_t q, bool hi) {
-    return add_outward(origin, std::ldexp(float(q), exp - 8), hi);
+// 2^(exp-8) as a normal float, built from its bits (exp in [kMinExp, kMaxExp]).
+inline float quantum(int exp) {
+    const uint32_t b = uint32_t(exp - 8 + 127) << 23;
+    float f;
+    std::memcpy(&f, &b, 4);
+    return f;
+}
+
+inline float decode_bound(float origin, int exp, uint8_t q, bool hi) {
+    return add_outward(origin, float(q) * quantum(exp), hi);
 }
 
 // Quantizes one axis of all children with exponent e; false if e is too small.
@@ -116,14 +136,15 @@ InternalNode decode_internal(const uint8_t* bytes) {
     std::memcpy(exps, bytes + 12, 3);
     n.count = bytes[15];
     uint64_t addr = uint64_t(get<uint32_t>(bytes + 16)) * kBlockBytes;
+    const float scale[3] = {quantum(exps[0]), quantum(exps[1]), quantum(exps[2])};
     for (int i = 0; i < n.count && i < kMaxChildren; ++i) {
         n.type[i] = NodeType(bytes[20 + i]);
         n.addr[i] = addr;
         addr += node_bytes(n.type[i]);
         const uint8_t* q = bytes + 26 + 6 * i;
         for (int a = 0; a < 3; ++a) {
-            n.box[i].lo[a] = decode_bound(origin[a], exps[a], q[a], false);
-            n.box[i].hi[a] = decode_bound(origin[a], exps[a], q[3 + a], true);
+            n.box[i].lo[a] = add_outward(origin[a], float(q[a]) * scale[a], false);
+            n.box[i].hi[a] = add_outward(origin[a], float(q[3 + a]) * scale[a], true);
         }
     }
     return n;

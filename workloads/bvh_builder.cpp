@@ -197,7 +197,7 @@ BvhImage build_bvh_image(const Scene& scene) {
         header.root = w.alloc(kBlockBytes);
         header.root_box = box;
         auto writer = mesh_leaf_writer(mesh, geom);
-        w.stats.depth = w.write_internal(root, union_of(root), header.root, mesh.procedural() ? NodeType::Procedural : NodeType::Triangle, writer);
+        w.stats.depth = w.write_internal(root, union_of(root), header.root, mesh.procedural() ? NodeType::Procedural : NodeType::Triangle, writer) + 1;
         rtcReleaseBVH(bvh);
     } else {
         // TLAS over the instances of non-empty meshes.
@@ -260,7 +260,7 @@ BvhImage build_bvh_image(const Scene& scene) {
             encode_instance(leaf, &w.bytes[at]);
             deepest = std::max(deepest, blas_depth[in.mesh]);
         }
-        w.stats.depth = w.stats.tlas_depth + deepest;
+        w.stats.depth = w.stats.tlas_depth + 1 + deepest + 1;  // + instance leaf + primitive leaf
     }
     header.has_procedural = scene.has_procedural();
     header.leaves = uint32_t(w.stats.triangle_leaves + w.stats.procedural_leaves + w.stats.instance_leaves);

@@ -328,7 +328,7 @@ Scene load_scene(const std::string& name, const std::string& assets) {
         }
         s.sky = true;
     }
-    if (s.name.empty()) s.name = name;
+    if (s.name.empty() || name == "bath" || name == "sprng") s.name = name;
     s.validate();
     return s;
 }
