@@ -46,4 +46,14 @@ for f in sorted(pathlib.Path(sys.argv[1]).glob("*.json")):
     print("| %s | %.1f | %.1f | %+.1f %% | %d | %d | %+.1f %% |" % (d["scene"], d["nodes_per_ray"], b["nodes_per_ray"],
           100 * (b["nodes_per_ray"] / d["nodes_per_ray"] - 1), d["max_nodes_per_ray"], b["max_nodes_per_ray"],
           100 * (b["max_nodes_per_ray"] / d["max_nodes_per_ray"] - 1)))
+print()
+print("Agreement with Embree per ray (DFS run), by class")
+names = None
+for f in sorted(pathlib.Path(sys.argv[1]).glob("*.json")):
+    d = json.loads(f.read_text()); c = d["verify"]["classes"]
+    if names is None:
+        names = list(c)
+        print("| scene | " + " | ".join(names) + " |")
+        print("|---|" + "---|" * len(names))
+    print("| %s | " % d["scene"] + " | ".join(str(c[n]) for n in names) + " |")
 PY
