@@ -1,0 +1,271 @@
+#include "config.h"
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "config_presets.h"  // generated from platforms/configs/*.json
+
+namespace rtu {
+namespace {
+
+enum class Type { Int, Real, Text };
+struct Key {
+    const char* name;
+    Type type;
+    double min, max;
+    bool pow2;
+    const char* what;
+};
+
+// Every configuration key. Ranges are what the hardware model can represent.
+const Key kSchema[] = {
+    {"gpu.sms", Type::Int, 1, 1024, false, "streaming multiprocessors, one RT unit each"},
+    {"gpu.core_clock_mhz", Type::Real, 1, 1e5, false, "core, interconnect and L2 clock"},
+    {"gpu.memory_clock_mhz", Type::Real, 1, 1e5, false, "DRAM command clock"},
+    {"rt.warp_size", Type::Int, 1, 32, true, "threads per warp"},
+    {"rt.warp_buffer", Type::Int, 1, 64, false, "warps resident in an RT unit"},
+    {"rt.l1_hit_latency", Type::Int, 0, 1000, false, "extra cycles the RT unit waits on an L1 hit"},
+    {"rt.response_fifo", Type::Int, 0, 1 << 20, false, "response FIFO entries (0: unbounded)"},
+    {"rt.latency.header", Type::Int, 0, 1000, false, "BVH node header decode"},
+    {"rt.latency.ray_box", Type::Int, 0, 1000, false, "ray-box tests of an internal node"},
+    {"rt.latency.transform", Type::Int, 0, 1000, false, "instance transform"},
+    {"rt.latency.leaf_descriptor", Type::Int, 0, 1000, false, "leaf descriptor"},
+    {"rt.latency.ray_triangle", Type::Int, 0, 1000, false, "ray-triangle test"},
+    {"rt.latency.triangle_hit", Type::Int, 0, 1000, false, "triangle hit update"},
+    {"rt.latency.procedural", Type::Int, 0, 1000, false, "procedural (sphere) test"},
+    {"workload.shade_latency", Type::Int, 0, 1e7, false, "cycles to shade a hit and issue the next ray"},
+    {"l1.size_kb", Type::Int, 1, 1 << 20, true, "L1 data cache per SM"},
+    {"l1.assoc", Type::Int, 0, 1 << 16, false, "ways (0: fully associative)"},
+    {"l1.line", Type::Int, 16, 4096, true, "line bytes"},
+    {"l1.sector", Type::Int, 16, 4096, true, "sector bytes"},
+    {"l1.mshrs", Type::Int, 1, 1 << 16, false, "miss status holding registers"},
+    {"l1.mshr_merge", Type::Int, 1, 1024, false, "requests merged into one MSHR"},
+    {"l1.latency", Type::Int, 0, 10000, false, "load/store hit latency (the RT unit uses rt.l1_hit_latency)"},
+    {"l2.slices", Type::Int, 1, 256, false, "L2 slices"},
+    {"l2.slice_kb", Type::Int, 1, 1 << 22, false, "capacity of one slice"},
+    {"l2.assoc", Type::Int, 0, 1 << 16, false, "ways (0: fully associative)"},
+    {"l2.line", Type::Int, 16, 4096, true, "line bytes"},
+    {"l2.sector", Type::Int, 16, 4096, true, "sector bytes"},
+    {"l2.mshrs", Type::Int, 1, 1 << 16, false, "MSHRs per slice"},
+    {"l2.mshr_merge", Type::Int, 1, 1024, false, "requests merged into one MSHR"},
+    {"l2.latency", Type::Int, 0, 100000, false, "L2 hit latency (core cycles)"},
+    {"xbar.latency", Type::Int, 0, 10000, false, "crossbar latency each way (core cycles)"},
+    {"dram.channels", Type::Int, 1, 256, false, "channels"},
+    {"dram.banks", Type::Int, 1, 1024, true, "banks per channel"},
+    {"dram.bank_groups", Type::Int, 1, 64, true, "bank groups per channel"},
+    {"dram.bus_bytes", Type::Int, 1, 64, true, "data bus width per channel (bytes)"},
+    {"dram.burst", Type::Int, 1, 64, true, "burst length"},
+    {"dram.queue", Type::Int, 1, 1 << 16, false, "scheduler queue entries per channel"},
+    {"dram.row_bytes", Type::Int, 128, 1 << 20, true, "row (page) size"},
+    {"dram.scheduler", Type::Text, 0, 0, false, "frfcfs or fcfs"},
+    {"dram.tCL", Type::Int, 1, 1000, false, "CAS latency (memory cycles)"},
+    {"dram.tRCD", Type::Int, 1, 1000, false, "ACT to column command"},
+    {"dram.tRP", Type::Int, 1, 1000, false, "precharge"},
+    {"dram.tRAS", Type::Int, 1, 1000, false, "ACT to precharge"},
+    {"dram.tRC", Type::Int, 1, 1000, false, "ACT to ACT, same bank"},
+    {"dram.tRRD", Type::Int, 0, 1000, false, "ACT to ACT, other bank"},
+    {"dram.tCCD", Type::Int, 1, 1000, false, "column to column"},
+    {"dram.tWL", Type::Int, 0, 1000, false, "write latency"},
+    {"dram.tWR", Type::Int, 0, 1000, false, "write recovery"},
+    {"sim.quantum", Type::Int, 1, 1e9, false, "LT quantum (core cycles)"},
+    {"sim.watchdog", Type::Int, 1000, 1e12, false, "cycles without progress before the run is stopped"},
+};
+
+const Key* find_key(const std::string& name) {
+    for (const Key& k : kSchema)
+        if (name == k.name) return &k;
+    return nullptr;
+}
+
+std::string near_keys(const std::string& name) {
+    const std::string group = name.substr(0, name.find('.'));
+    std::string out;
+    for (const Key& k : kSchema)
+        if (std::string(k.name).rfind(group + ".", 0) == 0) out += (out.empty() ? "" : ", ") + std::string(k.name);
+    return out.empty() ? "see platforms/configs/mobile.json" : out;
+}
+
+nlohmann::json checked_value(const Key& k, const nlohmann::json& v, const std::string& source) {
+    const std::string where = source + ": key '" + k.name + "'";
+    if (k.type == Type::Text) {
+        if (!v.is_string()) throw ConfigError(where + " must be a string, got " + v.dump());
+        return v;
+    }
+    if (!v.is_number()) throw ConfigError(where + " must be a number, got " + v.dump());
+    const double d = v.get<double>();
+    if (k.type == Type::Int && (d != std::floor(d))) throw ConfigError(where + " must be a whole number, got " + v.dump());
+    if (!(d >= k.min && d <= k.max))
+        throw ConfigError(where + " = " + v.dump() + " is out of range [" + nlohmann::json(k.min).dump() + ", " +
+                          nlohmann::json(k.max).dump() + "] (" + k.what + ")");
+    if (k.pow2) {
+        const uint64_t u = uint64_t(d);
+        if (u == 0 || (u & (u - 1))) throw ConfigError(where + " = " + v.dump() + " must be a power of two (" + k.what + ")");
+    }
+    return k.type == Type::Int ? nlohmann::json(uint64_t(d)) : nlohmann::json(d);
+}
+
+}  // namespace
+
+std::vector<std::string> Config::presets() {
+    std::vector<std::string> v;
+    for (const auto& p : kConfigPresets) v.push_back(p.first);
+    return v;
+}
+
+void Config::apply(const nlohmann::json& j, const std::string& prefix, const std::string& source) {
+    if (!j.is_object()) throw ConfigError(source + ": expected a JSON object at '" + prefix + "'");
+    for (auto it = j.begin(); it != j.end(); ++it) {
+        if (!it.key().empty() && it.key()[0] == '_') continue;  // comments
+        const std::string name = prefix.empty() ? it.key() : prefix + "." + it.key();
+        if (it.value().is_object()) {
+            apply(it.value(), name, source);
+            continue;
+        }
+        const Key* k = find_key(name);
+        if (!k) throw ConfigError(source + ": unknown key '" + name + "' (known: " + near_keys(name) + ")");
+        values_[name] = checked_value(*k, it.value(), source);
+    }
+}
+
+Config Config::load(const std::string& name) {
+    Config c;
+    const auto base = nlohmann::json::parse(kConfigPresets.at("mobile"));
+    c.apply(base, "", "preset mobile");
+    std::string text, source;
+    auto preset = kConfigPresets.find(name);
+    if (preset != kConfigPresets.end()) {
+        text = preset->second;
+        source = "preset " + name;
+    } else {
+        std::error_code ec;
+        if (!std::filesystem::is_regular_file(name, ec)) {
+            std::string names;
+            for (const auto& p : presets()) names += (names.empty() ? "" : ", ") + p;
+            throw ConfigError("--config '" + name + "': not a preset (" + names + ") and no such file");
+        }
+        std::ifstream in(name);
+        std::stringstream ss;
+        ss << in.rdbuf();
+        text = ss.str();
+        source = name;
+    }
+    nlohmann::json j;
+    try {
+        j = nlohmann::json::parse(text);
+    } catch (const nlohmann::json::parse_error& e) {
+        throw ConfigError(source + ": not valid JSON: " + e.what());
+    }
+    c.apply(j, "", source);
+    c.resolve();  // cross-key rules
+    return c;
+}
+
+void Config::set(const std::string& assignment) {
+    const auto eq = assignment.find('=');
+    if (eq == std::string::npos) throw ConfigError("--set '" + assignment + "': expected key=value");
+    const std::string name = assignment.substr(0, eq), text = assignment.substr(eq + 1);
+    const Key* k = find_key(name);
+    if (!k) throw ConfigError("--set: unknown key '" + name + "' (known: " + near_keys(name) + ")");
+    nlohmann::json v;
+    if (k->type == Type::Text) {
+        v = text;
+    } else {
+        try {
+            size_t used = 0;
+            const double d = std::stod(text, &used);
+            if (used != text.size()) throw std::invalid_argument("trailing");
+            v = d;
+        } catch (const std::exception&) {
+            throw ConfigError("--set: key '" + name + "' needs a number, got '" + text + "'");
+        }
+    }
+    values_[name] = checked_value(*k, v, "--set");
+}
+
+HwConfig Config::resolve() const {
+    auto num = [&](const char* key) { return values_.at(key).get<double>(); };
+    auto u32 = [&](const char* key) { return uint32_t(values_.at(key).get<uint64_t>()); };
+    HwConfig h;
+    h.sms = u32("gpu.sms");
+    h.core_mhz = num("gpu.core_clock_mhz");
+    h.memory_mhz = num("gpu.memory_clock_mhz");
+    h.warp_size = u32("rt.warp_size");
+    h.warp_buffer = u32("rt.warp_buffer");
+    h.l1_hit_latency = u32("rt.l1_hit_latency");
+    h.response_fifo = u32("rt.response_fifo");
+    h.lat = {u32("rt.latency.header"), u32("rt.latency.ray_box"), u32("rt.latency.transform"),
+             u32("rt.latency.leaf_descriptor"), u32("rt.latency.ray_triangle"), u32("rt.latency.triangle_hit"),
+             u32("rt.latency.procedural")};
+    h.shade_latency = u32("workload.shade_latency");
+    auto cache = [&](const std::string& p, uint64_t kb) {
+        CacheConfig c;
+        c.size_bytes = kb * 1024;
+        c.assoc = u32((p + ".assoc").c_str());
+        c.line = u32((p + ".line").c_str());
+        c.sector = u32((p + ".sector").c_str());
+        c.mshrs = u32((p + ".mshrs").c_str());
+        c.mshr_merge = u32((p + ".mshr_merge").c_str());
+        c.latency = u32((p + ".latency").c_str());
+        if (c.sector > c.line) throw ConfigError("key '" + p + ".sector' (" + std::to_string(c.sector) + ") must not exceed '" + p + ".line' (" + std::to_string(c.line) + ")");
+        const uint64_t lines = c.size_bytes / c.line;
+        if (lines == 0 || c.size_bytes % c.line) throw ConfigError("key '" + p + ".size' must be a multiple of '" + p + ".line'");
+        if (c.assoc && (lines % c.assoc || c.assoc > lines))
+            throw ConfigError("key '" + p + ".assoc' (" + std::to_string(c.assoc) + ") must divide the " + std::to_string(lines) + " lines");
+        if (c.assoc && ((lines / c.assoc) & (lines / c.assoc - 1)))
+            throw ConfigError("key '" + p + ".assoc': the number of sets (" + std::to_string(lines / c.assoc) + ") must be a power of two");
+        if (c.mshr_merge > c.mshrs)
+            throw ConfigError("key '" + p + ".mshr_merge' (" + std::to_string(c.mshr_merge) + ") exceeds '" + p + ".mshrs' (" + std::to_string(c.mshrs) + ")");
+        return c;
+    };
+    h.l1 = cache("l1", values_.at("l1.size_kb").get<uint64_t>());
+    h.l2_slices = u32("l2.slices");
+    h.l2 = cache("l2", values_.at("l2.slice_kb").get<uint64_t>());
+    if (h.l1.line != h.l2.line || h.l1.sector != h.l2.sector)
+        throw ConfigError("keys 'l1.line'/'l1.sector' must equal 'l2.line'/'l2.sector'");
+    h.xbar_latency = u32("xbar.latency");
+    DramConfig& d = h.dram;
+    d.channels = u32("dram.channels");
+    d.banks = u32("dram.banks");
+    d.bank_groups = u32("dram.bank_groups");
+    d.bus_bytes = u32("dram.bus_bytes");
+    d.burst = u32("dram.burst");
+    d.queue = u32("dram.queue");
+    d.row_bytes = u32("dram.row_bytes");
+    const std::string sched = values_.at("dram.scheduler").get<std::string>();
+    if (sched != "frfcfs" && sched != "fcfs") throw ConfigError("key 'dram.scheduler' = '" + sched + "': allowed are frfcfs, fcfs");
+    d.frfcfs = sched == "frfcfs";
+    d.tCL = u32("dram.tCL");
+    d.tRCD = u32("dram.tRCD");
+    d.tRP = u32("dram.tRP");
+    d.tRAS = u32("dram.tRAS");
+    d.tRC = u32("dram.tRC");
+    d.tRRD = u32("dram.tRRD");
+    d.tCCD = u32("dram.tCCD");
+    d.tWL = u32("dram.tWL");
+    d.tWR = u32("dram.tWR");
+    if (d.bank_groups > d.banks) throw ConfigError("key 'dram.bank_groups' exceeds 'dram.banks'");
+    if (d.row_bytes < h.l2.line) throw ConfigError("key 'dram.row_bytes' must be at least one cache line");
+    if (d.tRC < d.tRAS) throw ConfigError("key 'dram.tRC' (" + std::to_string(d.tRC) + ") must be at least 'dram.tRAS' (" + std::to_string(d.tRAS) + ")");
+    h.quantum = values_.at("sim.quantum").get<uint64_t>();
+    h.watchdog = values_.at("sim.watchdog").get<uint64_t>();
+    return h;
+}
+
+nlohmann::ordered_json Config::to_json() const {
+    nlohmann::ordered_json j;
+    for (const Key& k : kSchema) {
+        nlohmann::ordered_json* node = &j;
+        std::string name = k.name;
+        size_t pos;
+        while ((pos = name.find('.')) != std::string::npos) {
+            node = &(*node)[name.substr(0, pos)];
+            name = name.substr(pos + 1);
+        }
+        (*node)[name] = values_.at(k.name);
+    }
+    return j;
+}
+
+}  // namespace rtu

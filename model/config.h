@@ -1,0 +1,71 @@
+// Hardware configuration of the timing model: JSON presets (platforms/configs/*.json), a file,
+// and single-key overrides (`--set key=value`). Every key is declared once in a schema with its
+// type and allowed range; unknown keys, wrong types and impossible values are rejected with a
+// message naming the key. Plain C++ (no SystemC).
+#pragma once
+#include <cstdint>
+#include <map>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace rtu {
+
+struct ConfigError : std::runtime_error {
+    using std::runtime_error::runtime_error;
+};
+
+struct CacheConfig {
+    uint64_t size_bytes;
+    uint32_t assoc;  // 0 = fully associative
+    uint32_t line, sector, mshrs, mshr_merge, latency;
+};
+
+struct DramConfig {
+    uint32_t channels, banks, bank_groups, bus_bytes, burst, queue, row_bytes;
+    bool frfcfs;
+    uint32_t tCL, tRCD, tRP, tRAS, tRC, tRRD, tCCD, tWL, tWR;  // memory clock cycles
+};
+
+struct RtLatency {
+    uint32_t header, ray_box, transform, leaf_descriptor, ray_triangle, triangle_hit, procedural;
+};
+
+// The typed view of a validated configuration.
+struct HwConfig {
+    uint32_t sms;
+    double core_mhz, memory_mhz;
+    uint32_t warp_size, warp_buffer, l1_hit_latency, response_fifo;
+    RtLatency lat;
+    uint32_t shade_latency;
+    CacheConfig l1;
+    uint32_t l2_slices;
+    CacheConfig l2;  // per slice
+    uint32_t xbar_latency;
+    DramConfig dram;
+    uint64_t quantum, watchdog;  // core cycles
+};
+
+class Config {
+public:
+    // A preset name (mobile, desktop) or a JSON file path. Throws ConfigError.
+    static Config load(const std::string& name_or_file);
+    static std::vector<std::string> presets();
+
+    // key=value, e.g. "l1.size_kb=64"; the value is parsed as the key's type. Throws ConfigError.
+    void set(const std::string& assignment);
+
+    // Checks cross-key rules (sizes, powers of two, merges) and returns the typed view.
+    HwConfig resolve() const;
+
+    // The effective configuration as nested JSON (written into the stats file).
+    nlohmann::ordered_json to_json() const;
+
+private:
+    void apply(const nlohmann::json& j, const std::string& prefix, const std::string& source);
+    std::map<std::string, nlohmann::json> values_;
+};
+
+}  // namespace rtu

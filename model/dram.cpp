@@ -1,0 +1,77 @@
+#include "dram.h"
+
+#include <algorithm>
+
+namespace rtu {
+
+DramAddressMap::DramAddressMap(const DramConfig& c, uint32_t line_bytes)
+    : channels_(c.channels), banks_(c.banks), line_(line_bytes), lines_per_row_(c.row_bytes / line_bytes) {}
+
+DramCoord DramAddressMap::map(uint64_t addr) const {
+    const uint64_t line = addr / line_;
+    DramCoord d;
+    d.channel = uint32_t(line % channels_);
+    const uint64_t in_channel = line / channels_;
+    const uint64_t row_block = in_channel / lines_per_row_;
+    d.bank = uint32_t(row_block % banks_);
+    d.row = row_block / banks_;
+    return d;
+}
+
+DramChannel::DramChannel(const DramConfig& c) : cfg_(c), banks_(c.banks) {}
+
+bool DramChannel::schedule(uint64_t now, DramRequest* out, uint64_t* done) {
+    if (queue_.empty()) return false;
+    size_t pick = 0;
+    if (cfg_.frfcfs) {
+        for (size_t i = 0; i < queue_.size(); ++i) {
+            const Bank& b = banks_[queue_[i].at.bank];
+            if (b.open && b.row == queue_[i].at.row) {
+                pick = i;
+                break;
+            }
+        }
+    }
+    DramRequest r = queue_[pick];
+    queue_.erase(queue_.begin() + long(pick));
+    Bank& b = banks_[r.at.bank];
+    uint64_t col;
+    if (b.open && b.row == r.at.row) {
+        ++stats_.row_hits;
+        col = std::max({now, b.act + cfg_.tRCD, next_col_});
+    } else {
+        uint64_t act_ready = now;
+        if (b.open) {
+            ++stats_.row_conflicts;
+            const uint64_t pre = std::max({now, b.act + cfg_.tRAS, b.write_done});
+            act_ready = pre + cfg_.tRP;
+        } else {
+            ++stats_.row_misses;
+        }
+        uint64_t act = act_ready;
+        if (b.activated) act = std::max(act, b.act + cfg_.tRC);
+        if (any_act_) act = std::max(act, last_act_ + cfg_.tRRD);
+        b.open = true;
+        b.row = r.at.row;
+        b.act = act;
+        b.activated = true;
+        last_act_ = act;
+        any_act_ = true;
+        col = std::max(act + cfg_.tRCD, next_col_);
+    }
+    const uint64_t xfer = transfer_cycles(r.bytes);
+    const uint64_t data_start = std::max(col + (r.write ? cfg_.tWL : cfg_.tCL), bus_free_);
+    const uint64_t data_end = data_start + xfer;
+    bus_free_ = data_end;
+    next_col_ = col + std::max<uint64_t>(cfg_.tCCD, xfer);
+    if (r.write) b.write_done = data_end + cfg_.tWR;
+    (r.write ? stats_.writes : stats_.reads)++;
+    stats_.bytes += r.bytes;
+    stats_.data_cycles += xfer;
+    stats_.queue_wait += col - std::min(col, r.arrival);
+    *out = r;
+    *done = data_end;
+    return true;
+}
+
+}  // namespace rtu

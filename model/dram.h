@@ -1,0 +1,81 @@
+// DRAM channel timing: banks with open rows, the command timing of DESIGN.md section 5 (tCL,
+// tRCD, tRP, tRAS, tRC, tRRD, tCCD, tWL, tWR, in memory clock cycles), a shared data bus of
+// bus_bytes x 2 (double data rate) per memory cycle, and an FR-FCFS (or FCFS) scheduler over a
+// bounded request queue. Plain C++ (no SystemC); the tlm/ DRAM module drives it.
+#pragma once
+#include <cstdint>
+#include <deque>
+#include <vector>
+
+#include "config.h"
+
+namespace rtu {
+
+struct DramCoord {
+    uint32_t channel, bank;
+    uint64_t row;
+};
+
+// Lines are interleaved across channels; within a channel consecutive lines fill a row, then
+// move to the next bank.
+class DramAddressMap {
+public:
+    DramAddressMap(const DramConfig& c, uint32_t line_bytes);
+    DramCoord map(uint64_t addr) const;
+
+private:
+    uint32_t channels_, banks_, line_, lines_per_row_;
+};
+
+struct DramRequest {
+    uint64_t addr = 0;
+    uint32_t bytes = 32;
+    bool write = false;
+    uint64_t token = 0;
+    uint64_t arrival = 0;  // memory cycle it entered the queue
+    DramCoord at{};
+};
+
+struct DramStats {
+    uint64_t reads = 0, writes = 0, row_hits = 0, row_misses = 0, row_conflicts = 0;
+    uint64_t bytes = 0, data_cycles = 0;  // data-bus occupancy, for bandwidth utilisation
+    uint64_t queue_wait = 0;              // sum of (issue - arrival), memory cycles
+};
+
+class DramChannel {
+public:
+    explicit DramChannel(const DramConfig& c);
+    bool full() const { return queue_.size() >= cfg_.queue; }
+    bool empty() const { return queue_.empty(); }
+    size_t depth() const { return queue_.size(); }
+    void enqueue(const DramRequest& r) { queue_.push_back(r); }
+    // Earliest memory cycle at which the scheduler picks the next request: tRCD before the
+    // column bus frees, so that a row miss's ACT overlaps the transfers ahead of it while row
+    // hits that arrive meanwhile can still be preferred.
+    uint64_t next_decision() const { return next_col_ > cfg_.tRCD ? next_col_ - cfg_.tRCD : 0; }
+    // Picks a request at memory cycle `now` (FR-FCFS: the oldest row hit, else the oldest),
+    // issues its commands at their earliest legal cycles and returns it with the cycle its
+    // data transfer ends. False if the queue is empty.
+    bool schedule(uint64_t now, DramRequest* out, uint64_t* done);
+    const DramStats& stats() const { return stats_; }
+
+    // Data cycles of one transfer of `bytes`.
+    uint64_t transfer_cycles(uint32_t bytes) const { return (bytes + 2 * cfg_.bus_bytes - 1) / (2 * cfg_.bus_bytes); }
+
+private:
+    struct Bank {
+        bool open = false;
+        uint64_t row = 0;
+        uint64_t act = 0;          // cycle of the last ACT
+        bool activated = false;
+        uint64_t write_done = 0;   // end of write recovery
+    };
+    DramConfig cfg_;
+    std::deque<DramRequest> queue_;
+    std::vector<Bank> banks_;
+    uint64_t next_col_ = 0, bus_free_ = 0, last_act_ = 0;
+    bool any_act_ = false;
+    DramStats stats_;
+};
+
+}  // namespace rtu

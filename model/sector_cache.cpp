@@ -1,0 +1,113 @@
+#include "sector_cache.h"
+
+#include <stdexcept>
+
+namespace rtu {
+
+SectorCache::SectorCache(const CacheConfig& c)
+    : line_(c.line), sector_(c.sector), mshrs_(c.mshrs), merge_(c.mshr_merge) {
+    const uint64_t lines = c.size_bytes / c.line;
+    assoc_ = c.assoc ? c.assoc : uint32_t(lines);
+    sets_ = uint32_t(lines / assoc_);
+    if (line_ / sector_ > 32) throw std::invalid_argument("at most 32 sectors per line");
+    ways_.resize(lines);
+    where_.reserve(lines * 2);
+}
+
+SectorCache::Way* SectorCache::find(uint64_t line) {
+    auto it = where_.find(line);
+    return it == where_.end() ? nullptr : &ways_[it->second];
+}
+
+CacheStats SectorCache::total() const {
+    CacheStats t;
+    for (const CacheStats& s : stats_) {
+        t.accesses += s.accesses;
+        t.hits += s.hits;
+        t.mshr_hits += s.mshr_hits;
+        t.sector_misses += s.sector_misses;
+        t.line_misses += s.line_misses;
+        t.reservation_fails += s.reservation_fails;
+        t.fills += s.fills;
+        t.evictions += s.evictions;
+    }
+    return t;
+}
+
+CacheOutcome SectorCache::read(uint64_t addr, uint64_t token, ReqKind kind) {
+    CacheStats& st = stats_[size_t(kind)];
+    ++st.accesses;
+    const uint64_t line = addr / line_ * line_;
+    const uint64_t sector = sector_of(addr);
+    const uint32_t bit = 1u << ((addr - line) / sector_);
+    Way* w = find(line);
+    if (w && (w->valid & bit)) {
+        w->lru = ++clock_;
+        ++st.hits;
+        return CacheOutcome::Hit;
+    }
+    if (w && (w->pending & bit)) {
+        Mshr& m = mshr_.at(sector);
+        if (m.tokens.size() >= merge_) {
+            ++st.reservation_fails;
+            return CacheOutcome::ReservationFail;
+        }
+        m.tokens.push_back(token);
+        w->lru = ++clock_;
+        ++st.mshr_hits;
+        return CacheOutcome::MshrHit;
+    }
+    if (mshr_.size() >= mshrs_) {
+        ++st.reservation_fails;
+        return CacheOutcome::ReservationFail;
+    }
+    CacheOutcome out = CacheOutcome::SectorMiss;
+    if (!w) {
+        // LRU victim among the set's ways that have no pending sector.
+        const uint64_t set = (line / line_) % sets_;
+        Way* victim = nullptr;
+        for (uint64_t i = set * assoc_; i < (set + 1) * assoc_; ++i) {
+            Way& c = ways_[i];
+            if (c.pending) continue;
+            if (!victim || c.line == ~0ull || (victim->line != ~0ull && c.lru < victim->lru)) victim = &c;
+            if (c.line == ~0ull) break;
+        }
+        if (!victim) {
+            ++st.reservation_fails;
+            return CacheOutcome::ReservationFail;
+        }
+        if (victim->line != ~0ull) {
+            where_.erase(victim->line);
+            if (victim->valid) ++st.evictions;
+        }
+        victim->line = line;
+        victim->valid = 0;
+        victim->pending = 0;
+        where_[line] = uint32_t(victim - ways_.data());
+        w = victim;
+        out = CacheOutcome::LineMiss;
+    }
+    w->pending |= bit;
+    w->lru = ++clock_;
+    mshr_[sector].tokens.push_back(token);
+    if (out == CacheOutcome::LineMiss) ++st.line_misses;
+    else ++st.sector_misses;
+    return out;
+}
+
+std::vector<uint64_t> SectorCache::fill(uint64_t sector_addr) {
+    auto it = mshr_.find(sector_addr);
+    if (it == mshr_.end()) throw std::logic_error("fill of a sector without MSHR");
+    std::vector<uint64_t> tokens = std::move(it->second.tokens);
+    mshr_.erase(it);
+    const uint64_t line = sector_addr / line_ * line_;
+    Way* w = find(line);
+    if (!w) throw std::logic_error("fill of a sector whose line was evicted while pending");
+    const uint32_t bit = 1u << ((sector_addr - line) / sector_);
+    w->pending &= ~bit;
+    w->valid |= bit;
+    ++stats_[0].fills;
+    return tokens;
+}
+
+}  // namespace rtu

@@ -1,0 +1,68 @@
+// Tag, LRU and MSHR logic of a sector cache (L1 per SM, L2 slices): 128 B lines of 32 B
+// sectors, N-way or fully associative, LRU replacement, MSHRs that merge requests to a pending
+// sector up to a limit, and reservation fails when no MSHR or no replaceable line is left.
+// Plain C++ (no SystemC); the tlm/ cache module drives it.
+#pragma once
+#include <array>
+#include <cstdint>
+#include <unordered_map>
+#include <vector>
+
+#include "config.h"
+
+namespace rtu {
+
+enum class ReqKind : uint8_t { Demand = 0, Prefetch = 1 };
+constexpr int kReqKinds = 2;
+
+enum class CacheOutcome : uint8_t {
+    Hit,              // sector present
+    MshrHit,          // sector pending: merged into its MSHR
+    SectorMiss,       // line present, sector absent: MSHR allocated, sector must be fetched
+    LineMiss,         // line absent: line allocated (LRU victim evicted), MSHR allocated, fetch
+    ReservationFail,  // no MSHR, merge limit reached, or every way of the set has pending sectors
+};
+
+struct CacheStats {
+    uint64_t accesses = 0, hits = 0, mshr_hits = 0, sector_misses = 0, line_misses = 0, reservation_fails = 0;
+    uint64_t fills = 0, evictions = 0;
+};
+
+class SectorCache {
+public:
+    explicit SectorCache(const CacheConfig& c);
+
+    uint64_t sector_of(uint64_t addr) const { return addr & ~uint64_t(sector_ - 1); }
+    // Looks up a read of the sector holding `addr` on behalf of request `token`. On SectorMiss
+    // and LineMiss the caller fetches the sector and calls fill(); on ReservationFail nothing
+    // changed and the caller retries later.
+    CacheOutcome read(uint64_t addr, uint64_t token, ReqKind kind);
+    // The sector arrived: valid from now on; returns the tokens that waited on it (allocating
+    // request first, then merged ones in arrival order) and frees the MSHR.
+    std::vector<uint64_t> fill(uint64_t sector_addr);
+
+    size_t mshrs_in_use() const { return mshr_.size(); }
+    const CacheStats& stats(ReqKind k) const { return stats_[size_t(k)]; }
+    CacheStats total() const;
+    uint64_t lines() const { return ways_.size(); }
+
+private:
+    struct Way {
+        uint64_t line = ~0ull;  // line address; ~0 = invalid
+        uint32_t valid = 0, pending = 0;  // sector bit masks
+        uint64_t lru = 0;
+    };
+    struct Mshr {
+        std::vector<uint64_t> tokens;
+    };
+    Way* find(uint64_t line);
+
+    uint32_t line_, sector_, assoc_, sets_, mshrs_, merge_;
+    std::vector<Way> ways_;  // set-major: set s owns ways [s*assoc, (s+1)*assoc)
+    std::unordered_map<uint64_t, uint32_t> where_;  // line address -> way index
+    std::unordered_map<uint64_t, Mshr> mshr_;        // sector address -> waiting tokens
+    uint64_t clock_ = 0;
+    std::array<CacheStats, kReqKinds> stats_{};
+};
+
+}  // namespace rtu

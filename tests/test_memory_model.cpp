@@ -1,0 +1,186 @@
+// Cache tags/LRU/MSHR logic and DRAM timing, checked against hand-worked sequences.
+#include <gtest/gtest.h>
+
+#include "model/config.h"
+#include "model/dram.h"
+#include "model/sector_cache.h"
+
+using namespace rtu;
+
+namespace {
+CacheConfig tiny_cache() {
+    // 4 lines of 128 B in 2 sets of 2 ways, 32 B sectors, 2 MSHRs merging 2 requests each.
+    return CacheConfig{512, 2, 128, 32, 2, 2, 0};
+}
+}  // namespace
+
+// Set index = (addr / 128) % 2. Lines 0x000, 0x100, 0x200 fall into set 0; 0x080 into set 1.
+TEST(SectorCache, HandWorkedSequence) {
+    SectorCache c(tiny_cache());
+    EXPECT_EQ(c.read(0x000, 1, ReqKind::Demand), CacheOutcome::LineMiss);     // A: line 0, sector 0
+    EXPECT_EQ(c.read(0x010, 2, ReqKind::Demand), CacheOutcome::MshrHit);      // same sector: merged
+    EXPECT_EQ(c.read(0x008, 3, ReqKind::Demand), CacheOutcome::ReservationFail);  // merge limit 2
+    EXPECT_EQ(c.read(0x020, 4, ReqKind::Prefetch), CacheOutcome::SectorMiss);  // line 0, sector 1
+    EXPECT_EQ(c.read(0x100, 5, ReqKind::Demand), CacheOutcome::ReservationFail);  // both MSHRs busy
+    EXPECT_EQ(c.mshrs_in_use(), 2u);
+    EXPECT_EQ(c.fill(0x000), (std::vector<uint64_t>{1, 2}));
+    EXPECT_EQ(c.read(0x01F, 6, ReqKind::Demand), CacheOutcome::Hit);
+    EXPECT_EQ(c.read(0x100, 7, ReqKind::Demand), CacheOutcome::LineMiss);     // set 0, second way
+    // Set 0 now holds line 0 (sector 1 pending) and line 0x100 (pending): no victim.
+    EXPECT_EQ(c.read(0x200, 8, ReqKind::Demand), CacheOutcome::ReservationFail);
+    EXPECT_EQ(c.fill(0x020), (std::vector<uint64_t>{4}));
+    EXPECT_EQ(c.fill(0x100), (std::vector<uint64_t>{7}));
+    // Touch line 0 so that 0x100 is least recently used, then 0x200 evicts 0x100.
+    EXPECT_EQ(c.read(0x030, 9, ReqKind::Demand), CacheOutcome::Hit);
+    EXPECT_EQ(c.read(0x200, 10, ReqKind::Demand), CacheOutcome::LineMiss);
+    c.fill(0x200);
+    EXPECT_EQ(c.read(0x000, 11, ReqKind::Demand), CacheOutcome::Hit);
+    EXPECT_EQ(c.read(0x100, 12, ReqKind::Demand), CacheOutcome::LineMiss);    // was evicted: evicts 0x200 (LRU)
+    c.fill(0x100);
+    EXPECT_EQ(c.read(0x200, 13, ReqKind::Demand), CacheOutcome::LineMiss);    // evicts line 0 (LRU)
+    EXPECT_EQ(c.read(0x080, 14, ReqKind::Demand), CacheOutcome::LineMiss);    // set 1 unaffected
+
+    const CacheStats d = c.stats(ReqKind::Demand), p = c.stats(ReqKind::Prefetch);
+    EXPECT_EQ(d.accesses, 13u);  // tokens 1-3 and 5-14
+    EXPECT_EQ(p.accesses, 1u);
+    EXPECT_EQ(p.sector_misses, 1u);
+    EXPECT_EQ(d.hits, 3u);
+    EXPECT_EQ(d.mshr_hits, 1u);
+    EXPECT_EQ(d.reservation_fails, 3u);
+    EXPECT_EQ(d.line_misses, 6u);  // tokens 1, 7, 10, 12, 13, 14
+    // Conservation: every access has exactly one outcome.
+    for (const CacheStats& s : {d, p})
+        EXPECT_EQ(s.accesses, s.hits + s.mshr_hits + s.sector_misses + s.line_misses + s.reservation_fails);
+    EXPECT_EQ(c.total().evictions, 3u);
+}
+
+TEST(SectorCache, FullyAssociativeLru) {
+    SectorCache c(CacheConfig{4 * 128, 0, 128, 32, 8, 8, 0});
+    for (uint64_t l = 0; l < 4; ++l) {
+        ASSERT_EQ(c.read(l * 128, l, ReqKind::Demand), CacheOutcome::LineMiss);
+        c.fill(l * 128);
+    }
+    EXPECT_EQ(c.read(0, 9, ReqKind::Demand), CacheOutcome::Hit);         // line 0 most recent
+    EXPECT_EQ(c.read(7 * 128, 9, ReqKind::Demand), CacheOutcome::LineMiss);  // evicts line 1
+    c.fill(7 * 128);
+    EXPECT_EQ(c.read(1 * 128, 9, ReqKind::Demand), CacheOutcome::LineMiss);
+    EXPECT_EQ(c.read(0, 9, ReqKind::Demand), CacheOutcome::Hit);
+}
+
+namespace {
+DramConfig dram() {
+    DramConfig d{};
+    d.channels = 1;
+    d.banks = 4;
+    d.bank_groups = 1;
+    d.bus_bytes = 2;
+    d.burst = 8;
+    d.queue = 8;
+    d.row_bytes = 2048;
+    d.frfcfs = true;
+    d.tCL = 20, d.tRCD = 20, d.tRP = 20, d.tRAS = 50, d.tRC = 62, d.tRRD = 10, d.tCCD = 4, d.tWL = 8, d.tWR = 20;
+    return d;
+}
+}  // namespace
+
+// From the timing parameters: a 32 B read moves 32 / (2 B x 2) = 8 data cycles. Closed bank:
+// tRCD + tCL + 8 = 48. Row hit: tCL + 8 = 28 after its column slot. Row conflict: precharge no
+// earlier than ACT + tRAS, then tRP + tRCD + tCL + 8.
+TEST(Dram, RowHitRowMissAndConflictLatencies) {
+    const DramConfig cfg = dram();
+    DramAddressMap map(cfg, 128);
+    DramChannel ch(cfg);
+    auto issue = [&](uint64_t addr, uint64_t now) {
+        DramRequest r;
+        r.addr = addr;
+        r.at = map.map(addr);
+        r.arrival = now;
+        ch.enqueue(r);
+        DramRequest out;
+        uint64_t done = 0;
+        EXPECT_TRUE(ch.schedule(now, &out, &done));
+        return done;
+    };
+    EXPECT_EQ(issue(0, 0), 48u);            // closed bank: ACT 0, COL 20, data 40..48
+    EXPECT_EQ(issue(128, 100), 100u + 28u); // same row (lines 0..15 share a row): hit
+    // Row 1 of bank 0 is 16 lines x 4 banks further on: a conflict. ACT was at 0, so precharge
+    // at 200 (>= tRAS), ACT 220, COL 240, data 260..268.
+    const uint64_t conflict = 16ull * 128 * 4;
+    EXPECT_EQ(map.map(conflict).bank, 0u);
+    EXPECT_EQ(map.map(conflict).row, 1u);
+    EXPECT_EQ(issue(conflict, 200), 200u + 20 + 20 + 20 + 8);
+    const DramStats& s = ch.stats();
+    EXPECT_EQ(s.row_misses, 1u);
+    EXPECT_EQ(s.row_hits, 1u);
+    EXPECT_EQ(s.row_conflicts, 1u);
+    EXPECT_EQ(s.data_cycles, 24u);
+}
+
+TEST(Dram, FrFcfsPrefersRowHitsAndTrcHolds) {
+    const DramConfig cfg = dram();
+    DramAddressMap map(cfg, 128);
+    DramChannel ch(cfg);
+    auto push = [&](uint64_t addr) {
+        DramRequest r;
+        r.addr = addr;
+        r.token = addr;
+        r.at = map.map(addr);
+        ch.enqueue(r);
+    };
+    DramRequest out;
+    uint64_t done;
+    push(0);
+    ASSERT_TRUE(ch.schedule(0, &out, &done));  // opens row 0 of bank 0
+    const uint64_t conflict = 16ull * 128 * 4;
+    push(conflict);  // older, but a conflict
+    push(256);       // younger row hit
+    ASSERT_TRUE(ch.schedule(1, &out, &done));
+    EXPECT_EQ(out.addr, 256u);
+    ASSERT_TRUE(ch.schedule(2, &out, &done));
+    EXPECT_EQ(out.addr, conflict);
+    // ACT at 0; the next ACT of the same bank waits for tRC = 62 and tRAS + tRP = 70.
+    EXPECT_EQ(done, 70u + 20 + 20 + 8);
+}
+
+TEST(Config, PresetsLoadAndBadValuesAreRejectedByKey) {
+    const Config mobile = Config::load("mobile");
+    const HwConfig m = mobile.resolve();
+    EXPECT_EQ(m.sms, 8u);
+    EXPECT_EQ(m.l1.size_bytes, 32u * 1024);
+    EXPECT_EQ(m.l1.assoc, 0u);
+    EXPECT_EQ(m.l2_slices * m.l2.size_bytes, 512u * 1024);
+    EXPECT_EQ(m.l2_slices * m.l2.mshrs, 768u);
+    EXPECT_EQ(m.dram.tRC, 62u);
+    EXPECT_EQ(m.l1_hit_latency, 0u);
+    const HwConfig d = Config::load("desktop").resolve();
+    EXPECT_EQ(d.sms, 30u);
+    EXPECT_EQ(d.l1.size_bytes, 64u * 1024);
+    EXPECT_EQ(d.l2_slices * d.l2.size_bytes, 3u * 1024 * 1024);
+
+    auto error_of = [](const std::vector<std::string>& sets) -> std::string {
+        try {
+            Config c = Config::load("mobile");
+            for (const auto& s : sets) c.set(s);
+            c.resolve();
+        } catch (const ConfigError& e) {
+            return e.what();
+        }
+        return "";
+    };
+    EXPECT_NE(error_of({"l1.size_kb=0"}).find("'l1.size_kb'"), std::string::npos);
+    EXPECT_NE(error_of({"l1.line=100"}).find("power of two"), std::string::npos);
+    EXPECT_NE(error_of({"l1.mshr_merge=300"}).find("'l1.mshr_merge'"), std::string::npos);
+    EXPECT_NE(error_of({"l1.sizekb=3"}).find("unknown key 'l1.sizekb'"), std::string::npos);
+    EXPECT_NE(error_of({"gpu.sms=two"}).find("needs a number"), std::string::npos);
+    EXPECT_NE(error_of({"gpu.sms=2.5"}).find("whole number"), std::string::npos);
+    EXPECT_NE(error_of({"dram.scheduler=random"}).find("'dram.scheduler'"), std::string::npos);
+    EXPECT_NE(error_of({"l2.assoc=3"}).find("'l2.assoc'"), std::string::npos);
+    EXPECT_NE(error_of({"dram.tRC=10"}).find("'dram.tRC'"), std::string::npos);
+    EXPECT_NE(error_of({"l1.sector=256"}).find("'l1.sector'"), std::string::npos);
+    EXPECT_EQ(error_of({"l1.size_kb=64", "gpu.sms=30"}), "");
+    EXPECT_THROW(Config::load("no-such-preset-or-file"), ConfigError);
+    // The effective configuration round-trips through JSON.
+    Config c = Config::load("mobile");
+    c.set("l2.latency=123");
+    EXPECT_EQ(c.to_json()["l2"]["latency"], 123);
+}
