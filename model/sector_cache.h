@@ -42,6 +42,17 @@ public:
     std::vector<uint64_t> fill(uint64_t sector_addr);
 
     size_t mshrs_in_use() const { return mshr_.size(); }
+    // LT bookkeeping: a read found valid in the tags whose data was still in flight at its
+    // timestamp counts as an MSHR hit; a read that had to wait for a free MSHR counts one
+    // reservation fail (as the retried access would in AT).
+    void count_as_mshr_hit(ReqKind k) {
+        --stats_[size_t(k)].hits;
+        ++stats_[size_t(k)].mshr_hits;
+    }
+    void count_reservation_fail(ReqKind k) {
+        ++stats_[size_t(k)].accesses;
+        ++stats_[size_t(k)].reservation_fails;
+    }
     const CacheStats& stats(ReqKind k) const { return stats_[size_t(k)]; }
     CacheStats total() const;
     uint64_t lines() const { return ways_.size(); }

@@ -36,6 +36,9 @@ public:
     void start(const Ray& ray, const ImageHeader& header, TraversalOrder order);
     bool done() const { return !has_next_ && stack_.empty(); }
     // The node the thread reads next; only when !done().
+    // True when the next node comes off the stack / queue (a pop), false when it is the
+    // "next node" register (the first hit child, the root, or a BLAS root).
+    bool next_is_pop() const { return !has_next_; }
     const StackEntry& peek() const { return has_next_ ? next_ : (order_ == TraversalOrder::DFS ? stack_.back() : stack_.front()); }
     // Takes the next node, reads its bytes from the image and runs its tests.
     StepInfo step(const BvhImage& image);

@@ -28,11 +28,22 @@ Hit embree_trace_scaled(const EmbreeReference& ref, const Ray& ray, Query q) {
 }
 }  // namespace
 
+std::optional<Agreement> verify_ray(const Scene& scene, const EmbreeReference& reference, const Ray& ray, const Hit& hit) {
+    Ray scaled = ray;
+    scale_direction(scaled);
+    if (!embree_can_take(scaled)) return std::nullopt;
+    const Hit ref = embree_trace_scaled(reference, ray, ray.query);
+    Hit ref_closest = ref;
+    if (ray.query == Query::Any && ref.hit != hit.hit) ref_closest = embree_trace_scaled(reference, ray, Query::Closest);
+    return classify(scene, ray, hit, ref, ref_closest);
+}
+
 FunctionalResult run_functional(const Scene& scene, const BvhImage& image, Workload& workload, const FunctionalOptions& opt,
                                 const EmbreeReference* reference) {
     FunctionalResult res;
     std::vector<WorkRay> wave, next;
     workload.begin(wave);
+    std::vector<uint32_t> next_seq;
     auto last_report = Clock::now();
     const auto start = Clock::now();
     while (!wave.empty()) {
@@ -43,24 +54,21 @@ FunctionalResult run_functional(const Scene& scene, const BvhImage& image, Workl
             const TraceResult tr = trace_ray(image, w.ray, opt.order);
             res.rays.push_back(w.ray);
             res.hits.push_back(tr.hit);
+            if (next_seq.size() <= w.path) next_seq.resize(w.path + 1, 0);
+            res.path.push_back(w.path);
+            res.seq.push_back(next_seq[w.path]++);
             if (!valid) ++res.invalid_rays;
             res.nodes_visited += tr.nodes_visited;
             res.max_nodes_per_ray = std::max(res.max_nodes_per_ray, tr.nodes_visited);
             res.hit_count += tr.hit.hit;
             if (reference && valid) {
-                Ray scaled = w.ray;
-                scale_direction(scaled);
-                if (!embree_can_take(scaled)) {
+                const auto a = verify_ray(scene, *reference, w.ray, tr.hit);
+                if (!a) {
                     ++res.verify.skipped;
                 } else {
-                    const Hit ref = embree_trace_scaled(*reference, w.ray, w.ray.query);
-                    Hit ref_closest = ref;
-                    if (w.ray.query == Query::Any && ref.hit != tr.hit.hit)
-                        ref_closest = embree_trace_scaled(*reference, w.ray, Query::Closest);
-                    const Agreement a = classify(scene, w.ray, tr.hit, ref, ref_closest);
-                    ++res.verify.by_class[size_t(a)];
+                    ++res.verify.by_class[size_t(*a)];
                     ++res.verify.rays;
-                    if (a == Agreement::Mismatch && res.mismatch_rays.size() < 100) res.mismatch_rays.push_back(index);
+                    if (*a == Agreement::Mismatch && res.mismatch_rays.size() < 100) res.mismatch_rays.push_back(index);
                 }
             }
             workload.complete(w, tr.hit, next);

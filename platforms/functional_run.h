@@ -3,6 +3,7 @@
 // ray by ray against Embree.
 #pragma once
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "model/bvh_image.h"
@@ -20,8 +21,9 @@ struct FunctionalOptions {
 };
 
 struct FunctionalResult {
-    std::vector<Ray> rays;        // in trace order (the hits file's ray index)
+    std::vector<Ray> rays;        // in trace order
     std::vector<Hit> hits;
+    std::vector<uint32_t> path, seq;  // each ray's path and its order among that path's rays
     uint64_t invalid_rays = 0;
     uint64_t nodes_visited = 0;
     uint32_t max_nodes_per_ray = 0;
@@ -31,6 +33,10 @@ struct FunctionalResult {
     double trace_seconds = 0.0, embree_seconds = 0.0;  // measure_speed passes only
     uint64_t speed_checksum = 0;
 };
+
+// Checks one ray's hit against Embree: its class (Embree gets the same exactly-rescaled ray).
+// Rays Debian's Embree cannot take return nullopt (counted as skipped).
+std::optional<Agreement> verify_ray(const Scene& scene, const EmbreeReference& ref, const Ray& ray, const Hit& hit);
 
 // `reference` may be null (no verification).
 FunctionalResult run_functional(const Scene& scene, const BvhImage& image, Workload& workload, const FunctionalOptions& opt,

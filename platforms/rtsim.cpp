@@ -9,7 +9,10 @@
 #include <boost/program_options.hpp>
 #include <nlohmann/json.hpp>
 
+#include <systemc>
+
 #include "functional_run.h"
+#include "gpu_platform.h"
 #include "model/traversal.h"
 #include "output.h"
 #include "workloads/bvh_builder.h"
@@ -28,17 +31,20 @@ double seconds_since(Clock::time_point t) { return std::chrono::duration<double>
 
 struct Args {
     std::string scene = "wknd", assets, workload = "pt", rays, hits, traversal = "dfs", fidelity = "functional";
-    std::string stats, image;
+    std::string stats, image, config = "mobile", vcd, trace_warp;
+    std::vector<std::string> sets;
     int width = 128, height = 128, spp = 2, bounces = 16;
-    uint64_t seed = 1;
+    uint64_t seed = 1, quantum = 0;
     bool verify = false, quiet = false;
 };
 
-std::string hits_csv(const FunctionalResult& r) {
+// Hits in (path, seq) order: for ray files the line order, for generated workloads each pixel
+// sample's rays in the order its path made them. Functional and timing runs write the same file.
+std::string hits_csv(const std::vector<TracedRay>& rays) {
     std::string out = "ray,hit,t,geom,prim\n";
     char line[96];
-    for (size_t i = 0; i < r.hits.size(); ++i) {
-        const Hit& h = r.hits[i];
+    for (size_t i = 0; i < rays.size(); ++i) {
+        const Hit& h = rays[i].hit;
         if (h.hit)
             std::snprintf(line, sizeof line, "%zu,1,%.9g,%u,%u\n", i, double(h.t), h.geom, h.prim);
         else
@@ -48,18 +54,52 @@ std::string hits_csv(const FunctionalResult& r) {
     return out;
 }
 
-int run(const Args& a) {
-    if (a.fidelity != "functional") {
-        if (a.fidelity == "at" || a.fidelity == "lt")
-            throw InputError("--fidelity " + a.fidelity + ": the timing model is not built yet; use --fidelity functional");
-        throw InputError("--fidelity '" + a.fidelity + "': allowed are functional (at and lt follow)");
+std::vector<TracedRay> traced_from(const FunctionalResult& r) {
+    std::vector<TracedRay> v(r.rays.size());
+    for (size_t i = 0; i < v.size(); ++i) v[i] = TracedRay{r.path[i], r.seq[i], r.rays[i], r.hits[i], 0, is_valid_ray(r.rays[i])};
+    std::stable_sort(v.begin(), v.end(), [](const TracedRay& a, const TracedRay& b) { return a.path != b.path ? a.path < b.path : a.seq < b.seq; });
+    return v;
+}
+
+std::pair<int, int> parse_trace_warp(const std::string& s, const HwConfig& hw) {
+    const auto colon = s.find(':');
+    try {
+        if (colon == std::string::npos) throw std::invalid_argument("no colon");
+        const int sm = std::stoi(s.substr(0, colon)), warp = std::stoi(s.substr(colon + 1));
+        if (sm < 0 || sm >= int(hw.sms) || warp < 0 || warp >= int(hw.warp_buffer)) throw std::out_of_range("range");
+        return {sm, warp};
+    } catch (const std::exception&) {
+        throw InputError("--trace-warp '" + s + "': expected SM:WARP with SM in 0.." + std::to_string(hw.sms - 1) +
+                         " and WARP (warp-buffer slot) in 0.." + std::to_string(hw.warp_buffer - 1));
     }
+}
+
+int run(const Args& a) {
+    const bool timing = a.fidelity == "at" || a.fidelity == "lt";
+    if (!timing && a.fidelity != "functional")
+        throw InputError("--fidelity '" + a.fidelity + "': allowed are functional, at, lt");
     TraversalOrder order;
     if (a.traversal == "dfs") order = TraversalOrder::DFS;
     else if (a.traversal == "bfs") order = TraversalOrder::BFS;
     else throw InputError("--traversal '" + a.traversal + "': allowed are dfs, bfs");
     const WorkloadKind kind = a.rays.empty() ? parse_workload(a.workload) : WorkloadKind::RayFile;
     if (!a.rays.empty() && !a.image.empty()) throw InputError("--image needs a scene workload, not --rays");
+    if (!timing && (!a.vcd.empty() || !a.trace_warp.empty() || !a.sets.empty() || a.quantum))
+        throw InputError("--vcd, --trace-warp, --set and --quantum need --fidelity at or lt");
+
+    // Configuration first: a bad key should not wait for a scene to load.
+    Config config;
+    HwConfig hw{};
+    if (timing) {
+        try {
+            config = Config::load(a.config);
+            for (const auto& s : a.sets) config.set(s);
+            if (a.quantum) config.set("sim.quantum=" + std::to_string(a.quantum));
+            hw = config.resolve();
+        } catch (const ConfigError& e) {
+            throw InputError(e.what());
+        }
+    }
 
     auto t0 = Clock::now();
     const Scene scene = load_scene(a.scene, a.assets);
@@ -92,65 +132,138 @@ int run(const Args& a) {
 
     std::unique_ptr<EmbreeReference> reference;
     if (a.verify) reference = std::make_unique<EmbreeReference>(scene);
-    FunctionalOptions fo;
-    fo.order = order;
-    fo.progress = !a.quiet;
-    fo.measure_speed = a.verify;
-    t0 = Clock::now();
-    const FunctionalResult r = run_functional(scene, image, *workload, fo, reference.get());
-    const double run_s = seconds_since(t0);
-    const uint64_t valid_rays = r.rays.size() - r.invalid_rays;
-
     nlohmann::ordered_json j;
     j["scene"] = scene.name;
     j["workload"] = kind == WorkloadKind::RayFile ? "rays" : a.workload;
     j["fidelity"] = a.fidelity;
     j["traversal"] = a.traversal;
     if (kind != WorkloadKind::RayFile) j["params"] = {{"width", a.width}, {"height", a.height}, {"spp", a.spp}, {"bounces", a.bounces}, {"seed", a.seed}};
-    j["rays"] = r.rays.size();
-    j["invalid_rays"] = r.invalid_rays;
-    j["hits"] = r.hit_count;
-    j["nodes_visited"] = r.nodes_visited;
-    j["nodes_per_ray"] = valid_rays ? double(r.nodes_visited) / double(valid_rays) : 0.0;
-    j["max_nodes_per_ray"] = r.max_nodes_per_ray;
+
+    std::vector<TracedRay> rays;
+    VerifyCounts verify;
+    std::vector<uint64_t> mismatch_rays;
+    double speed_ours = 0, speed_embree = 0;
+    TimingResult timing_result;
+    t0 = Clock::now();
+    if (!timing) {
+        FunctionalOptions fo;
+        fo.order = order;
+        fo.progress = !a.quiet;
+        fo.measure_speed = a.verify;
+        const FunctionalResult r = run_functional(scene, image, *workload, fo, reference.get());
+        rays = traced_from(r);
+        verify = r.verify;
+        mismatch_rays = r.mismatch_rays;
+        speed_ours = r.trace_seconds;
+        speed_embree = r.embree_seconds;
+        j["nodes_visited"] = r.nodes_visited;
+        j["max_nodes_per_ray"] = r.max_nodes_per_ray;
+    } else {
+        TimingOptions to;
+        to.fidelity = a.fidelity == "at" ? Fidelity::AT : Fidelity::LT;
+        to.order = order;
+        to.progress = !a.quiet;
+        to.vcd = a.vcd;
+        if (to.vcd.size() > 4 && to.vcd.compare(to.vcd.size() - 4, 4, ".vcd") == 0) to.vcd.resize(to.vcd.size() - 4);
+        if (!a.trace_warp.empty()) std::tie(to.trace_sm, to.trace_warp) = parse_trace_warp(a.trace_warp, hw);
+        GpuPlatform platform(hw, image, *workload, to);
+        timing_result = platform.run();
+        rays = timing_result.rays;
+        uint64_t nodes = 0;
+        uint32_t max_nodes = 0;
+        for (const TracedRay& r : rays) {
+            nodes += r.nodes_visited;
+            max_nodes = std::max(max_nodes, r.nodes_visited);
+        }
+        j["nodes_visited"] = nodes;
+        j["max_nodes_per_ray"] = max_nodes;
+        if (reference) {
+            for (size_t i = 0; i < rays.size(); ++i) {
+                if (!rays[i].valid) continue;
+                const auto cls = verify_ray(scene, *reference, rays[i].ray, rays[i].hit);
+                if (!cls) {
+                    ++verify.skipped;
+                    continue;
+                }
+                ++verify.by_class[size_t(*cls)];
+                ++verify.rays;
+                if (*cls == Agreement::Mismatch && mismatch_rays.size() < 100) mismatch_rays.push_back(i);
+            }
+        }
+    }
+    const double run_s = seconds_since(t0);
+    uint64_t invalid = 0, hits = 0;
+    for (const TracedRay& r : rays) {
+        invalid += !r.valid;
+        hits += r.hit.hit;
+    }
+    const uint64_t valid_rays = rays.size() - invalid;
+    j["rays"] = rays.size();
+    j["invalid_rays"] = invalid;
+    j["hits"] = hits;
+    j["nodes_per_ray"] = valid_rays ? double(j["nodes_visited"].get<uint64_t>()) / double(valid_rays) : 0.0;
     j["bvh"] = {{"two_level", scene.two_level()}, {"image_bytes", bs.image_bytes}, {"internal_nodes", bs.internal_nodes},
                 {"triangle_leaves", bs.triangle_leaves}, {"procedural_leaves", bs.procedural_leaves},
                 {"instance_leaves", bs.instance_leaves}, {"blas", bs.blas_count}, {"depth", bs.depth}, {"tlas_depth", bs.tlas_depth}};
     j["time_s"] = {{"load", load_s}, {"build", build_s}, {"run", run_s}};
+    if (timing) {
+        j["cycles"] = timing_result.cycles;
+        j["timing"] = timing_result.stats;
+        j["simulation_rate"] = {{"rays_per_s", run_s > 0 ? double(rays.size()) / run_s : 0.0},
+                                {"cycles_per_s", run_s > 0 ? double(timing_result.cycles) / run_s : 0.0}};
+        j["config"] = config.to_json();
+    }
     if (a.verify) {
         nlohmann::ordered_json classes;
-        for (size_t c = 0; c < size_t(Agreement::Count); ++c) classes[agreement_name(Agreement(c))] = r.verify.by_class[c];
-        j["verify"] = {{"rays", r.verify.rays}, {"skipped", r.verify.skipped}, {"mismatches", r.verify.mismatches()},
-                       {"classes", classes}, {"mismatch_rays", r.mismatch_rays}};
-        j["speed"] = {{"rays", r.rays.size()},
-                      {"ours_s", r.trace_seconds},
-                      {"embree_s", r.embree_seconds},
-                      {"ours_rays_per_s", r.trace_seconds > 0 ? double(r.rays.size()) / r.trace_seconds : 0.0},
-                      {"embree_rays_per_s", r.embree_seconds > 0 ? double(r.rays.size()) / r.embree_seconds : 0.0},
-                      {"embree_over_ours", r.trace_seconds > 0 && r.embree_seconds > 0 ? r.trace_seconds / r.embree_seconds : 0.0}};
+        for (size_t c = 0; c < size_t(Agreement::Count); ++c) classes[agreement_name(Agreement(c))] = verify.by_class[c];
+        j["verify"] = {{"rays", verify.rays}, {"skipped", verify.skipped}, {"mismatches", verify.mismatches()},
+                       {"classes", classes}, {"mismatch_rays", mismatch_rays}};
+        if (!timing)
+            j["speed"] = {{"rays", rays.size()},
+                          {"ours_s", speed_ours},
+                          {"embree_s", speed_embree},
+                          {"ours_rays_per_s", speed_ours > 0 ? double(rays.size()) / speed_ours : 0.0},
+                          {"embree_rays_per_s", speed_embree > 0 ? double(rays.size()) / speed_embree : 0.0},
+                          {"embree_over_ours", speed_ours > 0 && speed_embree > 0 ? speed_ours / speed_embree : 0.0}};
+    }
+    if (timing && timing_result.stuck) {
+        std::cerr << "error: " << timing_result.stuck_report << "\n";
+        return 1;
     }
 
     // Write every output only after the whole run succeeded.
-    if (!a.hits.empty()) write_file_atomic(a.hits, hits_csv(r));
+    if (!a.hits.empty()) write_file_atomic(a.hits, hits_csv(rays));
     if (!a.image.empty()) write_png_atomic(a.image, a.width, a.height, workload->image());
     if (!a.stats.empty()) write_file_atomic(a.stats, j.dump(2) + "\n");
 
     if (!a.quiet) {
-        std::cout << "rays " << r.rays.size() << " (" << r.invalid_rays << " invalid), hits " << r.hit_count << ", nodes/ray "
-                  << j["nodes_per_ray"].get<double>() << " (max " << r.max_nodes_per_ray << "), " << a.traversal << ", " << run_s << " s\n";
+        std::cout << "rays " << rays.size() << " (" << invalid << " invalid), hits " << hits << ", nodes/ray "
+                  << j["nodes_per_ray"].get<double>() << " (max " << j["max_nodes_per_ray"] << "), " << a.traversal << ", "
+                  << a.fidelity << ", " << run_s << " s\n";
+        if (timing) {
+            const auto& t = timing_result.stats;
+            std::cout << "cycles " << timing_result.cycles << ", L1 miss rate " << t["l1"]["demand"]["miss_rate"].get<double>()
+                      << ", L2 miss rate " << t["l2"]["demand"]["miss_rate"].get<double>() << ", DRAM reads "
+                      << t["dram"]["reads"] << " (bandwidth " << t["dram"]["bandwidth_utilisation"].get<double>() * 100
+                      << " %), " << uint64_t(j["simulation_rate"]["rays_per_s"].get<double>()) << " rays/s simulated\n";
+        }
         if (a.verify) {
-            std::cout << "verify against Embree (robust): " << r.verify.rays << " rays, " << r.verify.mismatches() << " mismatches";
+            std::cout << "verify against Embree (robust): " << verify.rays << " rays, " << verify.mismatches() << " mismatches";
             for (size_t c = 1; c + 1 < size_t(Agreement::Count); ++c)
-                if (r.verify.by_class[c]) std::cout << ", " << agreement_name(Agreement(c)) << " " << r.verify.by_class[c];
-            if (r.verify.skipped) std::cout << ", skipped " << r.verify.skipped;
-            std::cout << "\nspeed: ours " << uint64_t(j["speed"]["ours_rays_per_s"].get<double>()) << " rays/s, Embree "
-                      << uint64_t(j["speed"]["embree_rays_per_s"].get<double>()) << " rays/s (Embree is "
-                      << j["speed"]["embree_over_ours"].get<double>() << "x faster)\n";
+                if (verify.by_class[c]) std::cout << ", " << agreement_name(Agreement(c)) << " " << verify.by_class[c];
+            if (verify.skipped) std::cout << ", skipped " << verify.skipped;
+            std::cout << "\n";
+            if (!timing)
+                std::cout << "speed: ours " << uint64_t(j["speed"]["ours_rays_per_s"].get<double>()) << " rays/s, Embree "
+                          << uint64_t(j["speed"]["embree_rays_per_s"].get<double>()) << " rays/s (Embree is "
+                          << j["speed"]["embree_over_ours"].get<double>() << "x faster)\n";
         }
     }
-    if (a.verify && r.verify.mismatches() > 0) {
-        std::cerr << "error: " << r.verify.mismatches() << " rays disagree with Embree outside the documented classes (first: ray "
-                  << r.mismatch_rays.front() << ")\n";
+    for (const std::string& f : timing_result.invariant_failures) std::cerr << "error: invariant violated: " << f << "\n";
+    if (!timing_result.invariant_failures.empty()) return 1;
+    if (a.verify && verify.mismatches() > 0) {
+        std::cerr << "error: " << verify.mismatches() << " rays disagree with Embree outside the documented classes (first: ray "
+                  << mismatch_rays.front() << ")\n";
         return 1;
     }
     return 0;
@@ -158,13 +271,15 @@ int run(const Args& a) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
+int sc_main(int argc, char** argv) {
+    sc_core::sc_set_time_resolution(1, sc_core::SC_FS);
     Args a;
     po::options_description desc(
         "rtsim: ray-tracing unit model\n"
         "usage: rtsim --scene NAME|PATH [--assets DIR] [--workload primary|pt|ao|sh] [--rays FILE] [--hits FILE]\n"
         "             [--width W --height H --spp N --bounces B --seed S] [--traversal dfs|bfs]\n"
-        "             [--fidelity functional] [--stats FILE.json] [--image FILE.png] [--verify]\n"
+        "             [--fidelity functional|at|lt] [--config NAME|FILE] [--set KEY=VALUE]... [--quantum CYCLES]\n"
+        "             [--stats FILE.json] [--image FILE.png] [--vcd FILE] [--trace-warp SM:WARP] [--verify] [--quiet]\n"
         "exit status: 0 ok, 1 a check failed (--verify mismatches), 2 bad input, 3 internal error\noptions");
     desc.add_options()
         ("help,h", "this help")
@@ -179,7 +294,12 @@ int main(int argc, char** argv) {
         ("bounces", po::value(&a.bounces)->default_value(a.bounces), "path tracing: at most this many rays per path")
         ("seed", po::value(&a.seed)->default_value(a.seed), "random seed")
         ("traversal", po::value(&a.traversal)->default_value(a.traversal), "dfs or bfs")
-        ("fidelity", po::value(&a.fidelity)->default_value(a.fidelity), "functional")
+        ("fidelity", po::value(&a.fidelity)->default_value(a.fidelity), "functional, at (reference timing) or lt (fast timing)")
+        ("config", po::value(&a.config)->default_value(a.config), "hardware preset (mobile, desktop) or JSON file")
+        ("set", po::value(&a.sets)->composing(), "override one configuration key, e.g. --set l1.size_kb=64 (repeatable)")
+        ("quantum", po::value(&a.quantum), "LT quantum in core cycles (same as --set sim.quantum=N)")
+        ("vcd", po::value(&a.vcd), "write waveforms to this VCD file")
+        ("trace-warp", po::value(&a.trace_warp), "with --vcd: trace each thread's stack depth of warp-buffer slot WARP of SM")
         ("stats", po::value(&a.stats), "write statistics JSON")
         ("image", po::value(&a.image), "write the rendered frame as PNG")
         ("verify", po::bool_switch(&a.verify), "compare every ray with Embree (robust mode); exit 1 on mismatches")
@@ -205,4 +325,11 @@ int main(int argc, char** argv) {
         std::cerr << "rtsim: internal error: " << e.what() << "\n";
         return 3;
     }
+}
+
+// Our own main: silence SystemC's banner (stdout carries the run summary), then SystemC's
+// elaboration calls sc_main.
+int main(int argc, char** argv) {
+    setenv("SYSTEMC_DISABLE_COPYRIGHT_MESSAGE", "1", 0);
+    return sc_core::sc_elab_and_sim(argc, argv);
 }

@@ -1,0 +1,208 @@
+#include "rt_unit_core.h"
+
+#include <algorithm>
+#include <stdexcept>
+
+namespace rtu {
+
+RtUnitCore::RtUnitCore(const HwConfig& cfg, const BvhImage& image, TraversalOrder order)
+    : cfg_(cfg), image_(image), order_(order), warps_(cfg.warp_buffer) {}
+
+bool RtUnitCore::has_free_slot() const {
+    for (const Warp& w : warps_)
+        if (!w.used) return true;
+    return false;
+}
+
+size_t RtUnitCore::warps_resident() const {
+    size_t n = 0;
+    for (const Warp& w : warps_) n += w.used;
+    return n;
+}
+
+uint32_t RtUnitCore::warp_buffer_occupancy() const { return uint32_t(warps_resident()); }
+
+uint32_t RtUnitCore::active_threads() const {
+    uint32_t n = 0;
+    for (const Warp& w : warps_)
+        if (w.used) n += w.live;
+    return n;
+}
+
+int RtUnitCore::stack_depth(uint32_t w, uint32_t t) const {
+    if (w >= warps_.size() || !warps_[w].used || t >= warps_[w].threads.size()) return -1;
+    return int(warps_[w].threads[t].trav.stack().size());
+}
+
+void RtUnitCore::set_status(Thread& t, ThreadStatus s, uint64_t now) {
+    stats_.thread_cycles[size_t(t.status)] += now - t.since;
+    t.status = s;
+    t.since = now;
+}
+
+void RtUnitCore::account(uint64_t now) {
+    for (Warp& w : warps_)
+        if (w.used)
+            for (Thread& t : w.threads) set_status(t, t.status, now);
+}
+
+void RtUnitCore::accept_warp(const std::vector<WarpRay>& rays, uint64_t now) {
+    if (rays.empty() || rays.size() > cfg_.warp_size) throw std::logic_error("warp of " + std::to_string(rays.size()) + " rays");
+    auto it = std::find_if(warps_.begin(), warps_.end(), [](const Warp& w) { return !w.used; });
+    if (it == warps_.end()) throw std::logic_error("no free warp-buffer slot");
+    Warp& w = *it;
+    w.used = true;
+    w.threads.assign(rays.size(), Thread{});
+    w.live = w.ready = 0;
+    for (size_t i = 0; i < rays.size(); ++i) {
+        Thread& t = w.threads[i];
+        t.key = rays[i].key;
+        t.since = now;
+        t.trav.start(rays[i].ray, image_.header(), order_);
+        if (!t.trav.done()) {
+            t.status = ThreadStatus::WaitSchedule;
+            ++w.live;
+            ++w.ready;
+        }
+    }
+    ++stats_.warps;
+    stats_.rays += rays.size();
+    if (w.live == 0) {  // every ray missed the root box
+        for (const Thread& t : w.threads) retired_.push_back({t.key, t.trav.hit(), t.trav.nodes_visited()});
+        w.used = false;
+    }
+}
+
+uint32_t RtUnitCore::math_latency(const StepInfo& s) const {
+    uint32_t l = 0;
+    switch (s.type) {
+        case NodeType::Internal: l = cfg_.lat.header + cfg_.lat.ray_box; break;
+        case NodeType::Triangle: l = cfg_.lat.leaf_descriptor + cfg_.lat.ray_triangle + (s.hit ? cfg_.lat.triangle_hit : 0); break;
+        case NodeType::Procedural: l = cfg_.lat.leaf_descriptor + cfg_.lat.procedural; break;
+        case NodeType::Instance: l = cfg_.lat.leaf_descriptor + cfg_.lat.transform; break;
+        case NodeType::Empty: break;
+    }
+    return std::max<uint32_t>(l, 1);
+}
+
+void RtUnitCore::on_response(uint64_t id, bool l1_miss, bool dram, uint64_t now) {
+    fifo_.push_back({id, {l1_miss, dram}});
+    stats_.max_response_fifo = std::max<uint64_t>(stats_.max_response_fifo, fifo_.size());
+    (void)now;
+}
+
+void RtUnitCore::cycle(uint64_t now) {
+    // Response FIFO: one response per cycle.
+    if (!fifo_.empty()) {
+        const auto [id, flags] = fifo_.front();
+        fifo_.pop_front();
+        ++stats_.responses;
+        auto it = inflight_.find(id);
+        if (it == inflight_.end()) throw std::logic_error("response for an unknown or answered request");
+        const Pending p = std::move(it->second);
+        inflight_.erase(it);
+        Warp& w = warps_[p.warp];
+        for (uint16_t ti : p.threads) {
+            Thread& t = w.threads[ti];
+            t.fetch_l1_miss |= flags.first;
+            t.fetch_dram |= flags.second;
+            if (--t.chunks_left > 0) continue;
+            // The whole node is here: decode it and run its tests.
+            stats_.streak_l1_misses[t.fetch_class] += t.fetch_l1_miss;
+            stats_.streak_dram_misses[t.fetch_class] += t.fetch_dram;
+            const StepInfo info = t.trav.step(image_);
+            if (info.pushed > 0) t.streak = 0;
+            set_status(t, ThreadStatus::InMath, now);
+            math_.push({now + math_latency(info), p.warp, ti});
+        }
+    }
+    // Math pipelines: threads whose tests end by now.
+    while (!math_.empty() && math_.top().at <= now) {
+        const MathDone m = math_.top();
+        math_.pop();
+        Warp& w = warps_[m.warp];
+        Thread& t = w.threads[m.thread];
+        if (t.trav.done()) {
+            set_status(t, ThreadStatus::Idle, now);
+            if (--w.live == 0) {
+                for (Thread& x : w.threads) {
+                    set_status(x, ThreadStatus::Idle, now);
+                    retired_.push_back({x.key, x.trav.hit(), x.trav.nodes_visited()});
+                }
+                w.used = false;
+                w.threads.clear();
+            }
+        } else {
+            set_status(t, ThreadStatus::WaitSchedule, now);
+            ++w.ready;
+        }
+    }
+    // Warp scheduler: one warp's ready threads go to the memory access queue, coalesced.
+    for (uint32_t k = 0; k < warps_.size(); ++k) {
+        const uint32_t wi = (rr_ + k) % uint32_t(warps_.size());
+        Warp& w = warps_[wi];
+        if (!w.used || w.ready == 0) continue;
+        rr_ = wi + 1;
+        std::vector<std::pair<uint64_t, std::vector<uint16_t>>> nodes;  // address -> threads
+        std::vector<NodeType> types;
+        for (uint16_t ti = 0; ti < w.threads.size(); ++ti) {
+            Thread& t = w.threads[ti];
+            if (t.status != ThreadStatus::WaitSchedule) continue;
+            const StackEntry& e = t.trav.peek();
+            if (t.trav.next_is_pop()) {
+                t.streak = uint8_t(std::min(t.streak + 1, 4));
+                t.fetch_class = t.streak;
+            } else {
+                t.fetch_class = 0;
+            }
+            ++stats_.streak_fetches[t.fetch_class];
+            t.fetch_l1_miss = t.fetch_dram = false;
+            t.fetch_type = e.type;
+            t.chunks_left = node_bytes(e.type) / kChunkBytes;
+            set_status(t, ThreadStatus::WaitMemory, now);
+            ++stats_.node_fetches;
+            auto it = std::find_if(nodes.begin(), nodes.end(), [&](const auto& n) { return n.first == e.addr; });
+            if (it == nodes.end()) {
+                nodes.push_back({e.addr, {ti}});
+                types.push_back(e.type);
+            } else {
+                it->second.push_back(ti);
+                ++stats_.coalesced;
+            }
+        }
+        w.ready = 0;
+        for (size_t n = 0; n < nodes.size(); ++n) {
+            const uint32_t chunks = node_bytes(types[n]) / kChunkBytes;
+            for (uint32_t c = 0; c < chunks; ++c) {
+                ChunkRequest r;
+                r.id = next_id_++;
+                r.addr = nodes[n].first + uint64_t(c) * kChunkBytes;
+                r.warp = wi;
+                r.streak = w.threads[nodes[n].second.front()].fetch_class;
+                maq_.push_back(r);
+                inflight_[r.id] = Pending{wi, nodes[n].second};
+                ++stats_.chunk_requests;
+            }
+        }
+        stats_.max_request_queue = std::max<uint64_t>(stats_.max_request_queue, maq_.size());
+        break;
+    }
+}
+
+std::vector<RetiredRay> RtUnitCore::take_retired() {
+    std::vector<RetiredRay> r;
+    r.swap(retired_);
+    return r;
+}
+
+bool RtUnitCore::idle() const { return maq_.empty() && fifo_.empty() && math_.empty() && inflight_.empty() && warps_resident() == 0; }
+
+uint64_t RtUnitCore::next_event(uint64_t now) const {
+    if (!fifo_.empty()) return now + 1;
+    for (const Warp& w : warps_)
+        if (w.used && w.ready) return now + 1;
+    if (!math_.empty()) return std::max(now + 1, math_.top().at);
+    return ~0ull;
+}
+
+}  // namespace rtu

@@ -1,0 +1,142 @@
+// The RT unit's per-cycle logic (paper section 2.3, DESIGN.md section 5), independent of how time
+// advances: the warp buffer with each thread's traversal state (plain data, never one process
+// per thread), the warp scheduler, the memory access queue (intra-warp coalescing of identical
+// node addresses, nodes split into 32 B chunks, one chunk leaving per cycle), the response FIFO
+// (one response drained per cycle) and the math pipelines with their latencies. Traversal
+// decisions are made from the node bytes when they arrive (execution-driven).
+// Plain C++ (no SystemC): tlm/rt_unit.h drives it in AT or LT.
+#pragma once
+#include <array>
+#include <cstdint>
+#include <deque>
+#include <queue>
+#include <unordered_map>
+#include <vector>
+
+#include "bvh_image.h"
+#include "config.h"
+#include "traversal.h"
+
+namespace rtu {
+
+constexpr uint32_t kChunkBytes = 32;
+
+// One ray handed to the RT unit: the direction is already rescaled (scale_direction), `key`
+// identifies it to the workload.
+struct WarpRay {
+    Ray ray;
+    int scale = 0;
+    uint64_t key = 0;
+};
+
+struct RetiredRay {
+    uint64_t key;
+    Hit hit;  // t in the rescaled units (the driver undoes the scaling)
+    uint32_t nodes_visited;
+};
+
+// A 32 B read leaving the RT unit.
+struct ChunkRequest {
+    uint64_t id;       // unique per RT unit
+    uint64_t addr;     // 32 B aligned
+    uint32_t warp;     // warp-buffer slot
+    uint8_t streak;    // pop-streak class of the node fetch: 0 not a pop, 1, 2, 3, 4 = 4th or later
+    bool prefetch = false;
+};
+
+enum class ThreadStatus : uint8_t { Idle, WaitSchedule, WaitMemory, InMath, Count };
+
+struct RtUnitStats {
+    uint64_t warps = 0, rays = 0, node_fetches = 0, chunk_requests = 0, coalesced = 0, responses = 0;
+    std::array<uint64_t, size_t(ThreadStatus::Count)> thread_cycles{};  // summed over thread slots
+    // Pop-streak classes 0 (not a pop: first child taken next / root), 1st, 2nd, 3rd, 4th+.
+    std::array<uint64_t, 5> streak_fetches{}, streak_l1_misses{}, streak_dram_misses{};
+    uint64_t max_response_fifo = 0, max_request_queue = 0;
+};
+
+class RtUnitCore {
+public:
+    RtUnitCore(const HwConfig& cfg, const BvhImage& image, TraversalOrder order);
+
+    bool has_free_slot() const;
+    // Takes a warp (at most warp_size rays) into a free slot at cycle `now`.
+    void accept_warp(const std::vector<WarpRay>& rays, uint64_t now);
+
+    // One cycle at `now`: drain one response, finish math that ends by now, and let the warp
+    // scheduler move one warp's ready threads into the memory access queue.
+    void cycle(uint64_t now);
+
+    bool has_request() const { return !maq_.empty(); }
+    const ChunkRequest& front_request() const { return maq_.front(); }
+    void pop_request() { maq_.pop_front(); }
+
+    // A response for chunk `id` entered the response FIFO; `l1_miss`/`dram` describe where it
+    // was served.
+    void on_response(uint64_t id, bool l1_miss, bool dram, uint64_t now);
+
+    // Rays of warps that finished since the last call.
+    std::vector<RetiredRay> take_retired();
+    size_t warps_resident() const;
+
+    // The cycle of the next work with no further input: now + 1 while the request queue, the
+    // response FIFO or a ready thread has work; else the earliest math completion; else ~0.
+    uint64_t next_event(uint64_t now) const;
+    bool idle() const;
+
+    // Closes the thread-status accounting at `now` (call before reading stats).
+    void account(uint64_t now);
+    const RtUnitStats& stats() const { return stats_; }
+    uint32_t warp_buffer_occupancy() const;
+    uint32_t active_threads() const;
+    size_t response_fifo_depth() const { return fifo_.size(); }
+    size_t request_queue_depth() const { return maq_.size(); }
+    // Stack depth of thread t of slot w (for waveforms); -1 if empty slot.
+    int stack_depth(uint32_t w, uint32_t t) const;
+
+private:
+    struct Thread {
+        TraversalThread trav;
+        ThreadStatus status = ThreadStatus::Idle;
+        uint64_t key = 0;
+        uint64_t since = 0;        // status entered at
+        uint32_t chunks_left = 0;
+        uint8_t streak = 0;        // consecutive pops so far
+        uint8_t fetch_class = 0;   // class of the node being fetched
+        bool fetch_l1_miss = false, fetch_dram = false;
+        NodeType fetch_type = NodeType::Empty;
+    };
+    struct Warp {
+        bool used = false;
+        std::vector<Thread> threads;
+        uint32_t live = 0;  // threads not Idle
+        uint32_t ready = 0; // threads in WaitSchedule
+    };
+    struct Pending {  // chunk in flight: which threads wait for it
+        uint32_t warp;
+        std::vector<uint16_t> threads;
+    };
+    struct MathDone {
+        uint64_t at;
+        uint32_t warp, thread;
+        bool operator>(const MathDone& o) const { return at > o.at; }
+    };
+
+    void set_status(Thread& t, ThreadStatus s, uint64_t now);
+    void after_step(uint32_t w, uint32_t t, uint64_t now);
+    uint32_t math_latency(const StepInfo& s) const;
+
+    HwConfig cfg_;
+    const BvhImage& image_;
+    TraversalOrder order_;
+    std::vector<Warp> warps_;
+    uint32_t rr_ = 0;
+    std::deque<ChunkRequest> maq_;
+    std::deque<std::pair<uint64_t, std::pair<bool, bool>>> fifo_;  // chunk id, (l1 miss, dram)
+    std::unordered_map<uint64_t, Pending> inflight_;
+    std::priority_queue<MathDone, std::vector<MathDone>, std::greater<MathDone>> math_;
+    std::vector<RetiredRay> retired_;
+    uint64_t next_id_ = 1;
+    RtUnitStats stats_;
+};
+
+}  // namespace rtu

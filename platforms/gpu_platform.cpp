@@ -1,0 +1,308 @@
+#include "gpu_platform.h"
+
+#include <chrono>
+#include <iostream>
+
+#include <systemc>
+
+namespace rtu {
+
+using namespace sc_core;
+
+namespace {
+
+// Watchdog, progress and windowed waveforms. It wakes every `period` cycles only while rays are
+// still in flight, so an idle platform has no pending events and sc_start() returns.
+class Monitor : public sc_module {
+public:
+    SC_HAS_PROCESS(Monitor);
+    Monitor(sc_module_name n, WorkloadDriver& driver, const ClockDomain& clock, uint64_t watchdog, bool progress,
+            uint64_t period, std::function<void(uint64_t)> sample)
+        : sc_module(n), driver_(driver), clock_(clock), watchdog_(watchdog), progress_(progress), period_(period),
+          sample_(std::move(sample)), start_(std::chrono::steady_clock::now()), last_print_(start_) {
+        SC_METHOD(check);
+    }
+    bool stuck = false;
+    std::string report;
+    std::function<std::string()> describe_stuck;
+
+private:
+    void check() {
+        const uint64_t c = clock_.cycle_at_or_before(sc_time_stamp());
+        if (sample_) sample_(c);
+        if (driver_.finished()) return;
+        if (c > driver_.last_progress() + watchdog_) {
+            stuck = true;
+            report = "no ray retired for " + std::to_string(c - driver_.last_progress()) + " cycles (sim.watchdog = " +
+                     std::to_string(watchdog_) + "); oldest trace: " + driver_.oldest_in_flight() +
+                     (describe_stuck ? "; " + describe_stuck() : std::string());
+            sc_stop();
+            return;
+        }
+        const auto now = std::chrono::steady_clock::now();
+        if (progress_ && std::chrono::duration<double>(now - last_print_).count() > 2.0) {
+            last_print_ = now;
+            const double wall = std::chrono::duration<double>(now - start_).count();
+            std::cerr << "\r  cycle " << c << ", rays retired " << driver_.rays_retired() << " of " << driver_.rays_issued()
+                      << " issued so far, " << uint64_t(driver_.rays_retired() / std::max(wall, 1e-9)) << " rays/s   " << std::flush;
+            printed_ = true;
+        }
+        next_trigger(clock_.period() * double(period_));
+    }
+
+public:
+    bool printed_ = false;
+
+private:
+    WorkloadDriver& driver_;
+    const ClockDomain& clock_;
+    uint64_t watchdog_;
+    bool progress_;
+    uint64_t period_;
+    std::function<void(uint64_t)> sample_;
+    std::chrono::steady_clock::time_point start_, last_print_;
+};
+
+nlohmann::ordered_json cache_json(const CacheStats& s) {
+    const uint64_t misses = s.sector_misses + s.line_misses;
+    return {{"accesses", s.accesses},
+            {"hits", s.hits},
+            {"mshr_hits", s.mshr_hits},
+            {"sector_misses", s.sector_misses},
+            {"line_misses", s.line_misses},
+            {"reservation_fails", s.reservation_fails},
+            {"miss_rate", s.accesses ? double(misses + s.mshr_hits) / double(s.accesses - s.reservation_fails + (s.accesses == s.reservation_fails)) : 0.0},
+            {"evictions", s.evictions}};
+}
+
+void add(CacheStats& a, const CacheStats& b) {
+    a.accesses += b.accesses;
+    a.hits += b.hits;
+    a.mshr_hits += b.mshr_hits;
+    a.sector_misses += b.sector_misses;
+    a.line_misses += b.line_misses;
+    a.reservation_fails += b.reservation_fails;
+    a.fills += b.fills;
+    a.evictions += b.evictions;
+}
+
+}  // namespace
+
+struct GpuPlatform::Impl {
+    HwConfig cfg;
+    const BvhImage& image;
+    TimingOptions opt;
+    ClockDomain core, mem;
+    PayloadPool pool;
+    WorkloadDriver driver;
+    std::vector<std::unique_ptr<RtUnit>> rt;
+    std::vector<std::unique_ptr<Cache>> l1, l2;
+    std::unique_ptr<Crossbar> xbar;
+    std::unique_ptr<Dram> dram;
+    std::unique_ptr<Monitor> monitor;
+    sc_trace_file* tf = nullptr;
+    // Traced values (sampled into the VCD when tracing is on).
+    struct RtTrace {
+        int warps = 0, maq = 0, fifo = 0, active = 0;
+    };
+    std::vector<RtTrace> rt_trace;
+    std::vector<int> l1_mshr, l2_mshr;
+    std::vector<double> l1_missrate, l2_missrate;
+    std::vector<CacheStats> l1_prev, l2_prev;
+    int dram_queue = 0;
+    double dram_bw = 0;
+    uint64_t dram_prev_busy = 0;
+    std::vector<int> stack_depth;
+
+    Impl(const HwConfig& c, const BvhImage& img, Workload& w, const TimingOptions& o)
+        : cfg(c), image(img), opt(o), core(c.core_mhz), mem(c.memory_mhz), driver(w, c.sms, c.warp_size, c.shade_latency) {}
+};
+
+GpuPlatform::GpuPlatform(const HwConfig& cfg, const BvhImage& image, Workload& workload, const TimingOptions& opt)
+    : impl_(new Impl(cfg, image, workload, opt)) {
+    Impl& m = *impl_;
+    if (opt.fidelity == Fidelity::LT)
+        tlm::tlm_global_quantum::instance().set(m.core.period() * double(cfg.quantum));
+    for (uint32_t s = 0; s < cfg.sms; ++s) {
+        const std::string id = std::to_string(s);
+        m.rt.emplace_back(new RtUnit(("rt_unit_" + id).c_str(), s, cfg, image, opt.order, m.driver, m.pool, m.core, opt.fidelity));
+        m.l1.emplace_back(new Cache(("l1_" + id).c_str(), 1, cfg.l1, cfg.l1_hit_latency, m.pool, m.core, opt.fidelity));
+        m.rt[s]->socket.bind(m.l1[s]->in);
+    }
+    m.xbar.reset(new Crossbar("crossbar", cfg.l2_slices, cfg.l2.line, cfg.xbar_latency, m.core, opt.fidelity));
+    for (uint32_t s = 0; s < cfg.sms; ++s) m.l1[s]->out.bind(m.xbar->in);
+    m.dram.reset(new Dram("dram", cfg.dram, cfg.l2.line, m.mem, opt.fidelity));
+    for (uint32_t s = 0; s < cfg.l2_slices; ++s) {
+        m.l2.emplace_back(new Cache(("l2_" + std::to_string(s)).c_str(), 2, cfg.l2, cfg.l2.latency, m.pool, m.core, opt.fidelity));
+        m.xbar->out.bind(m.l2[s]->in);
+        m.l2[s]->out.bind(m.dram->in);
+    }
+
+    std::function<void(uint64_t)> sample;
+    if (!opt.vcd.empty()) {
+        m.tf = sc_create_vcd_trace_file(opt.vcd.c_str());
+        m.tf->set_time_unit(1, SC_PS);
+        m.rt_trace.resize(cfg.sms);
+        for (uint32_t s = 0; s < cfg.sms; ++s) {
+            const std::string p = "rt_unit_" + std::to_string(s) + ".";
+            sc_trace(m.tf, m.rt_trace[s].warps, p + "warp_buffer_occupancy");
+            sc_trace(m.tf, m.rt_trace[s].maq, p + "memory_access_queue_depth");
+            sc_trace(m.tf, m.rt_trace[s].fifo, p + "response_fifo_depth");
+            sc_trace(m.tf, m.rt_trace[s].active, p + "active_threads");
+            RtUnit* unit = m.rt[s].get();
+            Impl::RtTrace* tr = &m.rt_trace[s];
+            const bool traced_warp = int(s) == opt.trace_sm;
+            if (traced_warp) {
+                m.stack_depth.assign(cfg.warp_size, -1);
+                for (uint32_t t = 0; t < cfg.warp_size; ++t)
+                    sc_trace(m.tf, m.stack_depth[t], p + "warp" + std::to_string(opt.trace_warp) + ".thread" + std::to_string(t) + ".stack_depth");
+            }
+            Impl* impl = &m;
+            unit->on_cycle = [unit, tr, traced_warp, impl](uint64_t) {
+                const RtUnitCore& c = unit->core();
+                tr->warps = int(c.warp_buffer_occupancy());
+                tr->maq = int(c.request_queue_depth());
+                tr->fifo = int(c.response_fifo_depth());
+                tr->active = int(c.active_threads());
+                if (traced_warp)
+                    for (size_t t = 0; t < impl->stack_depth.size(); ++t)
+                        impl->stack_depth[t] = c.stack_depth(uint32_t(impl->opt.trace_warp), uint32_t(t));
+            };
+        }
+        auto trace_caches = [&](const std::vector<std::unique_ptr<Cache>>& caches, std::vector<int>& mshr,
+                                std::vector<double>& rate, std::vector<CacheStats>& prev, const std::string& prefix) {
+            mshr.assign(caches.size(), 0);
+            rate.assign(caches.size(), 0.0);
+            prev.assign(caches.size(), CacheStats{});
+            for (size_t i = 0; i < caches.size(); ++i) {
+                sc_trace(m.tf, mshr[i], prefix + std::to_string(i) + ".mshr_occupancy");
+                sc_trace(m.tf, rate[i], prefix + std::to_string(i) + ".miss_rate_window");
+            }
+        };
+        trace_caches(m.l1, m.l1_mshr, m.l1_missrate, m.l1_prev, "l1_");
+        trace_caches(m.l2, m.l2_mshr, m.l2_missrate, m.l2_prev, "l2_");
+        sc_trace(m.tf, m.dram_queue, "dram.queue_depth");
+        sc_trace(m.tf, m.dram_bw, "dram.bandwidth_utilisation_window");
+        Impl* impl = &m;
+        sample = [impl](uint64_t) {
+            auto upd = [](const std::vector<std::unique_ptr<Cache>>& caches, std::vector<int>& mshr, std::vector<double>& rate,
+                          std::vector<CacheStats>& prev) {
+                for (size_t i = 0; i < caches.size(); ++i) {
+                    const CacheStats now = caches[i]->tags().total();
+                    const uint64_t acc = now.accesses - prev[i].accesses;
+                    const uint64_t miss = (now.sector_misses + now.line_misses + now.mshr_hits) -
+                                          (prev[i].sector_misses + prev[i].line_misses + prev[i].mshr_hits);
+                    rate[i] = acc ? double(miss) / double(acc) : 0.0;
+                    mshr[i] = int(caches[i]->mshrs_in_use());
+                    prev[i] = now;
+                }
+            };
+            upd(impl->l1, impl->l1_mshr, impl->l1_missrate, impl->l1_prev);
+            upd(impl->l2, impl->l2_mshr, impl->l2_missrate, impl->l2_prev);
+            impl->dram_queue = int(impl->dram->queue_depth());
+            const uint64_t busy = impl->dram->stats().data_cycles;
+            const double window_mem = double(impl->opt.trace_window) * impl->core.period_fs() / double(impl->mem.period_fs());
+            impl->dram_bw = double(busy - impl->dram_prev_busy) / (window_mem * impl->cfg.dram.channels);
+            impl->dram_prev_busy = busy;
+        };
+    }
+    const uint64_t period = m.tf ? opt.trace_window : std::max<uint64_t>(1, std::min<uint64_t>(cfg.watchdog / 4, 100000));
+    m.monitor.reset(new Monitor("monitor", m.driver, m.core, cfg.watchdog, opt.progress, period, sample));
+    m.monitor->describe_stuck = [this]() {
+        std::string s;
+        for (const auto& u : impl_->rt) {
+            const RtUnitCore& c = u->core();
+            if (c.warps_resident())
+                s += std::string(u->name()) + ": " + std::to_string(c.warps_resident()) + " warps, " +
+                     std::to_string(c.request_queue_depth()) + " queued requests; ";
+        }
+        return s;
+    };
+}
+
+GpuPlatform::~GpuPlatform() {
+    if (impl_->tf) sc_close_vcd_trace_file(impl_->tf);
+}
+
+TimingResult GpuPlatform::run() {
+    Impl& m = *impl_;
+    sc_start();
+    TimingResult r;
+    if (m.monitor->printed_) std::cerr << "\n";
+    // The frame ends when its last ray retires (the monitor may wake once more after that).
+    r.cycles = m.driver.last_progress();
+    r.stuck = m.monitor->stuck;
+    r.stuck_report = m.monitor->report;
+    if (!r.stuck && !m.driver.finished()) {
+        r.stuck = true;
+        r.stuck_report = "simulation ran out of events with rays outstanding; oldest trace: " + m.driver.oldest_in_flight();
+    }
+    r.rays = m.driver.results();
+
+    // Invariants.
+    auto fail = [&](const std::string& s) { r.invariant_failures.push_back(s); };
+    if (!r.stuck) {
+        if (m.pool.outstanding() != 0) fail(std::to_string(m.pool.outstanding()) + " requests never got their response");
+        if (m.driver.rays_retired() != m.driver.rays_issued()) fail("not every ray retired");
+    }
+    CacheStats l1[kReqKinds], l2[kReqKinds];
+    for (int k = 0; k < kReqKinds; ++k) {
+        for (const auto& c : m.l1) add(l1[k], c->tags().stats(ReqKind(k)));
+        for (const auto& c : m.l2) add(l2[k], c->tags().stats(ReqKind(k)));
+        for (const CacheStats* s : {&l1[k], &l2[k]})
+            if (s->accesses != s->hits + s->mshr_hits + s->sector_misses + s->line_misses + s->reservation_fails)
+                fail("cache counters do not add up");
+    }
+    RtUnitStats rs;
+    for (const auto& u : m.rt) {
+        u->core().account(r.cycles);
+        const RtUnitStats& s = u->core().stats();
+        rs.warps += s.warps;
+        rs.rays += s.rays;
+        rs.node_fetches += s.node_fetches;
+        rs.chunk_requests += s.chunk_requests;
+        rs.coalesced += s.coalesced;
+        rs.responses += s.responses;
+        for (size_t i = 0; i < rs.thread_cycles.size(); ++i) rs.thread_cycles[i] += s.thread_cycles[i];
+        for (size_t i = 0; i < 5; ++i) {
+            rs.streak_fetches[i] += s.streak_fetches[i];
+            rs.streak_l1_misses[i] += s.streak_l1_misses[i];
+            rs.streak_dram_misses[i] += s.streak_dram_misses[i];
+        }
+        rs.max_response_fifo = std::max(rs.max_response_fifo, s.max_response_fifo);
+        rs.max_request_queue = std::max(rs.max_request_queue, s.max_request_queue);
+    }
+    if (!r.stuck && rs.chunk_requests != rs.responses) fail("RT units sent " + std::to_string(rs.chunk_requests) + " requests but drained " + std::to_string(rs.responses) + " responses");
+
+    const DramStats ds = m.dram->stats();
+    const double mem_cycles = double(r.cycles) * double(m.core.period_fs()) / double(m.mem.period_fs());
+    nlohmann::ordered_json j;
+    j["cycles"] = r.cycles;
+    j["rt_unit"] = {{"warps", rs.warps}, {"rays", rs.rays}, {"node_fetches", rs.node_fetches},
+                    {"chunk_requests", rs.chunk_requests}, {"coalesced_fetches", rs.coalesced},
+                    {"max_response_fifo", rs.max_response_fifo}, {"max_request_queue", rs.max_request_queue}};
+    const double thread_total = double(rs.thread_cycles[0] + rs.thread_cycles[1] + rs.thread_cycles[2] + rs.thread_cycles[3]);
+    auto frac = [&](ThreadStatus s) { return thread_total > 0 ? double(rs.thread_cycles[size_t(s)]) / thread_total : 0.0; };
+    j["rt_unit"]["thread_status"] = {{"unit", "share of resident thread-cycles"},
+                                     {"waiting_to_be_scheduled", frac(ThreadStatus::WaitSchedule)},
+                                     {"waiting_on_memory", frac(ThreadStatus::WaitMemory)},
+                                     {"in_math", frac(ThreadStatus::InMath)},
+                                     {"done_waiting_for_warp", frac(ThreadStatus::Idle)}};
+    nlohmann::ordered_json streak = nlohmann::ordered_json::array();
+    const char* names[5] = {"not_a_pop", "pop_1", "pop_2", "pop_3", "pop_4_or_more"};
+    for (int i = 0; i < 5; ++i)
+        streak.push_back({{"class", names[i]}, {"node_fetches", rs.streak_fetches[i]}, {"l1_misses", rs.streak_l1_misses[i]},
+                          {"dram_misses", rs.streak_dram_misses[i]}});
+    j["pop_streak"] = streak;
+    j["l1"] = {{"demand", cache_json(l1[0])}, {"prefetch", cache_json(l1[1])}};
+    j["l2"] = {{"demand", cache_json(l2[0])}, {"prefetch", cache_json(l2[1])}};
+    j["dram"] = {{"reads", ds.reads}, {"writes", ds.writes}, {"bytes", ds.bytes}, {"row_hits", ds.row_hits},
+                 {"row_misses", ds.row_misses}, {"row_conflicts", ds.row_conflicts},
+                 {"bandwidth_utilisation", mem_cycles > 0 ? double(ds.data_cycles) / (mem_cycles * m.cfg.dram.channels) : 0.0},
+                 {"avg_queue_wait_mem_cycles", ds.reads + ds.writes ? double(ds.queue_wait) / double(ds.reads + ds.writes) : 0.0}};
+    j["payloads_allocated"] = m.pool.allocated();
+    r.stats = j;
+    return r;
+}
+
+}  // namespace rtu

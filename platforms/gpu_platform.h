@@ -1,0 +1,53 @@
+// The GPU platform of the timing model: the only place where modules are wired together.
+//   WorkloadDriver -> RtUnit[sm] -> L1[sm] -> Crossbar -> L2[slice] -> Dram
+// Built from a HwConfig, elaborated once per process, run with sc_start().
+#pragma once
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "model/bvh_image.h"
+#include "model/config.h"
+#include "tlm/cache.h"
+#include "tlm/clock.h"
+#include "tlm/crossbar.h"
+#include "tlm/dram.h"
+#include "tlm/driver.h"
+#include "tlm/payload.h"
+#include "tlm/rt_unit.h"
+
+namespace rtu {
+
+struct TimingOptions {
+    Fidelity fidelity = Fidelity::AT;
+    TraversalOrder order = TraversalOrder::DFS;
+    bool progress = false;
+    std::string vcd;                  // VCD file (without the .vcd suffix SystemC adds)
+    int trace_sm = -1, trace_warp = -1;  // one warp-buffer slot whose threads' stack depths are traced
+    uint32_t trace_window = 1000;     // cycles per sample of windowed waveforms (miss rate, bandwidth)
+};
+
+struct TimingResult {
+    std::vector<TracedRay> rays;
+    uint64_t cycles = 0;
+    bool stuck = false;
+    std::string stuck_report;
+    std::vector<std::string> invariant_failures;
+    nlohmann::ordered_json stats;  // hierarchy statistics (no wall time)
+};
+
+class GpuPlatform {
+public:
+    GpuPlatform(const HwConfig& cfg, const BvhImage& image, Workload& workload, const TimingOptions& opt);
+    ~GpuPlatform();
+    // Runs the simulation to the end (call once per process: SystemC elaborates once).
+    TimingResult run();
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace rtu

@@ -1,0 +1,196 @@
+#include "cache.h"
+
+namespace rtu {
+
+using namespace sc_core;
+
+Cache::Cache(sc_module_name name, int level, const CacheConfig& cfg, uint32_t hit_latency, PayloadPool& pool,
+             const ClockDomain& clock, Fidelity fidelity)
+    : sc_module(name), in("in"), out("out"), level_(level), cfg_(cfg), hit_latency_(hit_latency), tags_(cfg), pool_(pool),
+      clock_(clock), fidelity_(fidelity), resp_peq_("resp_peq") {
+    if (fidelity == Fidelity::AT) {
+        in.register_nb_transport_fw(this, &Cache::nb_transport_fw);
+        out.register_nb_transport_bw(this, &Cache::nb_transport_bw);
+        SC_METHOD(send_responses);
+        sensitive << resp_peq_.get_event() << resp_event_;
+        dont_initialize();
+        SC_METHOD(send_misses);
+        sensitive << miss_event_;
+        dont_initialize();
+    } else {
+        in.register_b_transport(this, &Cache::b_transport);
+    }
+}
+
+// ---- AT ---------------------------------------------------------------------------------------
+
+bool Cache::lookup(tlm::tlm_generic_payload& t) {
+    RtExtension& e = ext(t);
+    const uint64_t token = next_token_++;
+    const CacheOutcome o = tags_.read(t.get_address(), token, e.kind);
+    switch (o) {
+        case CacheOutcome::ReservationFail:
+            return false;
+        case CacheOutcome::Hit:
+            respond_later(t, hit_latency_);
+            return true;
+        case CacheOutcome::MshrHit:
+            waiting_[token] = &t;
+            return true;
+        case CacheOutcome::SectorMiss:
+        case CacheOutcome::LineMiss: {
+            waiting_[token] = &t;
+            const uint64_t sector = tags_.sector_of(t.get_address());
+            tlm::tlm_generic_payload* down = pool_.acquire(sector, cfg_.sector, t.get_data_ptr() - (t.get_address() - sector));
+            RtExtension& de = ext(*down);
+            de = e;
+            de.l1_miss = de.dram = false;
+            de.id = sector;
+            miss_queue_.push_back(down);
+            // The tag lookup takes the hit latency before the miss leaves.
+            miss_event_.notify(clock_.period() * double(hit_latency_));
+            return true;
+        }
+    }
+    return false;
+}
+
+void Cache::respond_later(tlm::tlm_generic_payload& t, uint64_t cycles) {
+    resp_peq_.notify(t, clock_.period() * double(cycles));
+}
+
+tlm::tlm_sync_enum Cache::nb_transport_fw(tlm::tlm_generic_payload& t, tlm::tlm_phase& ph, sc_time& d) {
+    if (ph == tlm::BEGIN_REQ) {
+        t.acquire();
+        if (lookup(t)) {
+            ph = tlm::END_REQ;
+            return tlm::TLM_UPDATED;
+        }
+        blocked_ = &t;  // END_REQ withheld until an MSHR or a way frees
+        return tlm::TLM_ACCEPTED;
+    }
+    if (ph == tlm::END_RESP) return tlm::TLM_COMPLETED;
+    SC_REPORT_FATAL(name(), "unexpected phase on the forward path");
+    return tlm::TLM_COMPLETED;
+}
+
+void Cache::send_responses() {
+    while (tlm::tlm_generic_payload* t = resp_peq_.get_next_transaction()) resp_queue_.push_back(t);
+    if (resp_queue_.empty()) return;
+    const uint64_t c = clock_.cycle_at_or_after(sc_time_stamp());
+    if (c == last_resp_cycle_ || clock_.time_of(c) != sc_time_stamp()) {
+        resp_event_.notify(clock_.time_of(c == last_resp_cycle_ ? c + 1 : c) - sc_time_stamp());
+        return;
+    }
+    last_resp_cycle_ = c;
+    tlm::tlm_generic_payload* t = resp_queue_.front();
+    resp_queue_.pop_front();
+    t->set_response_status(tlm::TLM_OK_RESPONSE);
+    tlm::tlm_phase ph = tlm::BEGIN_RESP;
+    sc_time d = SC_ZERO_TIME;
+    const tlm::tlm_sync_enum s = in->nb_transport_bw(*t, ph, d);
+    if (s != tlm::TLM_COMPLETED) SC_REPORT_FATAL(name(), "requester must complete the response phase at once");
+    t->release();
+    if (!resp_queue_.empty()) resp_event_.notify(clock_.period());
+}
+
+void Cache::send_misses() {
+    if (down_waiting_end_req_ || miss_queue_.empty()) return;
+    const uint64_t c = clock_.cycle_at_or_after(sc_time_stamp());
+    if (c == last_miss_cycle_ || clock_.time_of(c) != sc_time_stamp()) {
+        miss_event_.notify(clock_.time_of(c == last_miss_cycle_ ? c + 1 : c) - sc_time_stamp());
+        return;
+    }
+    last_miss_cycle_ = c;
+    tlm::tlm_generic_payload* t = miss_queue_.front();
+    tlm::tlm_phase ph = tlm::BEGIN_REQ;
+    sc_time d = SC_ZERO_TIME;
+    const tlm::tlm_sync_enum s = out->nb_transport_fw(*t, ph, d);
+    if (s == tlm::TLM_UPDATED && ph == tlm::END_REQ) {
+        miss_queue_.pop_front();
+        if (!miss_queue_.empty()) miss_event_.notify(clock_.period());
+    } else if (s == tlm::TLM_ACCEPTED) {
+        down_waiting_end_req_ = true;
+    } else {
+        SC_REPORT_FATAL(name(), "unexpected reply to BEGIN_REQ");
+    }
+}
+
+tlm::tlm_sync_enum Cache::nb_transport_bw(tlm::tlm_generic_payload& t, tlm::tlm_phase& ph, sc_time& d) {
+    if (ph == tlm::END_REQ) {
+        down_waiting_end_req_ = false;
+        miss_queue_.pop_front();
+        if (!miss_queue_.empty()) miss_event_.notify(clock_.period());
+        return tlm::TLM_ACCEPTED;
+    }
+    if (ph != tlm::BEGIN_RESP) {
+        SC_REPORT_FATAL(name(), "unexpected phase on the backward path");
+        return tlm::TLM_COMPLETED;
+    }
+    // A sector arrived: every request waiting on it gets its response.
+    const bool from_dram = level_ == 2 || ext(t).dram;
+    for (uint64_t token : tags_.fill(t.get_address())) {
+        tlm::tlm_generic_payload* up = waiting_.at(token);
+        waiting_.erase(token);
+        RtExtension& e = ext(*up);
+        if (level_ == 1) e.l1_miss = true;
+        e.dram = e.dram || from_dram;
+        respond_later(*up, 0);
+    }
+    t.release();
+    // An MSHR freed: retry the request held by a reservation fail.
+    if (blocked_ && lookup(*blocked_)) {
+        tlm::tlm_generic_payload* b = blocked_;
+        blocked_ = nullptr;
+        tlm::tlm_phase end = tlm::END_REQ;
+        sc_time zero = SC_ZERO_TIME;
+        in->nb_transport_bw(*b, end, zero);
+    }
+    return tlm::TLM_COMPLETED;
+}
+
+// ---- LT ---------------------------------------------------------------------------------------
+
+void Cache::b_transport(tlm::tlm_generic_payload& t, sc_time& d) {
+    RtExtension& e = ext(t);
+    uint64_t c = port_.book(clock_.cycle_at_or_after(sc_time_stamp() + d), 1);  // one lookup per cycle
+    const uint64_t sector = tags_.sector_of(t.get_address());
+    uint64_t done;
+    auto f = fill_at_.find(sector);
+    const CacheOutcome o = tags_.read(t.get_address(), next_token_++, e.kind);
+    if (o == CacheOutcome::Hit) {
+        // Valid in the tags, but its data may still be on the way at this timestamp.
+        if (f != fill_at_.end() && f->second > c + hit_latency_) {
+            done = f->second;
+            tags_.count_as_mshr_hit(e.kind);
+            if (level_ == 1) e.l1_miss = true;
+        } else {
+            done = c + hit_latency_;
+        }
+    } else {
+        // Miss: wait for a free MSHR at this timestamp, fetch, and fill at once (the sector is
+        // marked with the cycle its data arrives).
+        while (!lt_mshr_.empty() && *lt_mshr_.begin() <= c) lt_mshr_.erase(lt_mshr_.begin());
+        if (lt_mshr_.size() >= cfg_.mshrs) {
+            tags_.count_reservation_fail(e.kind);
+            c = *lt_mshr_.begin();
+        }
+        tlm::tlm_generic_payload* down = pool_.acquire(sector, cfg_.sector, t.get_data_ptr() - (t.get_address() - sector));
+        ext(*down) = e;
+        ext(*down).dram = false;
+        sc_time dd = clock_.time_of(c + hit_latency_) - sc_time_stamp();
+        out->b_transport(*down, dd);
+        done = clock_.cycle_at_or_after(sc_time_stamp() + dd);
+        e.dram = e.dram || level_ == 2 || ext(*down).dram;
+        if (level_ == 1) e.l1_miss = true;
+        down->release();
+        tags_.fill(sector);
+        fill_at_[sector] = done;
+        lt_mshr_.insert(done);
+        if (fill_at_.size() > 8 * tags_.lines()) fill_at_.clear();  // stale entries: all in the past
+    }
+    t.set_response_status(tlm::TLM_OK_RESPONSE);
+    d = clock_.time_of(done) - sc_time_stamp();
+}
+
+}  // namespace rtu

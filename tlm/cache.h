@@ -1,0 +1,75 @@
+// A sector cache (L1 of an SM, or one L2 slice) as a SystemC module: SectorCache (model/) behind
+// a TLM-2.0 target socket (from the RT unit or the crossbar) and an initiator socket (towards
+// L2 or DRAM). One lookup per cycle; a reservation fail holds END_REQ until an MSHR frees, which
+// stops the requester (base-protocol backpressure). LT: b_transport, booking the port and the
+// MSHRs by request timestamp.
+#pragma once
+#include <deque>
+#include <set>
+#include <unordered_map>
+
+#include <systemc>
+#include <tlm>
+#include <tlm_utils/peq_with_get.h>
+#include <tlm_utils/simple_initiator_socket.h>
+#include <tlm_utils/simple_target_socket.h>
+
+#include "clock.h"
+#include "model/calendar.h"
+#include "model/sector_cache.h"
+#include "payload.h"
+#include "rt_unit.h"
+
+namespace rtu {
+
+class Cache : public sc_core::sc_module {
+public:
+    tlm_utils::simple_target_socket<Cache> in;
+    tlm_utils::simple_initiator_socket<Cache> out;
+
+    // `level` 1 marks responses as L1 misses when not hits; `level` 2 marks them as DRAM-served
+    // when they came from below.
+    Cache(sc_core::sc_module_name name, int level, const CacheConfig& cfg, uint32_t hit_latency, PayloadPool& pool,
+          const ClockDomain& clock, Fidelity fidelity);
+    SC_HAS_PROCESS(Cache);
+
+    const SectorCache& tags() const { return tags_; }
+    size_t mshrs_in_use() const { return fidelity_ == Fidelity::AT ? tags_.mshrs_in_use() : lt_mshr_.size(); }
+    uint64_t outstanding_down() const { return waiting_.size(); }
+
+private:
+    // AT
+    tlm::tlm_sync_enum nb_transport_fw(tlm::tlm_generic_payload& t, tlm::tlm_phase& ph, sc_core::sc_time& d);
+    tlm::tlm_sync_enum nb_transport_bw(tlm::tlm_generic_payload& t, tlm::tlm_phase& ph, sc_core::sc_time& d);
+    bool lookup(tlm::tlm_generic_payload& t);  // false: reservation fail
+    void respond_later(tlm::tlm_generic_payload& t, uint64_t cycles);
+    void send_responses();  // SC_METHOD: one response per cycle
+    void send_misses();     // SC_METHOD: one miss per cycle downstream
+    // LT
+    void b_transport(tlm::tlm_generic_payload& t, sc_core::sc_time& d);
+
+    int level_;
+    CacheConfig cfg_;
+    uint32_t hit_latency_;
+    SectorCache tags_;
+    PayloadPool& pool_;
+    const ClockDomain& clock_;
+    Fidelity fidelity_;
+
+    uint64_t next_token_ = 1;
+    std::unordered_map<uint64_t, tlm::tlm_generic_payload*> waiting_;  // token -> upstream request
+    tlm::tlm_generic_payload* blocked_ = nullptr;                      // held by a reservation fail
+    tlm_utils::peq_with_get<tlm::tlm_generic_payload> resp_peq_;
+    std::deque<tlm::tlm_generic_payload*> resp_queue_;
+    sc_core::sc_event resp_event_, miss_event_;
+    uint64_t last_resp_cycle_ = ~0ull, last_miss_cycle_ = ~0ull;
+    std::deque<tlm::tlm_generic_payload*> miss_queue_;
+    bool down_waiting_end_req_ = false;
+
+    // LT state: port bookings, fill times of sectors, MSHR release cycles.
+    Calendar port_;
+    std::unordered_map<uint64_t, uint64_t> fill_at_;
+    std::multiset<uint64_t> lt_mshr_;
+};
+
+}  // namespace rtu

@@ -1,0 +1,49 @@
+// Crossbar between the SMs' L1s and the L2 slices: a request goes to slice (line index mod
+// slices); the response goes back to the L1 it came from. Each output serialises its requests
+// (one BEGIN_REQ outstanding per socket, as the base protocol requires); both directions add
+// the configured latency.
+#pragma once
+#include <deque>
+#include <vector>
+
+#include <systemc>
+#include <tlm>
+#include <tlm_utils/multi_passthrough_initiator_socket.h>
+#include <tlm_utils/multi_passthrough_target_socket.h>
+#include <tlm_utils/peq_with_get.h>
+
+#include "clock.h"
+#include "payload.h"
+#include "rt_unit.h"
+
+namespace rtu {
+
+class Crossbar : public sc_core::sc_module {
+public:
+    tlm_utils::multi_passthrough_target_socket<Crossbar> in;      // from L1s
+    tlm_utils::multi_passthrough_initiator_socket<Crossbar> out;  // to L2 slices
+
+    Crossbar(sc_core::sc_module_name name, uint32_t slices, uint32_t line, uint32_t latency, const ClockDomain& clock,
+             Fidelity fidelity);
+    SC_HAS_PROCESS(Crossbar);
+    uint32_t slice_of(uint64_t addr) const { return uint32_t((addr / line_) % slices_); }
+
+private:
+    tlm::tlm_sync_enum nb_transport_fw(int id, tlm::tlm_generic_payload& t, tlm::tlm_phase& ph, sc_core::sc_time& d);
+    tlm::tlm_sync_enum nb_transport_bw(int id, tlm::tlm_generic_payload& t, tlm::tlm_phase& ph, sc_core::sc_time& d);
+    void b_transport(int id, tlm::tlm_generic_payload& t, sc_core::sc_time& d);
+    void send(uint32_t slice);
+    void forward_requests();
+    void forward_responses();
+
+    uint32_t slices_, line_, latency_;
+    const ClockDomain& clock_;
+    struct Output {
+        std::deque<tlm::tlm_generic_payload*> queue;
+        bool waiting_end_req = false;
+    };
+    std::vector<Output> outputs_;
+    tlm_utils::peq_with_get<tlm::tlm_generic_payload> req_peq_, resp_peq_;
+};
+
+}  // namespace rtu

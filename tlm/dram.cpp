@@ -1,0 +1,150 @@
+#include "dram.h"
+
+#include <algorithm>
+
+namespace rtu {
+
+using namespace sc_core;
+
+Dram::Dram(sc_module_name name, const DramConfig& cfg, uint32_t line, const ClockDomain& clock, Fidelity fidelity)
+    : sc_module(name), in("from_l2"), cfg_(cfg), map_(cfg, line), clock_(clock), blocked_(cfg.channels),
+      resp_peq_("resp_peq"), lt_banks_(cfg.channels, std::vector<LtBank>(cfg.banks)),
+      lt_bank_busy_(cfg.channels, std::vector<Calendar>(cfg.banks)), lt_bus_(cfg.channels), lt_stats_(cfg.channels) {
+    for (uint32_t c = 0; c < cfg.channels; ++c) channels_.emplace_back(cfg);
+    if (fidelity == Fidelity::AT) {
+        in.register_nb_transport_fw(this, &Dram::nb_transport_fw);
+        SC_METHOD(schedule);
+        sensitive << wake_;
+        dont_initialize();
+        SC_METHOD(respond);
+        sensitive << resp_peq_.get_event();
+        dont_initialize();
+    } else {
+        in.register_b_transport(this, &Dram::b_transport);
+    }
+}
+
+DramStats Dram::stats() const {
+    DramStats s;
+    for (uint32_t c = 0; c < channels_.size(); ++c)
+        for (const DramStats* x : {&channels_[c].stats(), &lt_stats_[c]}) {
+            s.reads += x->reads;
+            s.writes += x->writes;
+            s.row_hits += x->row_hits;
+            s.row_misses += x->row_misses;
+            s.row_conflicts += x->row_conflicts;
+            s.bytes += x->bytes;
+            s.data_cycles += x->data_cycles;
+            s.queue_wait += x->queue_wait;
+        }
+    return s;
+}
+
+size_t Dram::queue_depth() const {
+    size_t n = 0;
+    for (const DramChannel& c : channels_) n += c.depth();
+    return n;
+}
+
+bool Dram::admit(tlm::tlm_generic_payload& t, uint64_t now) {
+    const DramCoord at = map_.map(t.get_address());
+    DramChannel& ch = channels_[at.channel];
+    if (ch.full()) return false;
+    DramRequest r;
+    r.addr = t.get_address();
+    r.bytes = t.get_data_length();
+    r.write = t.is_write();
+    r.token = reinterpret_cast<uint64_t>(&t);
+    r.arrival = now;
+    r.at = at;
+    ch.enqueue(r);
+    return true;
+}
+
+tlm::tlm_sync_enum Dram::nb_transport_fw(int id, tlm::tlm_generic_payload& t, tlm::tlm_phase& ph, sc_time& d) {
+    if (ph == tlm::END_RESP) return tlm::TLM_COMPLETED;
+    if (ph != tlm::BEGIN_REQ) SC_REPORT_FATAL(name(), "unexpected phase on the forward path");
+    ext(t).source = uint32_t(id);
+    t.acquire();
+    wake_.notify(SC_ZERO_TIME);
+    if (admit(t, clock_.cycle_at_or_after(sc_time_stamp()))) {
+        ph = tlm::END_REQ;
+        return tlm::TLM_UPDATED;
+    }
+    blocked_[map_.map(t.get_address()).channel].push_back(&t);
+    return tlm::TLM_ACCEPTED;
+}
+
+void Dram::schedule() {
+    const uint64_t now = clock_.cycle_at_or_after(sc_time_stamp());
+    uint64_t next = ~0ull;
+    for (uint32_t c = 0; c < channels_.size(); ++c) {
+        DramChannel& ch = channels_[c];
+        if (ch.empty()) continue;
+        if (ch.next_decision() > now) {
+            next = std::min(next, ch.next_decision());
+            continue;
+        }
+        DramRequest r;
+        uint64_t done;
+        ch.schedule(now, &r, &done);
+        window_busy_ += ch.transfer_cycles(r.bytes);
+        auto* t = reinterpret_cast<tlm::tlm_generic_payload*>(r.token);
+        resp_peq_.notify(*t, clock_.time_of(done) - sc_time_stamp());
+        // A queue slot freed: admit the oldest blocked request of this channel.
+        if (!blocked_[c].empty() && admit(*blocked_[c].front(), now)) {
+            tlm::tlm_generic_payload* b = blocked_[c].front();
+            blocked_[c].pop_front();
+            tlm::tlm_phase end = tlm::END_REQ;
+            sc_time zero = SC_ZERO_TIME;
+            in[ext(*b).source]->nb_transport_bw(*b, end, zero);
+        }
+        if (!ch.empty()) next = std::min(next, std::max(now + 1, ch.next_decision()));
+    }
+    if (next != ~0ull) wake_.notify(clock_.time_of(next) - sc_time_stamp());
+}
+
+void Dram::respond() {
+    while (tlm::tlm_generic_payload* t = resp_peq_.get_next_transaction()) {
+        t->set_response_status(tlm::TLM_OK_RESPONSE);
+        ext(*t).dram = true;
+        tlm::tlm_phase ph = tlm::BEGIN_RESP;
+        sc_time d = SC_ZERO_TIME;
+        if (in[ext(*t).source]->nb_transport_bw(*t, ph, d) != tlm::TLM_COMPLETED)
+            SC_REPORT_FATAL(name(), "requester must complete the response phase at once");
+        t->release();
+    }
+}
+
+void Dram::b_transport(int id, tlm::tlm_generic_payload& t, sc_time& d) {
+    const uint64_t now = clock_.cycle_at_or_after(sc_time_stamp() + d);
+    const DramCoord at = map_.map(t.get_address());
+    LtBank& b = lt_banks_[at.channel][at.bank];
+    DramStats& st = lt_stats_[at.channel];
+    // Row state follows call order (the LT approximation); bank and data-bus occupancy are
+    // booked at the request's own timestamp.
+    uint64_t access;  // cycles from bank start to data
+    if (b.open && b.row == at.row) {
+        ++st.row_hits;
+        access = cfg_.tCL;
+    } else {
+        (b.open ? st.row_conflicts : st.row_misses)++;
+        access = (b.open ? cfg_.tRP : 0) + cfg_.tRCD + cfg_.tCL;
+    }
+    b.open = true;
+    b.row = at.row;
+    const uint64_t xfer = channels_[at.channel].transfer_cycles(t.get_data_length());
+    const uint64_t bank_start = lt_bank_busy_[at.channel][at.bank].book(now, std::max<uint64_t>(access - cfg_.tCL + cfg_.tCCD, 1));
+    const uint64_t bus_start = lt_bus_[at.channel].book(bank_start + access, xfer);
+    const uint64_t done = bus_start + xfer;
+    ++st.reads;
+    st.bytes += t.get_data_length();
+    st.data_cycles += xfer;
+    st.queue_wait += bank_start - now;
+    ext(t).dram = true;
+    ext(t).source = uint32_t(id);
+    t.set_response_status(tlm::TLM_OK_RESPONSE);
+    d = clock_.time_of(done) - sc_time_stamp();
+}
+
+}  // namespace rtu

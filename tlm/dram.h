@@ -1,0 +1,59 @@
+// The DRAM: channels of banks (model/dram.h) behind one target socket per L2 slice. AT: each
+// channel's FR-FCFS scheduler runs in an SC_METHOD that sleeps until its next decision; a full
+// channel queue holds END_REQ. LT: the request's timestamp books its bank and the channel's data
+// bus in calendars, so that the order of calls does not matter.
+#pragma once
+#include <deque>
+#include <vector>
+
+#include <systemc>
+#include <tlm>
+#include <tlm_utils/multi_passthrough_target_socket.h>
+#include <tlm_utils/peq_with_get.h>
+
+#include "clock.h"
+#include "model/calendar.h"
+#include "model/dram.h"
+#include "payload.h"
+#include "rt_unit.h"
+
+namespace rtu {
+
+class Dram : public sc_core::sc_module {
+public:
+    tlm_utils::multi_passthrough_target_socket<Dram> in;
+
+    Dram(sc_core::sc_module_name name, const DramConfig& cfg, uint32_t line, const ClockDomain& clock, Fidelity fidelity);
+    SC_HAS_PROCESS(Dram);
+
+    DramStats stats() const;
+    size_t queue_depth() const;
+    uint64_t busy_cycles_window() const { return window_busy_; }
+
+private:
+    tlm::tlm_sync_enum nb_transport_fw(int id, tlm::tlm_generic_payload& t, tlm::tlm_phase& ph, sc_core::sc_time& d);
+    void b_transport(int id, tlm::tlm_generic_payload& t, sc_core::sc_time& d);
+    void schedule();   // SC_METHOD
+    void respond();    // SC_METHOD on the response PEQ
+    bool admit(tlm::tlm_generic_payload& t, uint64_t now);
+
+    DramConfig cfg_;
+    DramAddressMap map_;
+    const ClockDomain& clock_;
+    std::vector<DramChannel> channels_;
+    std::vector<std::deque<tlm::tlm_generic_payload*>> blocked_;  // per channel: END_REQ withheld
+    tlm_utils::peq_with_get<tlm::tlm_generic_payload> resp_peq_;
+    sc_core::sc_event wake_;
+    uint64_t window_busy_ = 0;
+    // LT
+    struct LtBank {
+        bool open = false;
+        uint64_t row = 0;
+    };
+    std::vector<std::vector<LtBank>> lt_banks_;
+    std::vector<std::vector<Calendar>> lt_bank_busy_;
+    std::vector<Calendar> lt_bus_;
+    std::vector<DramStats> lt_stats_;
+};
+
+}  // namespace rtu

@@ -1,0 +1,145 @@
+#include "rt_unit.h"
+
+#include <tlm_utils/tlm_quantumkeeper.h>
+
+namespace rtu {
+
+using namespace sc_core;
+
+RtUnit::RtUnit(sc_module_name name, uint32_t sm, const HwConfig& cfg, const BvhImage& image, TraversalOrder order,
+               WorkloadDriver& driver, PayloadPool& pool, const ClockDomain& clock, Fidelity fidelity)
+    : sc_module(name), socket("to_l1"), sm_(sm), core_(cfg, image, order), image_(image), driver_(driver), pool_(pool),
+      clock_(clock) {
+    if (fidelity == Fidelity::AT) {
+        socket.register_nb_transport_bw(this, &RtUnit::nb_transport_bw);
+        SC_METHOD(tick);
+        sensitive << wake_;  // runs once at time 0, then only when woken
+    } else {
+        SC_THREAD(lt_loop);
+    }
+}
+
+void RtUnit::wake_at(uint64_t cycle) {
+    const sc_time t = clock_.time_of(cycle);
+    wake_.notify(t > sc_time_stamp() ? t - sc_time_stamp() : SC_ZERO_TIME);
+}
+
+tlm::tlm_generic_payload* RtUnit::make_payload(const ChunkRequest& r) {
+    // Data comes straight from the backing store (the BVH image); timing from the transaction.
+    auto* t = pool_.acquire(r.addr, kChunkBytes, const_cast<unsigned char*>(image_.at(r.addr, kChunkBytes)));
+    RtExtension& e = ext(*t);
+    e.sm = sm_;
+    e.warp = r.warp;
+    e.id = r.id;
+    e.kind = r.prefetch ? ReqKind::Prefetch : ReqKind::Demand;
+    e.streak = r.streak;
+    return t;
+}
+
+void RtUnit::pull_work(uint64_t c) {
+    while (core_.has_free_slot()) {
+        auto trace = driver_.next_trace(sm_, c);
+        if (!trace) break;
+        core_.accept_warp(*trace, c);
+    }
+}
+
+void RtUnit::tick() {
+    const uint64_t c = clock_.cycle_at_or_after(sc_time_stamp());
+    if (clock_.time_of(c) != sc_time_stamp()) return wake_at(c);  // align to the clock edge
+    if (c != last_cycle_) {
+        last_cycle_ = c;
+        pull_work(c);
+        // At most one 32 B request leaves per cycle.
+        if (!waiting_end_req_ && core_.has_request()) {
+            tlm::tlm_generic_payload* t = make_payload(core_.front_request());
+            tlm::tlm_phase ph = tlm::BEGIN_REQ;
+            sc_time d = SC_ZERO_TIME;
+            const tlm::tlm_sync_enum s = socket->nb_transport_fw(*t, ph, d);
+            if (s == tlm::TLM_UPDATED && ph == tlm::END_REQ) {
+                core_.pop_request();
+            } else if (s == tlm::TLM_ACCEPTED) {
+                waiting_end_req_ = true;
+            } else {
+                SC_REPORT_FATAL(name(), "unexpected reply to BEGIN_REQ");
+            }
+        }
+        core_.cycle(c);
+        auto retired = core_.take_retired();
+        if (!retired.empty()) driver_.retire(sm_, retired, c);
+        if (on_cycle) on_cycle(c);
+    }
+    uint64_t next = core_.next_event(c);
+    if (!waiting_end_req_ && core_.has_request()) next = c + 1;
+    if (core_.has_free_slot()) {
+        const uint64_t r = driver_.earliest_ready(sm_);
+        if (r != ~0ull) next = std::min(next, std::max(c + 1, r));
+    }
+    if (next != ~0ull) wake_at(next);
+}
+
+tlm::tlm_sync_enum RtUnit::nb_transport_bw(tlm::tlm_generic_payload& t, tlm::tlm_phase& ph, sc_time& d) {
+    const uint64_t c = clock_.cycle_at_or_after(sc_time_stamp() + d);
+    if (ph == tlm::END_REQ) {
+        waiting_end_req_ = false;
+        core_.pop_request();
+        wake_at(std::max(c, last_cycle_ == ~0ull ? 0 : last_cycle_ + 1));
+        return tlm::TLM_ACCEPTED;
+    }
+    if (ph == tlm::BEGIN_RESP) {
+        const RtExtension& e = ext(t);
+        core_.on_response(e.id, e.l1_miss, e.dram, c);
+        t.release();
+        wake_at(std::max(c, last_cycle_ == ~0ull ? 0 : last_cycle_ + 1));
+        return tlm::TLM_COMPLETED;
+    }
+    SC_REPORT_FATAL(name(), "unexpected phase on the backward path");
+    return tlm::TLM_COMPLETED;
+}
+
+void RtUnit::lt_loop() {
+    tlm_utils::tlm_quantumkeeper qk;
+    qk.reset();
+    struct Resp {
+        uint64_t id;
+        bool l1_miss, dram;
+    };
+    std::multimap<uint64_t, Resp> responses;  // cycle the response reaches the FIFO
+    uint64_t c = clock_.cycle_at_or_after(sc_time_stamp());
+    for (;;) {
+        last_cycle_ = c;
+        for (auto it = responses.begin(); it != responses.end() && it->first <= c;) {
+            core_.on_response(it->second.id, it->second.l1_miss, it->second.dram, c);
+            it = responses.erase(it);
+        }
+        pull_work(c);
+        if (core_.has_request()) {
+            tlm::tlm_generic_payload* t = make_payload(core_.front_request());
+            sc_time d = clock_.time_of(c) - sc_time_stamp();
+            socket->b_transport(*t, d);
+            const RtExtension& e = ext(*t);
+            responses.insert({std::max(c + 1, clock_.cycle_at_or_after(sc_time_stamp() + d)), Resp{e.id, e.l1_miss, e.dram}});
+            t->release();
+            core_.pop_request();
+        }
+        core_.cycle(c);
+        auto retired = core_.take_retired();
+        if (!retired.empty()) driver_.retire(sm_, retired, c);
+        if (on_cycle) on_cycle(c);
+
+        uint64_t next = core_.next_event(c);
+        if (core_.has_request()) next = c + 1;
+        if (!responses.empty()) next = std::min(next, std::max(c + 1, responses.begin()->first));
+        if (core_.has_free_slot()) {
+            const uint64_t r = driver_.earliest_ready(sm_);
+            if (r != ~0ull) next = std::min(next, std::max(c + 1, r));
+        }
+        if (next == ~0ull) break;  // nothing in flight and no trace will come for this SM
+        c = next;
+        qk.set(clock_.time_of(c) - sc_time_stamp());
+        if (qk.need_sync()) qk.sync();
+    }
+    qk.sync();
+}
+
+}  // namespace rtu

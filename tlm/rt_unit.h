@@ -1,0 +1,55 @@
+// The RT unit of one SM as a SystemC module: RtUnitCore (model/) behind one TLM-2.0 initiator
+// socket to the SM's L1. AT: non-blocking transport, one 32 B request per cycle, an SC_METHOD that
+// sleeps until its next event. LT: blocking transport with a quantum keeper; the unit runs ahead
+// of simulated time by up to one quantum.
+#pragma once
+#include <functional>
+#include <map>
+
+#include <systemc>
+#include <tlm>
+#include <tlm_utils/simple_initiator_socket.h>
+
+#include "clock.h"
+#include "driver.h"
+#include "model/rt_unit_core.h"
+#include "payload.h"
+
+namespace rtu {
+
+enum class Fidelity { AT, LT };
+
+class RtUnit : public sc_core::sc_module {
+public:
+    tlm_utils::simple_initiator_socket<RtUnit> socket;
+
+    RtUnit(sc_core::sc_module_name name, uint32_t sm, const HwConfig& cfg, const BvhImage& image, TraversalOrder order,
+           WorkloadDriver& driver, PayloadPool& pool, const ClockDomain& clock, Fidelity fidelity);
+    SC_HAS_PROCESS(RtUnit);
+
+    RtUnitCore& core() { return core_; }
+    const RtUnitCore& core() const { return core_; }
+    uint64_t last_cycle() const { return last_cycle_ == ~0ull ? 0 : last_cycle_; }
+    // Called after every cycle the unit works (waveform sampling); may be empty.
+    std::function<void(uint64_t cycle)> on_cycle;
+
+private:
+    void tick();     // AT
+    void lt_loop();  // LT
+    void pull_work(uint64_t c);
+    tlm::tlm_sync_enum nb_transport_bw(tlm::tlm_generic_payload& t, tlm::tlm_phase& ph, sc_core::sc_time& d);
+    tlm::tlm_generic_payload* make_payload(const ChunkRequest& r);
+    void wake_at(uint64_t cycle);
+
+    uint32_t sm_;
+    RtUnitCore core_;
+    const BvhImage& image_;
+    WorkloadDriver& driver_;
+    PayloadPool& pool_;
+    const ClockDomain& clock_;
+    bool waiting_end_req_ = false;
+    uint64_t last_cycle_ = ~0ull;
+    sc_core::sc_event wake_;
+};
+
+}  // namespace rtu
