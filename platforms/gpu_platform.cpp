@@ -100,6 +100,7 @@ struct GpuPlatform::Impl {
     std::unique_ptr<Crossbar> xbar;
     std::unique_ptr<Dram> dram;
     std::unique_ptr<Monitor> monitor;
+    std::vector<std::unique_ptr<ProtocolChecker>> checkers;
     sc_trace_file* tf = nullptr;
     // Traced values (sampled into the VCD when tracing is on).
     struct RtTrace {
@@ -123,19 +124,31 @@ GpuPlatform::GpuPlatform(const HwConfig& cfg, const BvhImage& image, Workload& w
     Impl& m = *impl_;
     if (opt.fidelity == Fidelity::LT)
         tlm::tlm_global_quantum::instance().set(m.core.period() * double(cfg.quantum));
+    // Binds initiator to target, through a protocol checker when asked for.
+    const bool check = opt.check_protocol && opt.fidelity == Fidelity::AT;
+    auto link = [&](auto& initiator, auto& target, const std::string& name) {
+        if (!check) {
+            initiator.bind(target);
+            return;
+        }
+        m.checkers.emplace_back(new ProtocolChecker(("check_" + name).c_str()));
+        initiator.bind(m.checkers.back()->in);
+        m.checkers.back()->out.bind(target);
+    };
     for (uint32_t s = 0; s < cfg.sms; ++s) {
         const std::string id = std::to_string(s);
         m.rt.emplace_back(new RtUnit(("rt_unit_" + id).c_str(), s, cfg, image, opt.order, m.driver, m.pool, m.core, opt.fidelity));
         m.l1.emplace_back(new Cache(("l1_" + id).c_str(), 1, cfg.l1, cfg.l1_hit_latency, m.pool, m.core, opt.fidelity));
-        m.rt[s]->socket.bind(m.l1[s]->in);
+        link(m.rt[s]->socket, m.l1[s]->in, "rt_unit_" + id + "_l1_" + id);
     }
     m.xbar.reset(new Crossbar("crossbar", cfg.l2_slices, cfg.l2.line, cfg.xbar_latency, m.core, opt.fidelity));
-    for (uint32_t s = 0; s < cfg.sms; ++s) m.l1[s]->out.bind(m.xbar->in);
+    for (uint32_t s = 0; s < cfg.sms; ++s) link(m.l1[s]->out, m.xbar->in, "l1_" + std::to_string(s) + "_crossbar");
     m.dram.reset(new Dram("dram", cfg.dram, cfg.l2.line, m.mem, opt.fidelity));
     for (uint32_t s = 0; s < cfg.l2_slices; ++s) {
-        m.l2.emplace_back(new Cache(("l2_" + std::to_string(s)).c_str(), 2, cfg.l2, cfg.l2.latency, m.pool, m.core, opt.fidelity));
-        m.xbar->out.bind(m.l2[s]->in);
-        m.l2[s]->out.bind(m.dram->in);
+        const std::string id = std::to_string(s);
+        m.l2.emplace_back(new Cache(("l2_" + id).c_str(), 2, cfg.l2, cfg.l2.latency, m.pool, m.core, opt.fidelity));
+        link(m.xbar->out, m.l2[s]->in, "crossbar_l2_" + id);
+        link(m.l2[s]->out, m.dram->in, "l2_" + id + "_dram");
     }
 
     std::function<void(uint64_t)> sample;
@@ -271,6 +284,11 @@ TimingResult GpuPlatform::run() {
         }
         rs.max_response_fifo = std::max(rs.max_response_fifo, s.max_response_fifo);
         rs.max_request_queue = std::max(rs.max_request_queue, s.max_request_queue);
+    }
+    for (const auto& c : m.checkers) {
+        r.protocol_transactions += c->transactions();
+        r.protocol_violations.insert(r.protocol_violations.end(), c->violations().begin(), c->violations().end());
+        if (!r.stuck && c->open()) r.protocol_violations.push_back(std::string(c->name()) + ": " + std::to_string(c->open()) + " transactions left open");
     }
     if (!r.stuck && rs.chunk_requests != rs.responses) fail("RT units sent " + std::to_string(rs.chunk_requests) + " requests but drained " + std::to_string(rs.responses) + " responses");
 

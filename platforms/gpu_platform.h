@@ -16,6 +16,7 @@
 #include "tlm/dram.h"
 #include "tlm/driver.h"
 #include "tlm/payload.h"
+#include "tlm/protocol_checker.h"
 #include "tlm/rt_unit.h"
 
 namespace rtu {
@@ -27,6 +28,7 @@ struct TimingOptions {
     std::string vcd;                  // VCD file (without the .vcd suffix SystemC adds)
     int trace_sm = -1, trace_warp = -1;  // one warp-buffer slot whose threads' stack depths are traced
     uint32_t trace_window = 1000;     // cycles per sample of windowed waveforms (miss rate, bandwidth)
+    bool check_protocol = false;      // AT: a base-protocol checker on every socket
 };
 
 struct TimingResult {
@@ -35,6 +37,8 @@ struct TimingResult {
     bool stuck = false;
     std::string stuck_report;
     std::vector<std::string> invariant_failures;
+    std::vector<std::string> protocol_violations;  // with check_protocol
+    uint64_t protocol_transactions = 0;
     nlohmann::ordered_json stats;  // hierarchy statistics (no wall time)
 };
 

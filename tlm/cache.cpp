@@ -46,9 +46,10 @@ bool Cache::lookup(tlm::tlm_generic_payload& t) {
             de = e;
             de.l1_miss = de.dram = false;
             de.id = sector;
-            miss_queue_.push_back(down);
             // The tag lookup takes the hit latency before the miss leaves.
-            miss_event_.notify(clock_.period() * double(hit_latency_));
+            const uint64_t leave = clock_.cycle_at_or_after(sc_time_stamp()) + hit_latency_;
+            miss_queue_.push_back({leave, down});
+            if (miss_queue_.size() == 1) miss_event_.notify(clock_.time_of(leave) - sc_time_stamp());
             return true;
         }
     }
@@ -97,18 +98,19 @@ void Cache::send_responses() {
 void Cache::send_misses() {
     if (down_waiting_end_req_ || miss_queue_.empty()) return;
     const uint64_t c = clock_.cycle_at_or_after(sc_time_stamp());
-    if (c == last_miss_cycle_ || clock_.time_of(c) != sc_time_stamp()) {
-        miss_event_.notify(clock_.time_of(c == last_miss_cycle_ ? c + 1 : c) - sc_time_stamp());
+    const uint64_t due = std::max(miss_queue_.front().first, c == last_miss_cycle_ ? c + 1 : c);
+    if (clock_.time_of(due) != sc_time_stamp()) {
+        miss_event_.notify(clock_.time_of(due) - sc_time_stamp());
         return;
     }
     last_miss_cycle_ = c;
-    tlm::tlm_generic_payload* t = miss_queue_.front();
+    tlm::tlm_generic_payload* t = miss_queue_.front().second;
     tlm::tlm_phase ph = tlm::BEGIN_REQ;
     sc_time d = SC_ZERO_TIME;
     const tlm::tlm_sync_enum s = out->nb_transport_fw(*t, ph, d);
     if (s == tlm::TLM_UPDATED && ph == tlm::END_REQ) {
         miss_queue_.pop_front();
-        if (!miss_queue_.empty()) miss_event_.notify(clock_.period());
+        if (!miss_queue_.empty()) miss_event_.notify(clock_.period());  // send_misses waits for its due cycle
     } else if (s == tlm::TLM_ACCEPTED) {
         down_waiting_end_req_ = true;
     } else {

@@ -63,7 +63,7 @@ private:
     std::deque<tlm::tlm_generic_payload*> resp_queue_;
     sc_core::sc_event resp_event_, miss_event_;
     uint64_t last_resp_cycle_ = ~0ull, last_miss_cycle_ = ~0ull;
-    std::deque<tlm::tlm_generic_payload*> miss_queue_;
+    std::deque<std::pair<uint64_t, tlm::tlm_generic_payload*>> miss_queue_;  // (cycle it may leave, request)
     bool down_waiting_end_req_ = false;
 
     // LT state: port bookings, fill times of sectors, MSHR release cycles.

@@ -1,0 +1,163 @@
+// The timing model (AT and LT). SystemC elaborates once per process: every test case here
+// builds one platform and runs it once (ctest runs each case in its own process).
+#include <gtest/gtest.h>
+
+#include <systemc>
+
+#include "platforms/functional_run.h"
+#include <map>
+
+#include "platforms/gpu_platform.h"
+#include "test_util.h"
+#include "workloads/bvh_builder.h"
+#include "workloads/scenes.h"
+
+using namespace rtu;
+
+namespace {
+
+struct FsResolution {
+    FsResolution() { sc_core::sc_set_time_resolution(1, sc_core::SC_FS); }
+};
+
+Scene scene_named(const std::string& name) {
+    if (name == "wknd" || name == "cornell") return load_scene(name, "");
+    return load_scene(name, rtu::test::shared_dir() + "/scenes/" + name);
+}
+
+// Runs the functional model and the timing model on the same workload and checks that every ray
+// (keyed by path and order within its path) got exactly the same hit.
+void timing_equals_functional(const std::string& name, Fidelity fidelity, WorkloadKind kind) {
+    FsResolution resolution;
+    const Scene scene = scene_named(name);
+    const BvhImage image = build_bvh_image(scene);
+    WorkloadParams p;
+    p.width = p.height = 24;
+    p.seed = 3;
+    auto fw = make_scene_workload(kind, scene, p);
+    const FunctionalResult f = run_functional(scene, image, *fw, FunctionalOptions{}, nullptr);
+    std::map<std::pair<uint32_t, uint32_t>, Hit> expected;
+    for (size_t i = 0; i < f.rays.size(); ++i) expected[{f.path[i], f.seq[i]}] = f.hits[i];
+
+    auto tw = make_scene_workload(kind, scene, p);
+    TimingOptions opt;
+    opt.fidelity = fidelity;
+    opt.check_protocol = true;
+    HwConfig hw = Config::load("mobile").resolve();
+    GpuPlatform platform(hw, image, *tw, opt);
+    const TimingResult r = platform.run();
+    ASSERT_FALSE(r.stuck) << r.stuck_report;
+    EXPECT_TRUE(r.invariant_failures.empty()) << r.invariant_failures.front();
+    ASSERT_EQ(r.rays.size(), f.rays.size());
+    for (const TracedRay& t : r.rays) {
+        const auto it = expected.find({t.path, t.seq});
+        ASSERT_NE(it, expected.end()) << "ray " << t.path << "/" << t.seq << " not in the functional run";
+        EXPECT_EQ(t.hit.hit, it->second.hit);
+        EXPECT_EQ(t.hit.t, it->second.t);
+        EXPECT_EQ(t.hit.geom, it->second.geom);
+        EXPECT_EQ(t.hit.prim, it->second.prim);
+    }
+    EXPECT_GT(r.cycles, 0u);
+    if (fidelity == Fidelity::AT) {
+        EXPECT_GT(r.protocol_transactions, r.rays.size());
+        EXPECT_TRUE(r.protocol_violations.empty()) << r.protocol_violations.front();
+    }
+    // Cache accounting: L1 sees every chunk request (plus retries), L2 every L1 miss.
+    const auto& l1 = r.stats["l1"]["demand"];
+    EXPECT_GE(l1["accesses"].get<uint64_t>(), r.stats["rt_unit"]["chunk_requests"].get<uint64_t>());
+}
+
+}  // namespace
+
+TEST(TimingAT, BunnyPathTracingHitsEqualFunctional) { timing_equals_functional("bunny", Fidelity::AT, WorkloadKind::PathTrace); }
+TEST(TimingAT, WkndAmbientOcclusionHitsEqualFunctional) { timing_equals_functional("wknd", Fidelity::AT, WorkloadKind::AmbientOcclusion); }
+TEST(TimingAT, ShipShadowHitsEqualFunctional) { timing_equals_functional("ship", Fidelity::AT, WorkloadKind::Shadow); }
+TEST(TimingLT, BunnyPathTracingHitsEqualFunctional) { timing_equals_functional("bunny", Fidelity::LT, WorkloadKind::PathTrace); }
+TEST(TimingLT, CornellPrimaryHitsEqualFunctional) { timing_equals_functional("cornell", Fidelity::LT, WorkloadKind::Primary); }
+
+// One ray, one triangle, cold caches, memory clock = core clock (so no rounding between clock
+// domains). The image is: header [0,64), root internal node [64,128), triangle leaf [128,192).
+// Worked by hand from the mobile preset's latencies:
+//   cycle 0    the warp is accepted; the scheduler puts the root's two chunks (64, 96) in the queue
+//   cycle 1    chunk 64 leaves: L1 line miss -> L2 slice 0 (line 0) line miss, +160 -> DRAM 161
+//              channel 0 bank 0 closed: ACT 161, column 181 (+tRCD), data 201..209 (+tCL, 8 cycles)
+//   cycle 2    chunk 96 leaves: L1 and L2 sector misses -> DRAM 162, scheduler waits until the
+//              column bus allows (next column 189 - tRCD = 169): row hit, column 189, data 209..217
+//   209, 217   responses drained; the node is complete at 217: header + ray-box = 12 -> 229
+//   229        the leaf's chunks (128, 160) are queued; they leave at 230 and 231
+//   230        line 1: L2 slice 1, DRAM channel 1 at 390: ACT 390, column 410, data 430..438
+//   231        DRAM 391, decision at 418 - 20 = 398, row hit, column 418, data 438..446
+//   446        leaf complete: descriptor 4 + ray-triangle 8 + hit 8 = 20 -> ray retires at 466
+TEST(TimingAT, SingleRayLatencyIsTheHandWorkedSum) {
+    FsResolution resolution;
+    Scene s;
+    s.name = "one-triangle";
+    s.materials.push_back(Material{});
+    Mesh m;
+    m.vertices = {{-1, -1, 0}, {1, -1, 0}, {0, 1, 0}};
+    m.triangles = {{0, 1, 2}};
+    m.material = {0};
+    s.meshes.push_back(m);
+    add_identity_instances(s);
+    const BvhImage image = build_bvh_image(s);
+    ASSERT_EQ(image.header().root, 64u);
+    ASSERT_EQ(image.size(), 192u);
+    std::vector<RayFileEntry> rays(1);
+    rays[0].ray.org = {0, 0, -5};
+    rays[0].ray.dir = {0, 0, 1};
+    rays[0].valid = true;
+    auto w = make_ray_file_workload(rays);
+    Config c = Config::load("mobile");
+    c.set("gpu.memory_clock_mhz=1365");
+    const HwConfig hw = c.resolve();
+    const uint64_t L2 = hw.l2.latency, rcd = hw.dram.tRCD, cl = hw.dram.tCL, xfer = 32 / (2 * hw.dram.bus_bytes);
+    const uint64_t root_a = 1 + L2 + rcd + cl + xfer;                        // 209
+    const uint64_t col_a = 1 + L2 + rcd;                                     // 181
+    const uint64_t root_b = col_a + std::max<uint64_t>(hw.dram.tCCD, xfer) + cl + xfer;  // 217
+    const uint64_t root_done = std::max(root_a, root_b) + hw.lat.header + hw.lat.ray_box;  // 229
+    const uint64_t leaf_a = root_done + 1 + L2 + rcd + cl + xfer;            // 438
+    const uint64_t leaf_b = leaf_a + xfer;                                   // 446 (column tCCD/xfer later)
+    const uint64_t expected = leaf_b + hw.lat.leaf_descriptor + hw.lat.ray_triangle + hw.lat.triangle_hit;  // 466
+    ASSERT_EQ(expected, 466u);
+
+    TimingOptions opt;
+    opt.check_protocol = true;
+    GpuPlatform platform(hw, image, *w, opt);
+    const TimingResult r = platform.run();
+    ASSERT_EQ(r.rays.size(), 1u);
+    EXPECT_TRUE(r.rays[0].hit.hit);
+    EXPECT_EQ(r.cycles, expected);
+    EXPECT_EQ(r.stats["dram"]["reads"], 4);
+    EXPECT_EQ(r.stats["dram"]["row_misses"], 2);
+    EXPECT_EQ(r.stats["dram"]["row_hits"], 2);
+    EXPECT_EQ(r.stats["l1"]["demand"]["line_misses"], 2);
+    EXPECT_EQ(r.stats["l1"]["demand"]["sector_misses"], 2);
+    EXPECT_TRUE(r.protocol_violations.empty()) << r.protocol_violations.front();
+}
+
+// The checker itself catches broken sequences (a checker that never fires proves nothing).
+TEST(ProtocolChecker, DetectsViolations) {
+    FsResolution resolution;
+    ProtocolChecker chk("chk");
+    PayloadPool pool;
+    unsigned char data[32] = {};
+    tlm::tlm_generic_payload* a = pool.acquire(0, 32, data);
+    tlm::tlm_generic_payload* b = pool.acquire(32, 32, data);
+    chk.on_fw(*a, tlm::BEGIN_REQ, tlm::BEGIN_REQ, tlm::TLM_ACCEPTED);
+    EXPECT_TRUE(chk.violations().empty());
+    chk.on_fw(*b, tlm::BEGIN_REQ, tlm::BEGIN_REQ, tlm::TLM_ACCEPTED);  // request exclusion broken
+    ASSERT_EQ(chk.violations().size(), 1u);
+    EXPECT_NE(chk.violations()[0].find("request exclusion"), std::string::npos);
+    chk.on_bw(*a, tlm::BEGIN_RESP, tlm::BEGIN_RESP, tlm::TLM_ACCEPTED);  // status still incomplete
+    EXPECT_NE(chk.violations().back().find("TLM_INCOMPLETE_RESPONSE"), std::string::npos);
+    b->set_response_status(tlm::TLM_OK_RESPONSE);
+    chk.on_bw(*b, tlm::BEGIN_RESP, tlm::BEGIN_RESP, tlm::TLM_ACCEPTED);  // response exclusion broken
+    EXPECT_NE(chk.violations().back().find("response exclusion"), std::string::npos);
+    chk.on_fw(*a, tlm::END_REQ, tlm::END_REQ, tlm::TLM_ACCEPTED);        // wrong path for END_REQ
+    bool found = false;
+    for (const std::string& v : chk.violations()) found |= v.find("forward path carries END_REQ") != std::string::npos;
+    EXPECT_TRUE(found);
+    a->release();
+    b->release();
+    EXPECT_EQ(pool.outstanding(), 0u);
+}

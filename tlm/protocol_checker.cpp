@@ -1,0 +1,124 @@
+#include "protocol_checker.h"
+
+namespace rtu {
+
+using namespace sc_core;
+
+ProtocolChecker::ProtocolChecker(sc_module_name name) : sc_module(name), in("in"), out("out") {
+    in.register_nb_transport_fw(this, &ProtocolChecker::nb_transport_fw);
+    in.register_b_transport(this, &ProtocolChecker::b_transport);
+    out.register_nb_transport_bw(this, &ProtocolChecker::nb_transport_bw);
+}
+
+void ProtocolChecker::violation(const std::string& what) {
+    if (violations_.size() < 100) violations_.push_back(std::string(name()) + " at " + sc_time_stamp().to_string() + ": " + what);
+}
+
+// Moves transaction t into phase ph, checking order and the exclusion rules.
+void ProtocolChecker::apply(tlm::tlm_generic_payload& t, tlm::tlm_phase ph, const char* path) {
+    auto it = state_.find(&t);
+    if (ph == tlm::BEGIN_REQ) {
+        if (it != state_.end()) violation(std::string("BEGIN_REQ for a transaction already in progress (") + path + ")");
+        if (open_request_) violation("BEGIN_REQ before END_REQ of the previous request (request exclusion)");
+        if (!t.has_mm()) violation("payload without memory manager on nb_transport");
+        if (t.get_data_length() == 0) violation("payload with zero data length");
+        state_[&t] = Phase::Req;
+        open_request_ = &t;
+        ++transactions_;
+        return;
+    }
+    if (it == state_.end()) {
+        violation(std::string(ph.get_name()) + " for an unknown transaction (" + path + ")");
+        return;
+    }
+    if (ph == tlm::END_REQ) {
+        if (it->second != Phase::Req) violation("END_REQ out of order");
+        it->second = Phase::ReqEnded;
+        if (open_request_ == &t) open_request_ = nullptr;
+    } else if (ph == tlm::BEGIN_RESP) {
+        if (it->second == Phase::Resp) violation("second BEGIN_RESP");
+        if (open_response_) violation("BEGIN_RESP before the previous response ended (response exclusion)");
+        if (t.get_response_status() == tlm::TLM_INCOMPLETE_RESPONSE) violation("BEGIN_RESP with TLM_INCOMPLETE_RESPONSE");
+        if (open_request_ == &t) open_request_ = nullptr;  // BEGIN_RESP implies END_REQ
+        it->second = Phase::Resp;
+        open_response_ = &t;
+    } else if (ph == tlm::END_RESP) {
+        if (it->second != Phase::Resp) violation("END_RESP before BEGIN_RESP");
+        if (open_response_ == &t) open_response_ = nullptr;
+        state_.erase(it);
+    } else {
+        violation("unknown phase");
+    }
+}
+
+void ProtocolChecker::pre_fw(tlm::tlm_generic_payload& t, tlm::tlm_phase before) {
+    if (before != tlm::BEGIN_REQ && before != tlm::END_RESP) violation(std::string("forward path carries ") + before.get_name());
+    apply(t, before, "forward call");
+}
+
+void ProtocolChecker::on_fw(tlm::tlm_generic_payload& t, tlm::tlm_phase before, tlm::tlm_phase after, tlm::tlm_sync_enum ret) {
+    pre_fw(t, before);
+    post_fw(t, before, after, ret);
+}
+
+void ProtocolChecker::post_fw(tlm::tlm_generic_payload& t, tlm::tlm_phase before, tlm::tlm_phase after, tlm::tlm_sync_enum ret) {
+    if (ret == tlm::TLM_UPDATED) {
+        if (before == tlm::END_RESP) violation("TLM_UPDATED returned for END_RESP");
+        else if (after != tlm::END_REQ && after != tlm::BEGIN_RESP) violation(std::string("forward return updates phase to ") + after.get_name());
+        else apply(t, after, "forward return");
+    } else if (ret == tlm::TLM_COMPLETED) {
+        if (state_.count(&t)) {
+            if (state_[&t] != Phase::Resp) {
+                // Completed at once: the response is implied (END_RESP reached).
+                if (open_request_ == &t) open_request_ = nullptr;
+            }
+            if (open_response_ == &t) open_response_ = nullptr;
+            state_.erase(&t);
+        }
+    } else if (after != before) {
+        violation("phase changed on a TLM_ACCEPTED return");
+    }
+}
+
+void ProtocolChecker::pre_bw(tlm::tlm_generic_payload& t, tlm::tlm_phase before) {
+    if (before != tlm::END_REQ && before != tlm::BEGIN_RESP) violation(std::string("backward path carries ") + before.get_name());
+    apply(t, before, "backward call");
+}
+
+void ProtocolChecker::on_bw(tlm::tlm_generic_payload& t, tlm::tlm_phase before, tlm::tlm_phase after, tlm::tlm_sync_enum ret) {
+    pre_bw(t, before);
+    post_bw(t, before, after, ret);
+}
+
+void ProtocolChecker::post_bw(tlm::tlm_generic_payload& t, tlm::tlm_phase before, tlm::tlm_phase after, tlm::tlm_sync_enum ret) {
+    if (ret == tlm::TLM_UPDATED) {
+        if (before != tlm::BEGIN_RESP || after != tlm::END_RESP) violation("backward return must update BEGIN_RESP to END_RESP only");
+        else apply(t, after, "backward return");
+    } else if (ret == tlm::TLM_COMPLETED) {
+        if (before == tlm::END_REQ) violation("TLM_COMPLETED returned for END_REQ");
+        if (open_response_ == &t) open_response_ = nullptr;
+        state_.erase(&t);
+    } else if (after != before) {
+        violation("phase changed on a TLM_ACCEPTED return");
+    }
+}
+
+tlm::tlm_sync_enum ProtocolChecker::nb_transport_fw(tlm::tlm_generic_payload& t, tlm::tlm_phase& ph, sc_time& d) {
+    const tlm::tlm_phase before = ph;
+    pre_fw(t, before);
+    const tlm::tlm_sync_enum r = out->nb_transport_fw(t, ph, d);
+    post_fw(t, before, ph, r);
+    return r;
+}
+
+tlm::tlm_sync_enum ProtocolChecker::nb_transport_bw(tlm::tlm_generic_payload& t, tlm::tlm_phase& ph, sc_time& d) {
+    const tlm::tlm_phase before = ph;
+    pre_bw(t, before);
+    const tlm::tlm_sync_enum r = in->nb_transport_bw(t, ph, d);
+    post_bw(t, before, ph, r);
+    return r;
+}
+
+void ProtocolChecker::b_transport(tlm::tlm_generic_payload& t, sc_time& d) { out->b_transport(t, d); }
+
+}  // namespace rtu
