@@ -43,8 +43,11 @@ private:
         if (progress_ && std::chrono::duration<double>(now - last_print_).count() > 2.0) {
             last_print_ = now;
             const double wall = std::chrono::duration<double>(now - start_).count();
-            std::cerr << "\r  cycle " << c << ", rays retired " << driver_.rays_retired() << " of " << driver_.rays_issued()
-                      << " issued so far, " << uint64_t(driver_.rays_retired() / std::max(wall, 1e-9)) << " rays/s   " << std::flush;
+            const double f = driver_.fraction_done();
+            std::cerr << "\r  cycle " << c << ", rays retired " << driver_.rays_retired() << " (" << int(100 * f)
+                      << " % of pixel warps done), " << uint64_t(driver_.rays_retired() / std::max(wall, 1e-9)) << " rays/s";
+            if (f > 0.02) std::cerr << ", ETA " << int(wall * (1.0 - f) / f) << " s";
+            std::cerr << "   " << std::flush;
             printed_ = true;
         }
         next_trigger(clock_.period() * double(period_));
@@ -153,8 +156,9 @@ GpuPlatform::GpuPlatform(const HwConfig& cfg, const BvhImage& image, Workload& w
 
     std::function<void(uint64_t)> sample;
     if (!opt.vcd.empty()) {
+        sc_report_handler::set_actions(SC_INFO, SC_DO_NOTHING);  // "timescale unit set" and the like
         m.tf = sc_create_vcd_trace_file(opt.vcd.c_str());
-        m.tf->set_time_unit(1, SC_PS);
+        m.tf->set_time_unit(1, SC_FS);  // the kernel resolution: clock periods are not whole ps
         m.rt_trace.resize(cfg.sms);
         for (uint32_t s = 0; s < cfg.sms; ++s) {
             const std::string p = "rt_unit_" + std::to_string(s) + ".";

@@ -198,3 +198,56 @@ TEST(Rtsim, ZeroDirectionRaysInFacePlanesAgreeWithEmbree) {
         }
     EXPECT_GT(hit, 10);
 }
+
+// Same inputs and seed: bit-identical statistics from the timing model (wall-clock fields aside).
+TEST(RtsimTiming, AtIsDeterministicAndWritesItsConfiguration) {
+    TempDir dir;
+    const std::string a = dir.file("a.json"), b = dir.file("b.json");
+    const std::string args = "--scene wknd --fidelity at --width 24 --height 24 --seed 9 --set l1.size_kb=16 --stats ";
+    ASSERT_EQ(rtsim(dir, args + a).status, 0);
+    ASSERT_EQ(rtsim(dir, args + b).status, 0);
+    auto ja = nlohmann::json::parse(read_text(a)), jb = nlohmann::json::parse(read_text(b));
+    for (auto* j : {&ja, &jb}) {
+        j->erase("time_s");
+        j->erase("simulation_rate");
+    }
+    EXPECT_EQ(ja, jb);
+    EXPECT_EQ(ja["config"]["l1"]["size_kb"], 16);
+    EXPECT_EQ(ja["config"]["gpu"]["sms"], 8);
+    EXPECT_GT(ja["cycles"].get<uint64_t>(), 0u);
+    for (const char* k : {"accesses", "hits", "sector_misses", "line_misses", "mshr_hits", "reservation_fails"})
+        EXPECT_TRUE(ja["timing"]["l1"]["demand"].contains(k)) << k;
+    EXPECT_EQ(ja["timing"]["pop_streak"].size(), 5u);
+    const auto& ts = ja["timing"]["rt_unit"]["thread_status"];
+    const double sum = ts["waiting_to_be_scheduled"].get<double>() + ts["waiting_on_memory"].get<double>() +
+                       ts["in_math"].get<double>() + ts["done_waiting_for_warp"].get<double>();
+    EXPECT_NEAR(sum, 1.0, 1e-9);
+}
+
+// A run that makes no progress for sim.watchdog cycles stops with status 1 and names where it
+// is stuck (a 1 MHz memory clock keeps every ray waiting far longer than the watchdog allows).
+TEST(RtsimTiming, WatchdogStopsARunWithoutProgress) {
+    TempDir dir;
+    const std::string stats = dir.file("s.json");
+    const Result r = rtsim(dir, "--scene cornell --fidelity at --width 8 --height 8 --set sim.watchdog=20000 --set gpu.memory_clock_mhz=1 --stats " + stats);
+    EXPECT_EQ(r.status, 1) << r.err;
+    EXPECT_NE(r.err.find("no ray retired"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("rt_unit_"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("shader warp"), std::string::npos) << r.err;
+    EXPECT_FALSE(exists(stats));
+}
+
+TEST(RtsimTiming, VcdHasTheDocumentedSignals) {
+    TempDir dir;
+    const Result r = rtsim(dir, "--scene cornell --fidelity at --width 16 --height 16 --vcd " + dir.file("w.vcd") + " --trace-warp 1:2");
+    ASSERT_EQ(r.status, 0) << r.err;
+    const std::string vcd = read_text(dir.file("w.vcd"));
+    for (const char* s : {"warp_buffer_occupancy", "memory_access_queue_depth", "response_fifo_depth", "active_threads",
+                          "mshr_occupancy", "miss_rate_window", "queue_depth", "bandwidth_utilisation_window"})
+        EXPECT_NE(vcd.find(s), std::string::npos) << s;
+    EXPECT_NE(vcd.find("$scope module warp2 $end"), std::string::npos);
+    size_t stacks = 0;
+    for (size_t at = vcd.find("stack_depth"); at != std::string::npos; at = vcd.find("stack_depth", at + 1)) ++stacks;
+    EXPECT_EQ(stacks, 32u);  // one per thread of the traced warp
+    EXPECT_EQ(r.err.find("Warning"), std::string::npos) << r.err;
+}

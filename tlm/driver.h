@@ -35,6 +35,8 @@ public:
     void retire(uint32_t sm, const std::vector<RetiredRay>& rays, uint64_t now);
 
     bool finished() const { return live_warps_ == 0; }
+    // Share of shader warps (pixel groups) whose paths have all ended.
+    double fraction_done() const { return warps_.empty() ? 1.0 : 1.0 - double(live_warps_) / double(warps_.size()); }
     uint64_t rays_issued() const { return records_.size(); }
     uint64_t rays_retired() const { return retired_; }
     uint64_t last_progress() const { return last_progress_; }
