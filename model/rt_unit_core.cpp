@@ -178,6 +178,7 @@ void RtUnitCore::cycle(uint64_t now) {
                 r.id = next_id_++;
                 r.addr = nodes[n].first + uint64_t(c) * kChunkBytes;
                 r.warp = wi;
+                r.thread = nodes[n].second.front();
                 r.streak = w.threads[nodes[n].second.front()].fetch_class;
                 maq_.push_back(r);
                 inflight_[r.id] = Pending{wi, nodes[n].second};

@@ -40,6 +40,7 @@ struct ChunkRequest {
     uint64_t id;       // unique per RT unit
     uint64_t addr;     // 32 B aligned
     uint32_t warp;     // warp-buffer slot
+    uint32_t thread;   // first thread waiting on the node (others coalesced onto it)
     uint8_t streak;    // pop-streak class of the node fetch: 0 not a pop, 1, 2, 3, 4 = 4th or later
     bool prefetch = false;
 };

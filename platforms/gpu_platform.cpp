@@ -125,6 +125,9 @@ struct GpuPlatform::Impl {
 GpuPlatform::GpuPlatform(const HwConfig& cfg, const BvhImage& image, Workload& workload, const TimingOptions& opt)
     : impl_(new Impl(cfg, image, workload, opt)) {
     Impl& m = *impl_;
+    // SystemC's informational reports ("simulation stopped by user", "timescale unit set") would
+    // clutter the run's own output; warnings and errors still show.
+    sc_report_handler::set_actions(SC_INFO, SC_DO_NOTHING);
     if (opt.fidelity == Fidelity::LT)
         tlm::tlm_global_quantum::instance().set(m.core.period() * double(cfg.quantum));
     // Binds initiator to target, through a protocol checker when asked for.
@@ -156,7 +159,6 @@ GpuPlatform::GpuPlatform(const HwConfig& cfg, const BvhImage& image, Workload& w
 
     std::function<void(uint64_t)> sample;
     if (!opt.vcd.empty()) {
-        sc_report_handler::set_actions(SC_INFO, SC_DO_NOTHING);  // "timescale unit set" and the like
         m.tf = sc_create_vcd_trace_file(opt.vcd.c_str());
         m.tf->set_time_unit(1, SC_FS);  // the kernel resolution: clock periods are not whole ps
         m.rt_trace.resize(cfg.sms);

@@ -44,6 +44,7 @@ bool Cache::lookup(tlm::tlm_generic_payload& t) {
             tlm::tlm_generic_payload* down = pool_.acquire(sector, cfg_.sector, t.get_data_ptr() - (t.get_address() - sector));
             RtExtension& de = ext(*down);
             de = e;
+            de.requester = level_ == 1 ? Requester::L1 : Requester::L2;
             de.l1_miss = de.dram = false;
             de.id = sector;
             // The tag lookup takes the hit latency before the miss leaves.
@@ -179,6 +180,7 @@ void Cache::b_transport(tlm::tlm_generic_payload& t, sc_time& d) {
         }
         tlm::tlm_generic_payload* down = pool_.acquire(sector, cfg_.sector, t.get_data_ptr() - (t.get_address() - sector));
         ext(*down) = e;
+        ext(*down).requester = level_ == 1 ? Requester::L1 : Requester::L2;
         ext(*down).dram = false;
         sc_time dd = clock_.time_of(c + hit_latency_) - sc_time_stamp();
         out->b_transport(*down, dd);

@@ -11,8 +11,11 @@
 
 namespace rtu {
 
+enum class Requester : uint8_t { RtUnit, L1, L2 };
+
 struct RtExtension : tlm::tlm_extension<RtExtension> {
-    uint32_t sm = 0, warp = 0;
+    Requester requester = Requester::RtUnit;  // who issued this payload
+    uint32_t sm = 0, warp = 0, thread = 0;    // thread: the first of the warp's threads waiting on the node
     uint64_t id = 0;          // the requester's id for this request (RT unit chunk id, cache token)
     ReqKind kind = ReqKind::Demand;
     uint8_t streak = 0;       // pop-streak class of the node fetch

@@ -30,6 +30,7 @@ tlm::tlm_generic_payload* RtUnit::make_payload(const ChunkRequest& r) {
     RtExtension& e = ext(*t);
     e.sm = sm_;
     e.warp = r.warp;
+    e.thread = r.thread;
     e.id = r.id;
     e.kind = r.prefetch ? ReqKind::Prefetch : ReqKind::Demand;
     e.streak = r.streak;
