@@ -69,6 +69,12 @@ const Key kSchema[] = {
     {"dram.tCCD", Type::Int, 1, 1000, false, "column to column"},
     {"dram.tWL", Type::Int, 0, 1000, false, "write latency"},
     {"dram.tWR", Type::Int, 0, 1000, false, "write recovery"},
+    {"prefetch.kind", Type::Text, 0, 0, false, "none, ttp, park, perfect-up, perfect-down"},
+    {"prefetch.ttp_depth_s1", Type::Int, 0, 64, false, "TTP (DFS): entries prefetched on the first pop after a push"},
+    {"prefetch.ttp_depth_s2", Type::Int, 0, 64, false, "TTP (DFS): on the second consecutive pop"},
+    {"prefetch.ttp_depth_s3", Type::Int, 0, 64, false, "TTP (DFS): on the third and later consecutive pops"},
+    {"prefetch.bfs_n", Type::Int, 0, 64, false, "TTP (BFS): queue entries prefetched per pop"},
+    {"prefetch.priority_after", Type::Int, 0, 1e6, false, "0: prefetch only in cycles without demand; X: prefetch first if none sent in X cycles"},
     {"sim.quantum", Type::Int, 1, 1e9, false, "LT quantum (core cycles)"},
     {"sim.watchdog", Type::Int, 1000, 1e12, false, "cycles without progress before the run is stopped"},
 };
@@ -248,6 +254,14 @@ HwConfig Config::resolve() const {
     if (d.bank_groups > d.banks) throw ConfigError("key 'dram.bank_groups' exceeds 'dram.banks'");
     if (d.row_bytes < h.l2.line) throw ConfigError("key 'dram.row_bytes' must be at least one cache line");
     if (d.tRC < d.tRAS) throw ConfigError("key 'dram.tRC' (" + std::to_string(d.tRC) + ") must be at least 'dram.tRAS' (" + std::to_string(d.tRAS) + ")");
+    try {
+        h.prefetch.kind = parse_prefetcher(values_.at("prefetch.kind").get<std::string>());
+    } catch (const std::invalid_argument& e) {
+        throw ConfigError(std::string("key 'prefetch.kind': ") + e.what());
+    }
+    h.prefetch.depth = {u32("prefetch.ttp_depth_s1"), u32("prefetch.ttp_depth_s2"), u32("prefetch.ttp_depth_s3")};
+    h.prefetch.bfs_n = u32("prefetch.bfs_n");
+    h.prefetch.priority_after = u32("prefetch.priority_after");
     h.quantum = values_.at("sim.quantum").get<uint64_t>();
     h.watchdog = values_.at("sim.watchdog").get<uint64_t>();
     return h;

@@ -11,6 +11,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "prefetcher.h"
+
 namespace rtu {
 
 struct ConfigError : std::runtime_error {
@@ -46,6 +48,7 @@ struct HwConfig {
     uint32_t xbar_latency;
     DramConfig dram;
     uint64_t quantum, watchdog;  // core cycles
+    PrefetchConfig prefetch;
 };
 
 class Config {

@@ -34,6 +34,13 @@ int RtUnitCore::stack_depth(uint32_t w, uint32_t t) const {
     return int(warps_[w].threads[t].trav.stack().size());
 }
 
+bool RtUnitCore::stack_contains(uint32_t w, uint32_t t, uint64_t addr) const {
+    if (w >= warps_.size() || !warps_[w].used || t >= warps_[w].threads.size()) return false;
+    for (const StackEntry& e : warps_[w].threads[t].trav.stack())
+        if (e.addr == addr) return true;
+    return false;
+}
+
 void RtUnitCore::set_status(Thread& t, ThreadStatus s, uint64_t now) {
     stats_.thread_cycles[size_t(t.status)] += now - t.since;
     t.status = s;
@@ -85,13 +92,80 @@ uint32_t RtUnitCore::math_latency(const StepInfo& s) const {
     return std::max<uint32_t>(l, 1);
 }
 
+const ChunkRequest& RtUnitCore::front_request(uint64_t now) {
+    if (!selected_) {
+        const uint32_t x = cfg_.prefetch.priority_after;
+        const bool starving = x > 0 && now >= last_prefetch_sent_ + x;
+        selected_prefetch_ = !pfq_.empty() && (maq_.empty() || starving);
+        selected_ = true;
+    }
+    return selected_prefetch_ ? pfq_.front() : maq_.front();
+}
+
+void RtUnitCore::pop_request(uint64_t now) {
+    if (!selected_) front_request(now);
+    if (selected_prefetch_) {
+        prefetch_ids_.insert(pfq_.front().id);
+        pfq_.pop_front();
+        last_prefetch_sent_ = now;
+        ++stats_.prefetches_sent;
+    } else {
+        maq_.pop_front();
+    }
+    selected_ = false;
+}
+
+void RtUnitCore::prefetch_entry(const StackEntry& e, uint32_t warp, uint32_t thread) {
+    for (uint32_t c = 0; c < node_bytes(e.type) / kChunkBytes; ++c) {
+        const uint64_t addr = e.addr + uint64_t(c) * kChunkBytes;
+        ++stats_.prefetches_generated;
+        if (std::any_of(pfq_.begin(), pfq_.end(), [&](const ChunkRequest& r) { return r.addr == addr; })) {
+            ++stats_.prefetch_duplicates;
+            continue;
+        }
+        ChunkRequest r;
+        r.id = next_id_++;
+        r.addr = addr;
+        r.warp = warp;
+        r.thread = thread;
+        r.streak = 0;
+        r.prefetch = true;
+        if (on_prefetch_generated) on_prefetch_generated(r);
+        pfq_.push_back(r);
+    }
+}
+
+// TTP: the thread is about to pop; its stack after the pop is the current one without its top
+// (DFS) or head (BFS).
+void RtUnitCore::prefetch_on_pop(Thread& t, uint32_t warp, uint32_t thread) {
+    const auto& st = t.trav.stack();
+    if (st.empty()) return;
+    std::vector<size_t> picks;
+    if (order_ == TraversalOrder::DFS) {
+        t.ttp_dfs.on_pop(st.size() - 1, cfg_.prefetch.depth, picks);
+        for (size_t i : picks) prefetch_entry(st[i], warp, thread);
+    } else {
+        t.ttp_bfs.on_pop(st.size() - 1, cfg_.prefetch.bfs_n, picks);
+        for (size_t pos : picks) prefetch_entry(st[pos + 1], warp, thread);
+    }
+}
+
 void RtUnitCore::on_response(uint64_t id, bool l1_miss, bool dram, uint64_t now) {
+    if (prefetch_ids_.erase(id)) {  // a prefetch filled the caches; the RT unit drops the data
+        ++stats_.prefetch_responses;
+        return;
+    }
     fifo_.push_back({id, {l1_miss, dram}});
     stats_.max_response_fifo = std::max<uint64_t>(stats_.max_response_fifo, fifo_.size());
     (void)now;
 }
 
 void RtUnitCore::cycle(uint64_t now) {
+    // Limit studies: fetches answered as L1 hits reach the response FIFO on their cycle.
+    while (!perfect_.empty() && perfect_.front().first <= now) {
+        fifo_.push_back({perfect_.front().second, {false, false}});
+        perfect_.pop_front();
+    }
     // Response FIFO: one response per cycle.
     if (!fifo_.empty()) {
         const auto [id, flags] = fifo_.front();
@@ -111,7 +185,14 @@ void RtUnitCore::cycle(uint64_t now) {
             stats_.streak_l1_misses[t.fetch_class] += t.fetch_l1_miss;
             stats_.streak_dram_misses[t.fetch_class] += t.fetch_dram;
             const StepInfo info = t.trav.step(image_);
-            if (info.pushed > 0) t.streak = 0;
+            if (info.pushed > 0) {
+                t.streak = 0;
+                t.ttp_dfs.on_push(t.trav.stack().size());
+            }
+            // Park et al.: prefetch the next stack entry while a leaf test runs.
+            if (cfg_.prefetch.kind == PrefetcherKind::Park && !t.trav.stack().empty() &&
+                (info.type == NodeType::Triangle || info.type == NodeType::Procedural))
+                prefetch_entry(order_ == TraversalOrder::DFS ? t.trav.stack().back() : t.trav.stack().front(), p.warp, ti);
             set_status(t, ThreadStatus::InMath, now);
             math_.push({now + math_latency(info), p.warp, ti});
         }
@@ -152,18 +233,23 @@ void RtUnitCore::cycle(uint64_t now) {
             if (t.trav.next_is_pop()) {
                 t.streak = uint8_t(std::min(t.streak + 1, 4));
                 t.fetch_class = t.streak;
+                if (cfg_.prefetch.kind == PrefetcherKind::Ttp) prefetch_on_pop(t, wi, ti);
             } else {
                 t.fetch_class = 0;
             }
+            const bool perfect = (cfg_.prefetch.kind == PrefetcherKind::PerfectUp && t.fetch_class >= 2) ||
+                                 (cfg_.prefetch.kind == PrefetcherKind::PerfectDown && t.fetch_class == 1);
             ++stats_.streak_fetches[t.fetch_class];
             t.fetch_l1_miss = t.fetch_dram = false;
             t.fetch_type = e.type;
             t.chunks_left = node_bytes(e.type) / kChunkBytes;
             set_status(t, ThreadStatus::WaitMemory, now);
             ++stats_.node_fetches;
-            auto it = std::find_if(nodes.begin(), nodes.end(), [&](const auto& n) { return n.first == e.addr; });
+            // Coalesce identical addresses (a limit-study hit does not merge with a real fetch).
+            const uint64_t key = e.addr | (perfect ? 1ull : 0ull);  // node addresses are 64 B aligned
+            auto it = std::find_if(nodes.begin(), nodes.end(), [&](const auto& n) { return n.first == key; });
             if (it == nodes.end()) {
-                nodes.push_back({e.addr, {ti}});
+                nodes.push_back({key, {ti}});
                 types.push_back(e.type);
             } else {
                 it->second.push_back(ti);
@@ -173,16 +259,23 @@ void RtUnitCore::cycle(uint64_t now) {
         w.ready = 0;
         for (size_t n = 0; n < nodes.size(); ++n) {
             const uint32_t chunks = node_bytes(types[n]) / kChunkBytes;
+            const bool perfect = nodes[n].first & 1ull;
+            const uint64_t base = nodes[n].first & ~1ull;
             for (uint32_t c = 0; c < chunks; ++c) {
                 ChunkRequest r;
                 r.id = next_id_++;
-                r.addr = nodes[n].first + uint64_t(c) * kChunkBytes;
+                r.addr = base + uint64_t(c) * kChunkBytes;
                 r.warp = wi;
                 r.thread = nodes[n].second.front();
                 r.streak = w.threads[nodes[n].second.front()].fetch_class;
-                maq_.push_back(r);
                 inflight_[r.id] = Pending{wi, nodes[n].second};
                 ++stats_.chunk_requests;
+                if (perfect) {
+                    perfect_.push_back({now + std::max<uint64_t>(1, cfg_.l1_hit_latency) + c, r.id});
+                    ++stats_.perfect_hits;
+                } else {
+                    maq_.push_back(r);
+                }
             }
         }
         stats_.max_request_queue = std::max<uint64_t>(stats_.max_request_queue, maq_.size());
@@ -196,14 +289,19 @@ std::vector<RetiredRay> RtUnitCore::take_retired() {
     return r;
 }
 
-bool RtUnitCore::idle() const { return maq_.empty() && fifo_.empty() && math_.empty() && inflight_.empty() && warps_resident() == 0; }
+bool RtUnitCore::idle() const {
+    return maq_.empty() && pfq_.empty() && fifo_.empty() && math_.empty() && inflight_.empty() && perfect_.empty() &&
+           warps_resident() == 0;
+}
 
 uint64_t RtUnitCore::next_event(uint64_t now) const {
     if (!fifo_.empty()) return now + 1;
+    uint64_t next = ~0ull;
+    if (!perfect_.empty()) next = std::max(now + 1, perfect_.front().first);
     for (const Warp& w : warps_)
         if (w.used && w.ready) return now + 1;
-    if (!math_.empty()) return std::max(now + 1, math_.top().at);
-    return ~0ull;
+    if (!math_.empty()) next = std::min(next, std::max(now + 1, math_.top().at));
+    return next;
 }
 
 }  // namespace rtu

@@ -9,12 +9,16 @@
 #include <array>
 #include <cstdint>
 #include <deque>
+#include <functional>
 #include <queue>
 #include <unordered_map>
 #include <vector>
 
+#include <unordered_set>
+
 #include "bvh_image.h"
 #include "config.h"
+#include "prefetcher.h"
 #include "traversal.h"
 
 namespace rtu {
@@ -53,6 +57,8 @@ struct RtUnitStats {
     // Pop-streak classes 0 (not a pop: first child taken next / root), 1st, 2nd, 3rd, 4th+.
     std::array<uint64_t, 5> streak_fetches{}, streak_l1_misses{}, streak_dram_misses{};
     uint64_t max_response_fifo = 0, max_request_queue = 0;
+    uint64_t prefetches_generated = 0, prefetch_duplicates = 0, prefetches_sent = 0, prefetch_responses = 0;
+    uint64_t perfect_hits = 0;  // chunk fetches answered as L1 hits by a perfect-up/down limit study
 };
 
 class RtUnitCore {
@@ -67,9 +73,12 @@ public:
     // scheduler move one warp's ready threads into the memory access queue.
     void cycle(uint64_t now);
 
-    bool has_request() const { return !maq_.empty(); }
-    const ChunkRequest& front_request() const { return maq_.front(); }
-    void pop_request() { maq_.pop_front(); }
+    // The request to send this cycle: demand first; a prefetch when no demand is waiting, or
+    // first when none was sent in the last prefetch.priority_after cycles. The choice sticks
+    // until pop_request() (a request held by backpressure stays the one to send).
+    bool has_request() const { return !maq_.empty() || !pfq_.empty(); }
+    const ChunkRequest& front_request(uint64_t now);
+    void pop_request(uint64_t now);
 
     // A response for chunk `id` entered the response FIFO; `l1_miss`/`dram` describe where it
     // was served.
@@ -91,8 +100,13 @@ public:
     uint32_t active_threads() const;
     size_t response_fifo_depth() const { return fifo_.size(); }
     size_t request_queue_depth() const { return maq_.size(); }
+    size_t prefetch_queue_depth() const { return pfq_.size(); }
     // Stack depth of thread t of slot w (for waveforms); -1 if empty slot.
     int stack_depth(uint32_t w, uint32_t t) const;
+    // Whether thread t of slot w has the node at `addr` in its stack (tests).
+    bool stack_contains(uint32_t w, uint32_t t, uint64_t addr) const;
+    // Called for every prefetch chunk a policy generates, at the moment it generates it (tests).
+    std::function<void(const ChunkRequest&)> on_prefetch_generated;
 
 private:
     struct Thread {
@@ -105,6 +119,8 @@ private:
         uint8_t fetch_class = 0;   // class of the node being fetched
         bool fetch_l1_miss = false, fetch_dram = false;
         NodeType fetch_type = NodeType::Empty;
+        TtpDfs ttp_dfs;
+        TtpBfs ttp_bfs;
     };
     struct Warp {
         bool used = false;
@@ -125,13 +141,19 @@ private:
     void set_status(Thread& t, ThreadStatus s, uint64_t now);
     void after_step(uint32_t w, uint32_t t, uint64_t now);
     uint32_t math_latency(const StepInfo& s) const;
+    void prefetch_entry(const StackEntry& e, uint32_t warp, uint32_t thread);
+    void prefetch_on_pop(Thread& t, uint32_t warp, uint32_t thread);
 
     HwConfig cfg_;
     const BvhImage& image_;
     TraversalOrder order_;
     std::vector<Warp> warps_;
     uint32_t rr_ = 0;
-    std::deque<ChunkRequest> maq_;
+    std::deque<ChunkRequest> maq_, pfq_;        // demand / prefetch chunks waiting to leave
+    bool selected_ = false, selected_prefetch_ = false;
+    uint64_t last_prefetch_sent_ = 0;
+    std::unordered_set<uint64_t> prefetch_ids_;  // prefetch chunks in flight
+    std::deque<std::pair<uint64_t, uint64_t>> perfect_;  // (cycle, chunk id) answered without memory
     std::deque<std::pair<uint64_t, std::pair<bool, bool>>> fifo_;  // chunk id, (l1 miss, dram)
     std::unordered_map<uint64_t, Pending> inflight_;
     std::priority_queue<MathDone, std::vector<MathDone>, std::greater<MathDone>> math_;

@@ -30,6 +30,10 @@ CacheStats SectorCache::total() const {
         t.reservation_fails += s.reservation_fails;
         t.fills += s.fills;
         t.evictions += s.evictions;
+        t.prefetch_fills += s.prefetch_fills;
+        t.useful_prefetches += s.useful_prefetches;
+        t.late_prefetches += s.late_prefetches;
+        t.unused_evictions += s.unused_evictions;
     }
     return t;
 }
@@ -44,6 +48,10 @@ CacheOutcome SectorCache::read(uint64_t addr, uint64_t token, ReqKind kind) {
     if (w && (w->valid & bit)) {
         w->lru = ++clock_;
         ++st.hits;
+        if (kind == ReqKind::Demand && (w->prefetched & bit)) {
+            w->prefetched &= ~bit;
+            ++st.useful_prefetches;
+        }
         return CacheOutcome::Hit;
     }
     if (w && (w->pending & bit)) {
@@ -55,6 +63,11 @@ CacheOutcome SectorCache::read(uint64_t addr, uint64_t token, ReqKind kind) {
         m.tokens.push_back(token);
         w->lru = ++clock_;
         ++st.mshr_hits;
+        if (kind == ReqKind::Demand && m.prefetch && !m.demanded) {
+            m.demanded = true;
+            ++st.useful_prefetches;
+            ++st.late_prefetches;
+        }
         return CacheOutcome::MshrHit;
     }
     if (mshr_.size() >= mshrs_) {
@@ -79,17 +92,21 @@ CacheOutcome SectorCache::read(uint64_t addr, uint64_t token, ReqKind kind) {
         if (victim->line != ~0ull) {
             where_.erase(victim->line);
             if (victim->valid) ++st.evictions;
+            stats_[size_t(ReqKind::Prefetch)].unused_evictions += uint64_t(__builtin_popcount(victim->prefetched));
         }
         victim->line = line;
         victim->valid = 0;
         victim->pending = 0;
+        victim->prefetched = 0;
         where_[line] = uint32_t(victim - ways_.data());
         w = victim;
         out = CacheOutcome::LineMiss;
     }
     w->pending |= bit;
     w->lru = ++clock_;
-    mshr_[sector].tokens.push_back(token);
+    Mshr& m = mshr_[sector];
+    m.tokens.push_back(token);
+    m.prefetch = kind == ReqKind::Prefetch;
     if (out == CacheOutcome::LineMiss) ++st.line_misses;
     else ++st.sector_misses;
     return out;
@@ -99,6 +116,8 @@ std::vector<uint64_t> SectorCache::fill(uint64_t sector_addr) {
     auto it = mshr_.find(sector_addr);
     if (it == mshr_.end()) throw std::logic_error("fill of a sector without MSHR");
     std::vector<uint64_t> tokens = std::move(it->second.tokens);
+    const bool unused_prefetch = it->second.prefetch && !it->second.demanded;
+    const bool by_prefetch = it->second.prefetch;
     mshr_.erase(it);
     const uint64_t line = sector_addr / line_ * line_;
     Way* w = find(line);
@@ -106,7 +125,9 @@ std::vector<uint64_t> SectorCache::fill(uint64_t sector_addr) {
     const uint32_t bit = 1u << ((sector_addr - line) / sector_);
     w->pending &= ~bit;
     w->valid |= bit;
+    if (unused_prefetch) w->prefetched |= bit;
     ++stats_[0].fills;
+    if (by_prefetch) ++stats_[size_t(ReqKind::Prefetch)].prefetch_fills;
     return tokens;
 }
 

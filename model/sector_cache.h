@@ -26,6 +26,11 @@ enum class CacheOutcome : uint8_t {
 struct CacheStats {
     uint64_t accesses = 0, hits = 0, mshr_hits = 0, sector_misses = 0, line_misses = 0, reservation_fails = 0;
     uint64_t fills = 0, evictions = 0;
+    // Prefetch usefulness (counted under the demand kind that used them / the prefetch kind):
+    uint64_t prefetch_fills = 0;     // sectors brought in by a prefetch (prefetch kind)
+    uint64_t useful_prefetches = 0;  // prefetched sectors a demand read then used (demand kind)
+    uint64_t late_prefetches = 0;    // of those, demand arrived while the prefetch was in flight
+    uint64_t unused_evictions = 0;   // prefetched sectors evicted unused (prefetch kind)
 };
 
 class SectorCache {
@@ -61,10 +66,13 @@ private:
     struct Way {
         uint64_t line = ~0ull;  // line address; ~0 = invalid
         uint32_t valid = 0, pending = 0;  // sector bit masks
+        uint32_t prefetched = 0;          // filled by a prefetch and not yet read by a demand
         uint64_t lru = 0;
     };
     struct Mshr {
         std::vector<uint64_t> tokens;
+        bool prefetch = false;   // allocated by a prefetch
+        bool demanded = false;   // a demand read merged into it
     };
     Way* find(uint64_t line);
 

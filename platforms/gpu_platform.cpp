@@ -75,7 +75,26 @@ nlohmann::ordered_json cache_json(const CacheStats& s) {
             {"line_misses", s.line_misses},
             {"reservation_fails", s.reservation_fails},
             {"miss_rate", s.accesses ? double(misses + s.mshr_hits) / double(s.accesses - s.reservation_fails + (s.accesses == s.reservation_fails)) : 0.0},
-            {"evictions", s.evictions}};
+            {"evictions", s.evictions},
+            {"prefetch_fills", s.prefetch_fills},
+            {"useful_prefetches", s.useful_prefetches},
+            {"late_prefetches", s.late_prefetches},
+            {"unused_prefetch_evictions", s.unused_evictions}};
+}
+
+// Prefetch figures of one cache level (paper section 6): accuracy = prefetched sectors later
+// used by a demand read / sectors prefetched; efficiency = prefetches that missed both the
+// cache and its MSHRs with an MSHR free / all prefetches; the full response breakdown.
+nlohmann::ordered_json prefetch_json(const CacheStats& demand, const CacheStats& pf) {
+    const uint64_t missed = pf.sector_misses + pf.line_misses;
+    return {{"issued", pf.accesses},
+            {"response", {{"hit", pf.hits}, {"mshr_hit", pf.mshr_hits}, {"mshr_miss_free_entry", missed},
+                          {"reservation_fail", pf.reservation_fails}}},
+            {"accuracy", pf.prefetch_fills ? double(demand.useful_prefetches) / double(pf.prefetch_fills) : 0.0},
+            {"efficiency", pf.accesses ? double(missed) / double(pf.accesses) : 0.0},
+            {"useful", demand.useful_prefetches},
+            {"late", demand.late_prefetches},
+            {"unused_evictions", pf.unused_evictions}};
 }
 
 void add(CacheStats& a, const CacheStats& b) {
@@ -87,6 +106,10 @@ void add(CacheStats& a, const CacheStats& b) {
     a.reservation_fails += b.reservation_fails;
     a.fills += b.fills;
     a.evictions += b.evictions;
+    a.prefetch_fills += b.prefetch_fills;
+    a.useful_prefetches += b.useful_prefetches;
+    a.late_prefetches += b.late_prefetches;
+    a.unused_evictions += b.unused_evictions;
 }
 
 }  // namespace
@@ -290,12 +313,19 @@ TimingResult GpuPlatform::run() {
         }
         rs.max_response_fifo = std::max(rs.max_response_fifo, s.max_response_fifo);
         rs.max_request_queue = std::max(rs.max_request_queue, s.max_request_queue);
+        rs.prefetches_generated += s.prefetches_generated;
+        rs.prefetch_duplicates += s.prefetch_duplicates;
+        rs.prefetches_sent += s.prefetches_sent;
+        rs.prefetch_responses += s.prefetch_responses;
+        rs.perfect_hits += s.perfect_hits;
     }
     for (const auto& c : m.checkers) {
         r.protocol_transactions += c->transactions();
         r.protocol_violations.insert(r.protocol_violations.end(), c->violations().begin(), c->violations().end());
         if (!r.stuck && c->open()) r.protocol_violations.push_back(std::string(c->name()) + ": " + std::to_string(c->open()) + " transactions left open");
     }
+    if (!r.stuck && rs.prefetches_sent != rs.prefetch_responses)
+        fail(std::to_string(rs.prefetches_sent) + " prefetches sent but " + std::to_string(rs.prefetch_responses) + " answered");
     if (!r.stuck && rs.chunk_requests != rs.responses) fail("RT units sent " + std::to_string(rs.chunk_requests) + " requests but drained " + std::to_string(rs.responses) + " responses");
 
     const DramStats ds = m.dram->stats();
@@ -320,6 +350,19 @@ TimingResult GpuPlatform::run() {
     j["pop_streak"] = streak;
     j["l1"] = {{"demand", cache_json(l1[0])}, {"prefetch", cache_json(l1[1])}};
     j["l2"] = {{"demand", cache_json(l2[0])}, {"prefetch", cache_json(l2[1])}};
+    // RT-read misses per kilo node fetch: the paper's MPKI with node fetches for instructions.
+    auto mpkf = [&](const CacheStats& d) {
+        return rs.node_fetches ? 1000.0 * double(d.sector_misses + d.line_misses + d.mshr_hits) / double(rs.node_fetches) : 0.0;
+    };
+    j["l1"]["rt_misses_per_kilo_node_fetch"] = mpkf(l1[0]);
+    j["l2"]["rt_misses_per_kilo_node_fetch"] = mpkf(l2[0]);
+    j["prefetch"] = {{"prefetcher", prefetcher_name(m.cfg.prefetch.kind)},
+                     {"generated", rs.prefetches_generated},
+                     {"duplicates_dropped", rs.prefetch_duplicates},
+                     {"sent", rs.prefetches_sent},
+                     {"perfect_hits", rs.perfect_hits},
+                     {"l1", prefetch_json(l1[0], l1[1])},
+                     {"l2", prefetch_json(l2[0], l2[1])}};
     j["dram"] = {{"reads", ds.reads}, {"writes", ds.writes}, {"bytes", ds.bytes}, {"row_hits", ds.row_hits},
                  {"row_misses", ds.row_misses}, {"row_conflicts", ds.row_conflicts},
                  {"bandwidth_utilisation", mem_cycles > 0 ? double(ds.data_cycles) / (mem_cycles * m.cfg.dram.channels) : 0.0},

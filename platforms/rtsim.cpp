@@ -31,7 +31,7 @@ double seconds_since(Clock::time_point t) { return std::chrono::duration<double>
 
 struct Args {
     std::string scene = "wknd", assets, workload = "pt", rays, hits, traversal = "dfs", fidelity = "functional";
-    std::string stats, image, config = "mobile", vcd, trace_warp;
+    std::string stats, image, config = "mobile", vcd, trace_warp, prefetcher;
     std::vector<std::string> sets;
     int width = 128, height = 128, spp = 2, bounces = 16;
     uint64_t seed = 1, quantum = 0;
@@ -84,8 +84,8 @@ int run(const Args& a) {
     else throw InputError("--traversal '" + a.traversal + "': allowed are dfs, bfs");
     const WorkloadKind kind = a.rays.empty() ? parse_workload(a.workload) : WorkloadKind::RayFile;
     if (!a.rays.empty() && !a.image.empty()) throw InputError("--image needs a scene workload, not --rays");
-    if (!timing && (!a.vcd.empty() || !a.trace_warp.empty() || !a.sets.empty() || a.quantum))
-        throw InputError("--vcd, --trace-warp, --set and --quantum need --fidelity at or lt");
+    if (!timing && (!a.vcd.empty() || !a.trace_warp.empty() || !a.sets.empty() || a.quantum || !a.prefetcher.empty()))
+        throw InputError("--vcd, --trace-warp, --set, --quantum and --prefetcher need --fidelity at or lt");
 
     // Configuration first: a bad key should not wait for a scene to load.
     Config config;
@@ -95,6 +95,7 @@ int run(const Args& a) {
             config = Config::load(a.config);
             for (const auto& s : a.sets) config.set(s);
             if (a.quantum) config.set("sim.quantum=" + std::to_string(a.quantum));
+            if (!a.prefetcher.empty()) config.set("prefetch.kind=" + a.prefetcher);
             hw = config.resolve();
         } catch (const ConfigError& e) {
             throw InputError(e.what());
@@ -279,6 +280,7 @@ int sc_main(int argc, char** argv) {
         "usage: rtsim --scene NAME|PATH [--assets DIR] [--workload primary|pt|ao|sh] [--rays FILE] [--hits FILE]\n"
         "             [--width W --height H --spp N --bounces B --seed S] [--traversal dfs|bfs]\n"
         "             [--fidelity functional|at|lt] [--config NAME|FILE] [--set KEY=VALUE]... [--quantum CYCLES]\n"
+        "             [--prefetcher none|ttp|park|perfect-up|perfect-down]\n"
         "             [--stats FILE.json] [--image FILE.png] [--vcd FILE] [--trace-warp SM:WARP] [--verify] [--quiet]\n"
         "exit status: 0 ok, 1 a check failed (--verify mismatches), 2 bad input, 3 internal error\noptions");
     desc.add_options()
@@ -298,6 +300,7 @@ int sc_main(int argc, char** argv) {
         ("config", po::value(&a.config)->default_value(a.config), "hardware preset (mobile, desktop) or JSON file")
         ("set", po::value(&a.sets)->composing(), "override one configuration key, e.g. --set l1.size_kb=64 (repeatable)")
         ("quantum", po::value(&a.quantum), "LT quantum in core cycles (same as --set sim.quantum=N)")
+        ("prefetcher", po::value(&a.prefetcher), "none, ttp, park, perfect-up, perfect-down (same as --set prefetch.kind=...)")
         ("vcd", po::value(&a.vcd), "write waveforms to this VCD file")
         ("trace-warp", po::value(&a.trace_warp), "with --vcd: trace each thread's stack depth of warp-buffer slot WARP of SM")
         ("stats", po::value(&a.stats), "write statistics JSON")

@@ -53,12 +53,12 @@ void RtUnit::tick() {
         pull_work(c);
         // At most one 32 B request leaves per cycle.
         if (!waiting_end_req_ && core_.has_request()) {
-            tlm::tlm_generic_payload* t = make_payload(core_.front_request());
+            tlm::tlm_generic_payload* t = make_payload(core_.front_request(c));
             tlm::tlm_phase ph = tlm::BEGIN_REQ;
             sc_time d = SC_ZERO_TIME;
             const tlm::tlm_sync_enum s = socket->nb_transport_fw(*t, ph, d);
             if (s == tlm::TLM_UPDATED && ph == tlm::END_REQ) {
-                core_.pop_request();
+                core_.pop_request(c);
             } else if (s == tlm::TLM_ACCEPTED) {
                 waiting_end_req_ = true;
             } else {
@@ -83,7 +83,7 @@ tlm::tlm_sync_enum RtUnit::nb_transport_bw(tlm::tlm_generic_payload& t, tlm::tlm
     const uint64_t c = clock_.cycle_at_or_after(sc_time_stamp() + d);
     if (ph == tlm::END_REQ) {
         waiting_end_req_ = false;
-        core_.pop_request();
+        core_.pop_request(c);
         wake_at(std::max(c, last_cycle_ == ~0ull ? 0 : last_cycle_ + 1));
         return tlm::TLM_ACCEPTED;
     }
@@ -115,13 +115,13 @@ void RtUnit::lt_loop() {
         }
         pull_work(c);
         if (core_.has_request()) {
-            tlm::tlm_generic_payload* t = make_payload(core_.front_request());
+            tlm::tlm_generic_payload* t = make_payload(core_.front_request(c));
             sc_time d = clock_.time_of(c) - sc_time_stamp();
             socket->b_transport(*t, d);
             const RtExtension& e = ext(*t);
             responses.insert({std::max(c + 1, clock_.cycle_at_or_after(sc_time_stamp() + d)), Resp{e.id, e.l1_miss, e.dram}});
             t->release();
-            core_.pop_request();
+            core_.pop_request(c);
         }
         core_.cycle(c);
         auto retired = core_.take_retired();

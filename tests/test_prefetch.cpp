@@ -1,0 +1,155 @@
+// Prefetch policies: TTP's state machine (paper section 4.1 example), its no-repeat pointer,
+// the BFS variant, and usefulness accounting in the cache.
+#include <gtest/gtest.h>
+
+#include <map>
+#include <random>
+#include <set>
+
+#include "model/prefetcher.h"
+#include "model/rt_unit_core.h"
+#include "model/sector_cache.h"
+#include "test_util.h"
+#include "workloads/bvh_builder.h"
+#include "workloads/scenes.h"
+
+using namespace rtu;
+
+// Paper: with L, N, O, P on the stack (P on top), popping P prefetches O (state S1); popping O
+// then prefetches N and L (state S2).
+TEST(Ttp, PaperWorkedExample) {
+    const std::array<uint32_t, 3> depth{1, 2, 16};
+    TtpDfs ttp;
+    ttp.on_push(4);  // stack: L N O P
+    std::vector<size_t> out;
+    ttp.on_pop(3, depth, out);  // P popped: L N O
+    EXPECT_EQ(ttp.state(), 1);
+    EXPECT_EQ(out, (std::vector<size_t>{2}));  // O
+    out.clear();
+    ttp.on_pop(2, depth, out);  // O popped: L N
+    EXPECT_EQ(ttp.state(), 2);
+    EXPECT_EQ(out, (std::vector<size_t>{1, 0}));  // N, L
+    out.clear();
+    ttp.on_pop(1, depth, out);  // N popped: L (already prefetched: nothing new)
+    EXPECT_EQ(ttp.state(), 3);
+    EXPECT_TRUE(out.empty());
+    ttp.on_push(3);  // a push resets the state and the pointer
+    EXPECT_EQ(ttp.state(), 0);
+    ttp.on_pop(2, depth, out);
+    EXPECT_EQ(out, (std::vector<size_t>{1}));
+}
+
+// Random push/pop sequences against a model stack: every prefetched index is a current entry,
+// no entry is prefetched twice between pushes, and a pop in state Sk prefetches at most depth[k].
+TEST(Ttp, NeverPrefetchesAnEntryTwiceBetweenPushes) {
+    std::mt19937 g(5);
+    const std::array<uint32_t, 3> depth{1, 2, 16};
+    for (int trial = 0; trial < 200; ++trial) {
+        TtpDfs ttp;
+        std::vector<int> stack;  // entry ids
+        std::set<int> prefetched_since_push;
+        int next_id = 0;
+        for (int step = 0; step < 200; ++step) {
+            if (stack.empty() || g() % 3 == 0) {
+                const int n = 1 + int(g() % 5);
+                for (int k = 0; k < n; ++k) stack.push_back(next_id++);
+                ttp.on_push(stack.size());
+                prefetched_since_push.clear();
+            } else {
+                stack.pop_back();
+                std::vector<size_t> out;
+                ttp.on_pop(stack.size(), depth, out);
+                ASSERT_LE(out.size(), depth[size_t(ttp.state() - 1)]);
+                for (size_t i : out) {
+                    ASSERT_LT(i, stack.size());
+                    EXPECT_TRUE(prefetched_since_push.insert(stack[i]).second) << "entry " << stack[i] << " prefetched twice";
+                }
+            }
+        }
+    }
+}
+
+TEST(Ttp, BfsPrefetchesUpToNFromTheHeadOnce) {
+    TtpBfs bfs;
+    std::vector<size_t> out;
+    bfs.on_pop(5, 2, out);  // queue after pop has 5 entries: prefetch positions 0, 1
+    EXPECT_EQ(out, (std::vector<size_t>{0, 1}));
+    out.clear();
+    bfs.on_pop(4, 2, out);  // old position 1 is now 0 (already prefetched): only the new position 1
+    EXPECT_EQ(out, (std::vector<size_t>{1}));
+    out.clear();
+    bfs.on_pop(1, 4, out);
+    EXPECT_EQ(out, (std::vector<size_t>{}));  // position 0 already prefetched, nothing beyond
+}
+
+// Hand-built sequence: sector A prefetched then read (useful), B prefetched then read while
+// still in flight (useful and late), C prefetched and evicted unread (unused).
+TEST(PrefetchAccounting, UsefulLateAndUnusedOnAHandBuiltSequence) {
+    SectorCache c(CacheConfig{2 * 128, 0, 128, 32, 4, 4, 0});  // two lines, fully associative
+    EXPECT_EQ(c.read(0x000, 1, ReqKind::Prefetch), CacheOutcome::LineMiss);  // A
+    c.fill(0x000);
+    EXPECT_EQ(c.read(0x000, 2, ReqKind::Demand), CacheOutcome::Hit);         // uses A
+    EXPECT_EQ(c.read(0x000, 3, ReqKind::Demand), CacheOutcome::Hit);         // second use: not counted again
+    EXPECT_EQ(c.read(0x020, 4, ReqKind::Prefetch), CacheOutcome::SectorMiss);  // B
+    EXPECT_EQ(c.read(0x020, 5, ReqKind::Demand), CacheOutcome::MshrHit);     // late use of B
+    c.fill(0x020);
+    EXPECT_EQ(c.read(0x080, 6, ReqKind::Prefetch), CacheOutcome::LineMiss);  // C in the second line
+    c.fill(0x080);
+    EXPECT_EQ(c.read(0x000, 7, ReqKind::Demand), CacheOutcome::Hit);         // line 0 most recent
+    EXPECT_EQ(c.read(0x100, 8, ReqKind::Demand), CacheOutcome::LineMiss);    // evicts C's line unread
+    const CacheStats d = c.stats(ReqKind::Demand), p = c.stats(ReqKind::Prefetch);
+    EXPECT_EQ(p.prefetch_fills, 3u);
+    EXPECT_EQ(d.useful_prefetches, 2u);
+    EXPECT_EQ(d.late_prefetches, 1u);
+    EXPECT_EQ(p.unused_evictions, 1u);
+    // Accuracy = useful / prefetched = 2 / 3.
+    EXPECT_DOUBLE_EQ(double(d.useful_prefetches) / double(p.prefetch_fills), 2.0 / 3.0);
+}
+
+// In the RT unit, every prefetch TTP generates is for a node that is in the thread's stack at
+// that moment, and TTP with all depths 0 sends none.
+TEST(Ttp, RtUnitPrefetchesOnlyCurrentStackEntries) {
+    const Scene s = load_scene("bunny", rtu::test::shared_dir() + "/scenes/bunny");
+    const BvhImage img = build_bvh_image(s);
+    HwConfig hw = Config::load("mobile").resolve();
+    hw.prefetch.kind = PrefetcherKind::Ttp;
+    RtUnitCore core(hw, img, TraversalOrder::DFS);
+    // A warp of 32 rays from the camera at the bunny; memory answers every request 50 cycles later.
+    std::vector<WarpRay> rays;
+    for (int i = 0; i < 32; ++i) {
+        WarpRay r;
+        r.ray.org = {278, 278, 800};
+        r.ray.dir = glm::vec3(-0.13f + 0.005f * (i % 8), -0.2f + 0.005f * (i / 8), -1.0f);
+        r.key = uint64_t(i);
+        rays.push_back(r);
+    }
+    core.accept_warp(rays, 0);
+    uint64_t generated = 0;
+    core.on_prefetch_generated = [&](const ChunkRequest& r) {
+        ++generated;
+        // The prefetched node (64 B aligned; a 128 B instance leaf spans two blocks) must be an
+        // entry of the generating thread's stack right now.
+        const uint64_t node = r.addr & ~uint64_t(63);
+        EXPECT_TRUE(core.stack_contains(r.warp, r.thread, node) || core.stack_contains(r.warp, r.thread, node - 64))
+            << "prefetch of " << r.addr << " is not in thread " << r.thread << "'s stack";
+    };
+    std::multimap<uint64_t, uint64_t> answers;
+    uint64_t prefetches = 0;
+    for (uint64_t c = 0; c < 200000 && !core.idle(); ++c) {
+        for (auto it = answers.begin(); it != answers.end() && it->first <= c; it = answers.erase(it))
+            core.on_response(it->second, true, true, c);
+        if (core.has_request()) {
+            const ChunkRequest r = core.front_request(c);
+            prefetches += r.prefetch;
+            core.pop_request(c);
+            answers.insert({c + 50, r.id});
+        }
+        core.cycle(c);
+        core.take_retired();
+    }
+    EXPECT_TRUE(core.idle());
+    EXPECT_GT(prefetches, 10u);
+    EXPECT_EQ(generated, prefetches);  // every generated (non-duplicate) prefetch left the unit
+    EXPECT_EQ(core.stats().prefetches_generated, generated + core.stats().prefetch_duplicates);
+    EXPECT_EQ(core.stats().prefetches_sent, prefetches);
+}
