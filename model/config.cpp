@@ -75,6 +75,12 @@ const Key kSchema[] = {
     {"prefetch.ttp_depth_s3", Type::Int, 0, 64, false, "TTP (DFS): on the third and later consecutive pops"},
     {"prefetch.bfs_n", Type::Int, 0, 64, false, "TTP (BFS): queue entries prefetched per pop"},
     {"prefetch.priority_after", Type::Int, 0, 1e6, false, "0: prefetch only in cycles without demand; X: prefetch first if none sent in X cycles"},
+    {"energy.l1_access_pj", Type::Real, 0, 1e6, false, "energy of one 32 B L1 access (pJ)"},
+    {"energy.l2_access_pj", Type::Real, 0, 1e6, false, "energy of one 32 B L2 access incl. crossbar (pJ)"},
+    {"energy.dram_read_pj", Type::Real, 0, 1e7, false, "energy of one 32 B DRAM read burst (pJ)"},
+    {"energy.dram_write_pj", Type::Real, 0, 1e7, false, "energy of one 32 B DRAM write burst (pJ)"},
+    {"energy.dram_activate_pj", Type::Real, 0, 1e7, false, "energy of one row activation and precharge (pJ)"},
+    {"energy.static_w", Type::Real, 0, 1e4, false, "static power of the modelled RT units and memory system (W)"},
     {"sim.quantum", Type::Int, 1, 1e9, false, "LT quantum (core cycles)"},
     {"sim.watchdog", Type::Int, 1000, 1e12, false, "cycles without progress before the run is stopped"},
 };
@@ -262,6 +268,8 @@ HwConfig Config::resolve() const {
     h.prefetch.depth = {u32("prefetch.ttp_depth_s1"), u32("prefetch.ttp_depth_s2"), u32("prefetch.ttp_depth_s3")};
     h.prefetch.bfs_n = u32("prefetch.bfs_n");
     h.prefetch.priority_after = u32("prefetch.priority_after");
+    h.energy = {num("energy.l1_access_pj"), num("energy.l2_access_pj"), num("energy.dram_read_pj"),
+                num("energy.dram_write_pj"), num("energy.dram_activate_pj"), num("energy.static_w")};
     h.quantum = values_.at("sim.quantum").get<uint64_t>();
     h.watchdog = values_.at("sim.watchdog").get<uint64_t>();
     return h;

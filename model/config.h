@@ -35,6 +35,11 @@ struct RtLatency {
     uint32_t header, ray_box, transform, leaf_descriptor, ray_triangle, triangle_hit, procedural;
 };
 
+// Per-event energies (see docs/energy.md for the figures and where they come from).
+struct EnergyTable {
+    double l1_access_pj, l2_access_pj, dram_read_pj, dram_write_pj, dram_activate_pj, static_w;
+};
+
 // The typed view of a validated configuration.
 struct HwConfig {
     uint32_t sms;
@@ -49,6 +54,7 @@ struct HwConfig {
     DramConfig dram;
     uint64_t quantum, watchdog;  // core cycles
     PrefetchConfig prefetch;
+    EnergyTable energy;
 };
 
 class Config {

@@ -189,10 +189,20 @@ void RtUnitCore::cycle(uint64_t now) {
                 t.streak = 0;
                 t.ttp_dfs.on_push(t.trav.stack().size());
             }
-            // Park et al.: prefetch the next stack entry while a leaf test runs.
-            if (cfg_.prefetch.kind == PrefetcherKind::Park && !t.trav.stack().empty() &&
-                (info.type == NodeType::Triangle || info.type == NodeType::Procedural))
-                prefetch_entry(order_ == TraversalOrder::DFS ? t.trav.stack().back() : t.trav.stack().front(), p.warp, ti);
+            // Park et al. (as the TTP paper models them): while a leaf test runs, prefetch as many
+            // stack entries as can leave during its latency (one 32 B chunk per cycle), next pop first.
+            if (cfg_.prefetch.kind == PrefetcherKind::Park && (info.type == NodeType::Triangle || info.type == NodeType::Procedural)) {
+                const auto& st = t.trav.stack();
+                // Chunk slots during the intersection test itself (8 cycles in the paper's setup).
+                uint32_t budget = info.type == NodeType::Triangle ? cfg_.lat.ray_triangle : cfg_.lat.procedural;
+                for (size_t k = 0; k < st.size(); ++k) {
+                    const StackEntry& e = order_ == TraversalOrder::DFS ? st[st.size() - 1 - k] : st[k];
+                    const uint32_t chunks = node_bytes(e.type) / kChunkBytes;
+                    if (chunks > budget) break;
+                    budget -= chunks;
+                    prefetch_entry(e, p.warp, ti);
+                }
+            }
             set_status(t, ThreadStatus::InMath, now);
             math_.push({now + math_latency(info), p.warp, ti});
         }

@@ -367,6 +367,26 @@ TimingResult GpuPlatform::run() {
                  {"row_misses", ds.row_misses}, {"row_conflicts", ds.row_conflicts},
                  {"bandwidth_utilisation", mem_cycles > 0 ? double(ds.data_cycles) / (mem_cycles * m.cfg.dram.channels) : 0.0},
                  {"avg_queue_wait_mem_cycles", ds.reads + ds.writes ? double(ds.queue_wait) / double(ds.reads + ds.writes) : 0.0}};
+    // Energy from per-event energies: every L1 and L2 access (demand and prefetch, retries
+    // included), DRAM bursts and activations, and static power over the frame's time.
+    {
+        const EnergyTable& e = m.cfg.energy;
+        const double seconds = double(r.cycles) * double(m.core.period_fs()) * 1e-15;
+        const uint64_t l1_acc = l1[0].accesses + l1[1].accesses, l2_acc = l2[0].accesses + l2[1].accesses;
+        const uint64_t activates = ds.row_misses + ds.row_conflicts;
+        const double dyn_pj = double(l1_acc) * e.l1_access_pj + double(l2_acc) * e.l2_access_pj +
+                              double(ds.reads) * e.dram_read_pj + double(ds.writes) * e.dram_write_pj +
+                              double(activates) * e.dram_activate_pj;
+        const double static_j = e.static_w * seconds;
+        const double total_j = dyn_pj * 1e-12 + static_j;
+        j["energy"] = {{"l1_j", double(l1_acc) * e.l1_access_pj * 1e-12},
+                       {"l2_j", double(l2_acc) * e.l2_access_pj * 1e-12},
+                       {"dram_j", (double(ds.reads) * e.dram_read_pj + double(ds.writes) * e.dram_write_pj + double(activates) * e.dram_activate_pj) * 1e-12},
+                       {"static_j", static_j},
+                       {"total_j", total_j},
+                       {"seconds", seconds},
+                       {"average_power_w", seconds > 0 ? total_j / seconds : 0.0}};
+    }
     j["payloads_allocated"] = m.pool.allocated();
     r.stats = j;
     return r;
