@@ -13,6 +13,8 @@ packages=(
   nlohmann-json3-dev        # statistics and configuration files
   libstb-dev                # PNG output
 )
+# --reports: also what the experiment sweeps and reports need (GNU parallel, matplotlib).
+if [ "${1:-}" = "--reports" ]; then packages+=(parallel python3-matplotlib gawk); fi
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
