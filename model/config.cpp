@@ -69,7 +69,9 @@ const Key kSchema[] = {
     {"dram.tCCD", Type::Int, 1, 1000, false, "column to column"},
     {"dram.tWL", Type::Int, 0, 1000, false, "write latency"},
     {"dram.tWR", Type::Int, 0, 1000, false, "write recovery"},
-    {"prefetch.kind", Type::Text, 0, 0, false, "none, ttp, park, perfect-up, perfect-down"},
+    {"prefetch.kind", Type::Text, 0, 0, false, "none, ttp, park, treelet, perfect-up, perfect-down"},
+    {"prefetch.treelet_budget", Type::Int, 64, 1 << 24, false, "Treelet: bytes per treelet"},
+    {"prefetch.treelet_threshold", Type::Real, 0, 1, false, "Treelet: share of a warp's threads heading for a treelet before it is prefetched"},
     {"prefetch.ttp_depth_s1", Type::Int, 0, 64, false, "TTP (DFS): entries prefetched on the first pop after a push"},
     {"prefetch.ttp_depth_s2", Type::Int, 0, 64, false, "TTP (DFS): on the second consecutive pop"},
     {"prefetch.ttp_depth_s3", Type::Int, 0, 64, false, "TTP (DFS): on the third and later consecutive pops"},
@@ -268,6 +270,8 @@ HwConfig Config::resolve() const {
     h.prefetch.depth = {u32("prefetch.ttp_depth_s1"), u32("prefetch.ttp_depth_s2"), u32("prefetch.ttp_depth_s3")};
     h.prefetch.bfs_n = u32("prefetch.bfs_n");
     h.prefetch.priority_after = u32("prefetch.priority_after");
+    h.prefetch.treelet_budget = u32("prefetch.treelet_budget");
+    h.prefetch.treelet_threshold = num("prefetch.treelet_threshold");
     h.energy = {num("energy.l1_access_pj"), num("energy.l2_access_pj"), num("energy.dram_read_pj"),
                 num("energy.dram_write_pj"), num("energy.dram_activate_pj"), num("energy.static_w")};
     h.quantum = values_.at("sim.quantum").get<uint64_t>();

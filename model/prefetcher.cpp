@@ -8,9 +8,10 @@ PrefetcherKind parse_prefetcher(const std::string& n) {
     if (n == "none") return PrefetcherKind::None;
     if (n == "ttp") return PrefetcherKind::Ttp;
     if (n == "park") return PrefetcherKind::Park;
+    if (n == "treelet") return PrefetcherKind::Treelet;
     if (n == "perfect-up") return PrefetcherKind::PerfectUp;
     if (n == "perfect-down") return PrefetcherKind::PerfectDown;
-    throw std::invalid_argument("--prefetcher '" + n + "': allowed are none, ttp, park, perfect-up, perfect-down (treelet: not yet)");
+    throw std::invalid_argument("--prefetcher '" + n + "': allowed are none, ttp, park, treelet, perfect-up, perfect-down");
 }
 
 const char* prefetcher_name(PrefetcherKind k) {
@@ -18,6 +19,7 @@ const char* prefetcher_name(PrefetcherKind k) {
         case PrefetcherKind::None: return "none";
         case PrefetcherKind::Ttp: return "ttp";
         case PrefetcherKind::Park: return "park";
+        case PrefetcherKind::Treelet: return "treelet";
         case PrefetcherKind::PerfectUp: return "perfect-up";
         case PrefetcherKind::PerfectDown: return "perfect-down";
     }

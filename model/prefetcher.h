@@ -18,7 +18,7 @@
 
 namespace rtu {
 
-enum class PrefetcherKind : uint8_t { None, Ttp, Park, PerfectUp, PerfectDown };
+enum class PrefetcherKind : uint8_t { None, Ttp, Park, Treelet, PerfectUp, PerfectDown };
 PrefetcherKind parse_prefetcher(const std::string& name);  // throws std::invalid_argument
 const char* prefetcher_name(PrefetcherKind k);
 
@@ -28,6 +28,8 @@ struct PrefetchConfig {
     uint32_t bfs_n = 1;                       // TTP BFS: entries prefetched per pop
     uint32_t priority_after = 0;              // 0: prefetch only in cycles without a demand request;
                                               // X: a prefetch goes first if none was sent in the last X cycles
+    uint32_t treelet_budget = 512;            // Treelet: bytes per treelet
+    double treelet_threshold = 0.75;          // Treelet: share of a warp's threads that must head for a treelet
 };
 
 class TtpDfs {

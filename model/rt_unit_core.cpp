@@ -1,12 +1,36 @@
 #include "rt_unit_core.h"
 
+#include <map>
+
+#include "treelet.h"
+
 #include <algorithm>
 #include <stdexcept>
 
 namespace rtu {
 
-RtUnitCore::RtUnitCore(const HwConfig& cfg, const BvhImage& image, TraversalOrder order)
-    : cfg_(cfg), image_(image), order_(order), warps_(cfg.warp_buffer) {}
+RtUnitCore::RtUnitCore(const HwConfig& cfg, const BvhImage& image, TraversalOrder order, const Treelets* treelets)
+    : cfg_(cfg), image_(image), order_(order), treelets_(treelets), warps_(cfg.warp_buffer) {
+    if ((order == TraversalOrder::Treelet || cfg.prefetch.kind == PrefetcherKind::Treelet) && !treelets)
+        throw std::logic_error("treelet traversal / prefetching needs treelets");
+}
+
+// Treelet prefetcher: when at least `treelet_threshold` of the warp's live threads head for the
+// same next treelet, the whole treelet is prefetched (once per warp).
+void RtUnitCore::prefetch_popular_treelet(Warp& w, uint32_t warp) {
+    std::map<uint32_t, uint32_t> votes;
+    for (const Thread& t : w.threads)
+        if (t.status != ThreadStatus::Idle) {
+            const uint32_t n = t.trav.next_treelet();
+            if (n != ~0u) ++votes[n];
+        }
+    uint32_t best = ~0u, count = 0;
+    for (const auto& [id, c] : votes)
+        if (c > count) best = id, count = c;
+    if (best == ~0u || double(count) < cfg_.prefetch.treelet_threshold * double(w.live)) return;
+    if (!w.treelets_prefetched.insert(best).second) return;
+    for (const StackEntry& e : treelets_->nodes[best]) prefetch_entry(e, warp, 0);
+}
 
 bool RtUnitCore::has_free_slot() const {
     for (const Warp& w : warps_)
@@ -59,13 +83,14 @@ void RtUnitCore::accept_warp(const std::vector<WarpRay>& rays, uint64_t now) {
     if (it == warps_.end()) throw std::logic_error("no free warp-buffer slot");
     Warp& w = *it;
     w.used = true;
+    w.treelets_prefetched.clear();
     w.threads.assign(rays.size(), Thread{});
     w.live = w.ready = 0;
     for (size_t i = 0; i < rays.size(); ++i) {
         Thread& t = w.threads[i];
         t.key = rays[i].key;
         t.since = now;
-        t.trav.start(rays[i].ray, image_.header(), order_);
+        t.trav.start(rays[i].ray, image_.header(), order_, treelets_);
         if (!t.trav.done()) {
             t.status = ThreadStatus::WaitSchedule;
             ++w.live;
@@ -267,6 +292,7 @@ void RtUnitCore::cycle(uint64_t now) {
             }
         }
         w.ready = 0;
+        if (cfg_.prefetch.kind == PrefetcherKind::Treelet) prefetch_popular_treelet(w, wi);
         for (size_t n = 0; n < nodes.size(); ++n) {
             const uint32_t chunks = node_bytes(types[n]) / kChunkBytes;
             const bool perfect = nodes[n].first & 1ull;

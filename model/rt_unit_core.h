@@ -63,7 +63,8 @@ struct RtUnitStats {
 
 class RtUnitCore {
 public:
-    RtUnitCore(const HwConfig& cfg, const BvhImage& image, TraversalOrder order);
+    // `treelets` is needed for treelet traversal and the Treelet prefetcher (else may be null).
+    RtUnitCore(const HwConfig& cfg, const BvhImage& image, TraversalOrder order, const Treelets* treelets = nullptr);
 
     bool has_free_slot() const;
     // Takes a warp (at most warp_size rays) into a free slot at cycle `now`.
@@ -124,6 +125,7 @@ private:
     };
     struct Warp {
         bool used = false;
+        std::unordered_set<uint32_t> treelets_prefetched;
         std::vector<Thread> threads;
         uint32_t live = 0;  // threads not Idle
         uint32_t ready = 0; // threads in WaitSchedule
@@ -143,10 +145,12 @@ private:
     uint32_t math_latency(const StepInfo& s) const;
     void prefetch_entry(const StackEntry& e, uint32_t warp, uint32_t thread);
     void prefetch_on_pop(Thread& t, uint32_t warp, uint32_t thread);
+    void prefetch_popular_treelet(Warp& w, uint32_t warp);
 
     HwConfig cfg_;
     const BvhImage& image_;
     TraversalOrder order_;
+    const Treelets* treelets_;
     std::vector<Warp> warps_;
     uint32_t rr_ = 0;
     std::deque<ChunkRequest> maq_, pfq_;        // demand / prefetch chunks waiting to leave

@@ -1,17 +1,30 @@
 #include "traversal.h"
 
+#include "treelet.h"
+
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include <glm/geometric.hpp>
 
 namespace rtu {
 
-void TraversalThread::start(const Ray& ray, const ImageHeader& header, TraversalOrder order) {
+uint32_t TraversalThread::next_treelet() const {
+    if (!treelets_) return ~0u;
+    if (!has_next_ && stack_.empty() && !deferred_.empty()) return treelets_->treelet_of(deferred_.back().addr);
+    return deferred_.empty() ? ~0u : treelets_->treelet_of(deferred_.back().addr);
+}
+
+void TraversalThread::start(const Ray& ray, const ImageHeader& header, TraversalOrder order, const Treelets* treelets) {
     ray_ = ray;
     order_ = order;
+    treelets_ = order == TraversalOrder::Treelet ? treelets : nullptr;
+    if (order == TraversalOrder::Treelet && !treelets_) throw std::logic_error("treelet traversal needs treelets");
+    current_treelet_ = treelets_ ? treelets_->treelet_of(header.root) : ~0u;
     hit_ = Hit{};
     stack_.clear();
+    deferred_.clear();
     has_next_ = false;
     nodes_visited_ = max_stack_ = 0;
     space_inst_ = kNoId;
@@ -59,9 +72,15 @@ StepInfo TraversalThread::step(const BvhImage& image) {
     if (has_next_) {
         e = next_;
         has_next_ = false;
-    } else if (order_ == TraversalOrder::DFS) {
+    } else if (order_ == TraversalOrder::DFS || (order_ == TraversalOrder::Treelet && !stack_.empty())) {
         e = stack_.back();
         stack_.pop_back();
+        info.from_stack = true;
+    } else if (order_ == TraversalOrder::Treelet) {
+        // The current treelet is finished: move to the one on top of the deferred stack.
+        e = deferred_.back();
+        deferred_.pop_back();
+        current_treelet_ = treelets_->treelet_of(e.addr);
         info.from_stack = true;
     } else {
         e = stack_.front();
@@ -83,7 +102,12 @@ StepInfo TraversalThread::step(const BvhImage& image) {
                 // Culls children whose entry lies beyond the closest hit so far (ray_.tfar).
                 if (!intersect_box(box_ray_, n.box[i], ray_.tnear, ray_.tfar, &tentry)) continue;
                 StackEntry child{n.addr[i], n.type[i], e.inst_block};
-                if (first && order_ == TraversalOrder::DFS) {
+                if (treelets_ && treelets_->treelet_of(child.addr) != current_treelet_) {
+                    deferred_.push_back(child);  // another treelet: after this one is finished
+                    ++info.pushed;
+                    continue;
+                }
+                if (first && order_ != TraversalOrder::BFS) {
                     next_ = child;
                     has_next_ = true;
                 } else {
@@ -97,7 +121,10 @@ StepInfo TraversalThread::step(const BvhImage& image) {
         case NodeType::Instance: {
             const InstanceLeaf inst = decode_instance(bytes);
             StackEntry root{inst.blas_root, NodeType::Internal, uint32_t(e.addr / kBlockBytes)};
-            if (order_ == TraversalOrder::DFS) {
+            if (treelets_ && treelets_->treelet_of(root.addr) != current_treelet_) {
+                deferred_.push_back(root);
+                ++info.pushed;
+            } else if (order_ != TraversalOrder::BFS) {
                 next_ = root;
                 has_next_ = true;
             } else {
@@ -141,17 +168,17 @@ StepInfo TraversalThread::step(const BvhImage& image) {
             break;
     }
     if (info.hit && ray_.query == Query::Any) finish();
-    max_stack_ = std::max<uint32_t>(max_stack_, uint32_t(stack_.size()));
+    max_stack_ = std::max<uint32_t>(max_stack_, uint32_t(stack_.size() + deferred_.size()));
     return info;
 }
 
-TraceResult trace_ray(const BvhImage& image, const Ray& ray, TraversalOrder order) {
+TraceResult trace_ray(const BvhImage& image, const Ray& ray, TraversalOrder order, const Treelets* treelets) {
     TraceResult r;
     if (!is_valid_ray(ray)) return r;
     Ray scaled = ray;
     const int k = scale_direction(scaled);
     TraversalThread th;
-    th.start(scaled, image.header(), order);
+    th.start(scaled, image.header(), order, treelets);
     while (!th.done()) th.step(image);
     r.hit = th.hit();
     if (r.hit.hit) r.hit.t = std::ldexp(r.hit.t, -k);

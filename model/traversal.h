@@ -14,7 +14,11 @@
 
 namespace rtu {
 
-enum class TraversalOrder : uint8_t { DFS, BFS };
+// DFS and BFS as described above; Treelet: DFS within the current treelet, with children in
+// other treelets deferred on a second stack until the current treelet is finished (Chou et al.).
+enum class TraversalOrder : uint8_t { DFS, BFS, Treelet };
+
+struct Treelets;
 
 struct StackEntry {
     uint64_t addr = 0;
@@ -33,13 +37,23 @@ class TraversalThread {
 public:
     // Prepares the ray and tests the root box (a register in the RT unit, not a memory read).
     // The ray must be valid (is_valid_ray).
-    void start(const Ray& ray, const ImageHeader& header, TraversalOrder order);
-    bool done() const { return !has_next_ && stack_.empty(); }
+    // `treelets` is required for TraversalOrder::Treelet and ignored otherwise.
+    void start(const Ray& ray, const ImageHeader& header, TraversalOrder order, const Treelets* treelets = nullptr);
+    bool done() const { return !has_next_ && stack_.empty() && deferred_.empty(); }
     // The node the thread reads next; only when !done().
     // True when the next node comes off the stack / queue (a pop), false when it is the
     // "next node" register (the first hit child, the root, or a BLAS root).
     bool next_is_pop() const { return !has_next_; }
-    const StackEntry& peek() const { return has_next_ ? next_ : (order_ == TraversalOrder::DFS ? stack_.back() : stack_.front()); }
+    const StackEntry& peek() const {
+        if (has_next_) return next_;
+        if (order_ == TraversalOrder::BFS) return stack_.front();
+        return stack_.empty() ? deferred_.back() : stack_.back();
+    }
+    // Treelet traversal: the treelet the thread works in, and the one it will move to next
+    // (~0 when it has none waiting).
+    uint32_t current_treelet() const { return current_treelet_; }
+    uint32_t next_treelet() const;
+    const std::deque<StackEntry>& deferred() const { return deferred_; }
     // Takes the next node, reads its bytes from the image and runs its tests.
     StepInfo step(const BvhImage& image);
 
@@ -51,13 +65,19 @@ public:
 
 private:
     void select_space(const BvhImage& image, uint32_t inst_block);
-    void finish() { has_next_ = false; stack_.clear(); }
+    void finish() {
+        has_next_ = false;
+        stack_.clear();
+        deferred_.clear();
+    }
     glm::vec3 normal_to_world(const BvhImage& image, const glm::vec3& n) const;
 
     Ray ray_;
     TraversalOrder order_ = TraversalOrder::DFS;
     Hit hit_;
-    std::deque<StackEntry> stack_;
+    std::deque<StackEntry> stack_, deferred_;  // deferred: entries of other treelets (Treelet order)
+    const Treelets* treelets_ = nullptr;
+    uint32_t current_treelet_ = ~0u;
     StackEntry next_;
     bool has_next_ = false;
     uint32_t nodes_visited_ = 0, max_stack_ = 0;
@@ -73,6 +93,6 @@ struct TraceResult {
     Hit hit;
     uint32_t nodes_visited = 0;
 };
-TraceResult trace_ray(const BvhImage& image, const Ray& ray, TraversalOrder order);
+TraceResult trace_ray(const BvhImage& image, const Ray& ray, TraversalOrder order, const Treelets* treelets = nullptr);
 
 }  // namespace rtu

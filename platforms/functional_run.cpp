@@ -51,7 +51,7 @@ FunctionalResult run_functional(const Scene& scene, const BvhImage& image, Workl
         for (const WorkRay& w : wave) {
             const uint64_t index = res.rays.size();
             const bool valid = is_valid_ray(w.ray);
-            const TraceResult tr = trace_ray(image, w.ray, opt.order);
+            const TraceResult tr = trace_ray(image, w.ray, opt.order, opt.treelets);
             res.rays.push_back(w.ray);
             res.hits.push_back(tr.hit);
             if (next_seq.size() <= w.path) next_seq.resize(w.path + 1, 0);
@@ -85,7 +85,7 @@ FunctionalResult run_functional(const Scene& scene, const BvhImage& image, Workl
         // Both traversals over the same recorded rays in tight loops, one after the other.
         uint64_t sink = 0;
         auto t0 = Clock::now();
-        for (const Ray& r : res.rays) sink += trace_ray(image, r, opt.order).hit.hit;
+        for (const Ray& r : res.rays) sink += trace_ray(image, r, opt.order, opt.treelets).hit.hit;
         res.trace_seconds = seconds_since(t0);
         if (reference) {
             t0 = Clock::now();

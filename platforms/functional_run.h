@@ -16,6 +16,7 @@ namespace rtu {
 
 struct FunctionalOptions {
     TraversalOrder order = TraversalOrder::DFS;
+    const Treelets* treelets = nullptr;  // required for TraversalOrder::Treelet
     bool progress = false;        // rays done and rate on stderr every few seconds
     bool measure_speed = false;   // afterwards, re-trace all rays with ours (and Embree's, if given) for rays/s
 };

@@ -5,6 +5,8 @@
 
 #include <systemc>
 
+#include "model/treelet.h"
+
 namespace rtu {
 
 using namespace sc_core;
@@ -127,6 +129,7 @@ struct GpuPlatform::Impl {
     std::unique_ptr<Dram> dram;
     std::unique_ptr<Monitor> monitor;
     std::vector<std::unique_ptr<ProtocolChecker>> checkers;
+    std::unique_ptr<Treelets> treelets;
     sc_trace_file* tf = nullptr;
     // Traced values (sampled into the VCD when tracing is on).
     struct RtTrace {
@@ -153,6 +156,8 @@ GpuPlatform::GpuPlatform(const HwConfig& cfg, const BvhImage& image, Workload& w
     sc_report_handler::set_actions(SC_INFO, SC_DO_NOTHING);
     if (opt.fidelity == Fidelity::LT)
         tlm::tlm_global_quantum::instance().set(m.core.period() * double(cfg.quantum));
+    if (opt.order == TraversalOrder::Treelet || cfg.prefetch.kind == PrefetcherKind::Treelet)
+        m.treelets = std::make_unique<Treelets>(form_treelets(image, cfg.prefetch.treelet_budget));
     // Binds initiator to target, through a protocol checker when asked for.
     const bool check = opt.check_protocol && opt.fidelity == Fidelity::AT;
     auto link = [&](auto& initiator, auto& target, const std::string& name) {
@@ -166,7 +171,8 @@ GpuPlatform::GpuPlatform(const HwConfig& cfg, const BvhImage& image, Workload& w
     };
     for (uint32_t s = 0; s < cfg.sms; ++s) {
         const std::string id = std::to_string(s);
-        m.rt.emplace_back(new RtUnit(("rt_unit_" + id).c_str(), s, cfg, image, opt.order, m.driver, m.pool, m.core, opt.fidelity));
+        m.rt.emplace_back(new RtUnit(("rt_unit_" + id).c_str(), s, cfg, image, opt.order, m.driver, m.pool, m.core, opt.fidelity,
+                                     m.treelets.get()));
         m.l1.emplace_back(new Cache(("l1_" + id).c_str(), 1, cfg.l1, cfg.l1_hit_latency, m.pool, m.core, opt.fidelity));
         link(m.rt[s]->socket, m.l1[s]->in, "rt_unit_" + id + "_l1_" + id);
     }

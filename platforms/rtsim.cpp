@@ -14,6 +14,7 @@
 #include "functional_run.h"
 #include "gpu_platform.h"
 #include "model/traversal.h"
+#include "model/treelet.h"
 #include "output.h"
 #include "workloads/bvh_builder.h"
 #include "workloads/embree_reference.h"
@@ -81,7 +82,8 @@ int run(const Args& a) {
     TraversalOrder order;
     if (a.traversal == "dfs") order = TraversalOrder::DFS;
     else if (a.traversal == "bfs") order = TraversalOrder::BFS;
-    else throw InputError("--traversal '" + a.traversal + "': allowed are dfs, bfs");
+    else if (a.traversal == "treelet") order = TraversalOrder::Treelet;
+    else throw InputError("--traversal '" + a.traversal + "': allowed are dfs, bfs, treelet");
     const WorkloadKind kind = a.rays.empty() ? parse_workload(a.workload) : WorkloadKind::RayFile;
     if (!a.rays.empty() && !a.image.empty()) throw InputError("--image needs a scene workload, not --rays");
     if (!timing && (!a.vcd.empty() || !a.trace_warp.empty() || !a.sets.empty() || a.quantum || !a.prefetcher.empty()))
@@ -97,6 +99,8 @@ int run(const Args& a) {
             if (a.quantum) config.set("sim.quantum=" + std::to_string(a.quantum));
             if (!a.prefetcher.empty()) config.set("prefetch.kind=" + a.prefetcher);
             hw = config.resolve();
+            if (hw.prefetch.kind == PrefetcherKind::Treelet && order != TraversalOrder::Treelet)
+                throw ConfigError("--prefetcher treelet needs --traversal treelet (the Treelet prefetcher requires treelet traversal)");
         } catch (const ConfigError& e) {
             throw InputError(e.what());
         }
@@ -149,6 +153,11 @@ int run(const Args& a) {
     if (!timing) {
         FunctionalOptions fo;
         fo.order = order;
+        std::unique_ptr<Treelets> treelets;
+        if (order == TraversalOrder::Treelet) {
+            treelets = std::make_unique<Treelets>(form_treelets(image, PrefetchConfig{}.treelet_budget));
+            fo.treelets = treelets.get();
+        }
         fo.progress = !a.quiet;
         fo.measure_speed = a.verify;
         const FunctionalResult r = run_functional(scene, image, *workload, fo, reference.get());
@@ -278,9 +287,9 @@ int sc_main(int argc, char** argv) {
     po::options_description desc(
         "rtsim: ray-tracing unit model\n"
         "usage: rtsim --scene NAME|PATH [--assets DIR] [--workload primary|pt|ao|sh] [--rays FILE] [--hits FILE]\n"
-        "             [--width W --height H --spp N --bounces B --seed S] [--traversal dfs|bfs]\n"
+        "             [--width W --height H --spp N --bounces B --seed S] [--traversal dfs|bfs|treelet]\n"
         "             [--fidelity functional|at|lt] [--config NAME|FILE] [--set KEY=VALUE]... [--quantum CYCLES]\n"
-        "             [--prefetcher none|ttp|park|perfect-up|perfect-down]\n"
+        "             [--prefetcher none|ttp|park|treelet|perfect-up|perfect-down]\n"
         "             [--stats FILE.json] [--image FILE.png] [--vcd FILE] [--trace-warp SM:WARP] [--verify] [--quiet]\n"
         "exit status: 0 ok, 1 a check failed (--verify mismatches), 2 bad input, 3 internal error\noptions");
     desc.add_options()
@@ -295,12 +304,12 @@ int sc_main(int argc, char** argv) {
         ("spp", po::value(&a.spp)->default_value(a.spp), "samples per pixel")
         ("bounces", po::value(&a.bounces)->default_value(a.bounces), "path tracing: at most this many rays per path")
         ("seed", po::value(&a.seed)->default_value(a.seed), "random seed")
-        ("traversal", po::value(&a.traversal)->default_value(a.traversal), "dfs or bfs")
+        ("traversal", po::value(&a.traversal)->default_value(a.traversal), "dfs, bfs or treelet")
         ("fidelity", po::value(&a.fidelity)->default_value(a.fidelity), "functional, at (reference timing) or lt (fast timing)")
         ("config", po::value(&a.config)->default_value(a.config), "hardware preset (mobile, desktop) or JSON file")
         ("set", po::value(&a.sets)->composing(), "override one configuration key, e.g. --set l1.size_kb=64 (repeatable)")
         ("quantum", po::value(&a.quantum), "LT quantum in core cycles (same as --set sim.quantum=N)")
-        ("prefetcher", po::value(&a.prefetcher), "none, ttp, park, perfect-up, perfect-down (same as --set prefetch.kind=...)")
+        ("prefetcher", po::value(&a.prefetcher), "none, ttp, park, treelet, perfect-up, perfect-down (same as --set prefetch.kind=...)")
         ("vcd", po::value(&a.vcd), "write waveforms to this VCD file")
         ("trace-warp", po::value(&a.trace_warp), "with --vcd: trace each thread's stack depth of warp-buffer slot WARP of SM")
         ("stats", po::value(&a.stats), "write statistics JSON")

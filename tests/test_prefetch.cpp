@@ -9,6 +9,7 @@
 #include "model/prefetcher.h"
 #include "model/rt_unit_core.h"
 #include "model/sector_cache.h"
+#include "model/treelet.h"
 #include "test_util.h"
 #include "workloads/bvh_builder.h"
 #include "workloads/scenes.h"
@@ -152,4 +153,68 @@ TEST(Ttp, RtUnitPrefetchesOnlyCurrentStackEntries) {
     EXPECT_EQ(generated, prefetches);  // every generated (non-duplicate) prefetch left the unit
     EXPECT_EQ(core.stats().prefetches_generated, generated + core.stats().prefetch_duplicates);
     EXPECT_EQ(core.stats().prefetches_sent, prefetches);
+}
+
+// Treelets: every node of the image in exactly one treelet, no treelet over the byte budget
+// (a single node may exceed a budget smaller than itself), each grown from its first node.
+TEST(Treelets, FormationRespectsTheBudgetAndCoversEveryNodeOnce) {
+    const Scene s = load_scene("ship", rtu::test::shared_dir() + "/scenes/ship");
+    const BvhImage img = build_bvh_image(s);
+    const uint64_t nodes = img.stats.internal_nodes + img.stats.triangle_leaves + img.stats.procedural_leaves + img.stats.instance_leaves;
+    for (uint32_t budget : {64u, 512u, 4096u, 48u * 1024u}) {
+        const Treelets t = form_treelets(img, budget);
+        EXPECT_EQ(t.of.size(), nodes) << budget;
+        uint64_t listed = 0, bytes = 0;
+        for (size_t i = 0; i < t.nodes.size(); ++i) {
+            listed += t.nodes[i].size();
+            bytes += t.bytes[i];
+            ASSERT_FALSE(t.nodes[i].empty());
+            if (t.nodes[i].size() > 1) {
+                EXPECT_LE(t.bytes[i], budget) << "treelet " << i;
+            }
+            for (const StackEntry& e : t.nodes[i]) EXPECT_EQ(t.treelet_of(e.addr), i);
+        }
+        EXPECT_EQ(listed, nodes) << budget;
+        EXPECT_EQ(bytes + kBlockBytes, img.size()) << "every byte but the header, once";
+        EXPECT_EQ(t.treelet_of(img.header().root), 0u);
+        if (budget == 512u) {
+            EXPECT_GE(t.nodes.size(), nodes / 8);  // at most 8 nodes of 64 B per 512 B treelet
+        }
+    }
+}
+
+// Treelet traversal finds the same closest hits as DFS, and finishes a treelet before it moves
+// on: no ray enters the same treelet twice (bunny has no BLAS instanced twice).
+TEST(Treelets, TraversalFindsTheDfsHitsAndFinishesATreeletBeforeLeaving) {
+    const Scene s = load_scene("bunny", rtu::test::shared_dir() + "/scenes/bunny");
+    const BvhImage img = build_bvh_image(s);
+    const Treelets t = form_treelets(img, 512);
+    int hits = 0, switches = 0;
+    for (int i = 0; i < 2000; ++i) {
+        Ray r;
+        r.org = {278, 278, 800};
+        r.dir = glm::vec3(-0.3f + 0.6f * float(i % 50) / 49.0f, -0.3f + 0.6f * float(i / 50) / 39.0f, -1.0f);
+        const TraceResult a = trace_ray(img, r, TraversalOrder::DFS);
+        const TraceResult b = trace_ray(img, r, TraversalOrder::Treelet, &t);
+        ASSERT_EQ(a.hit.hit, b.hit.hit) << i;
+        if (a.hit.hit) {
+            EXPECT_EQ(a.hit.t, b.hit.t) << i;
+            ++hits;
+        }
+        TraversalThread th;
+        th.start(r, img.header(), TraversalOrder::Treelet, &t);
+        std::set<uint32_t> entered = {th.current_treelet()};
+        uint32_t current = th.current_treelet();
+        while (!th.done()) {
+            const uint32_t next = t.treelet_of(th.peek().addr);
+            if (next != current) {
+                EXPECT_TRUE(entered.insert(next).second) << "ray " << i << " re-enters treelet " << next;
+                current = next;
+                ++switches;
+            }
+            th.step(img);
+        }
+    }
+    EXPECT_GT(hits, 500);
+    EXPECT_GT(switches, 1000);
 }

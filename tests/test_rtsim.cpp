@@ -290,3 +290,26 @@ TEST(RtsimPrefetch, HitsIdenticalUnderEveryPrefetcherAndNoneIsTheBaseline) {
     EXPECT_EQ(jz["timing"]["prefetch"]["sent"], 0);
     EXPECT_EQ(jn["timing"]["l1"], jr["timing"]["l1"]);
 }
+
+// The Treelet prefetcher needs treelet traversal; with it, answers are still the DFS answers.
+TEST(RtsimPrefetch, TreeletTraversalAndPrefetcher) {
+    TempDir dir;
+    // Primary rays: each independent of the others (with path tracing a tie at one bounce,
+    // resolved to another duplicated face, changes the next ray).
+    const std::string base = "--scene ship --assets " + rtu::test::shared_dir() + "/scenes/ship --workload primary --width 32 --height 32 ";
+    ASSERT_EQ(rtsim(dir, base + "--hits " + dir.file("dfs.csv")).status, 0);
+    const Result r = rtsim(dir, base + "--fidelity at --traversal treelet --prefetcher treelet --hits " + dir.file("t.csv") +
+                                    " --stats " + dir.file("t.json"));
+    ASSERT_EQ(r.status, 0) << r.err;
+    const auto a = lines(read_text(dir.file("dfs.csv"))), b = lines(read_text(dir.file("t.csv")));
+    ASSERT_EQ(a.size(), b.size());
+    for (size_t i = 0; i < a.size(); ++i) {
+        auto cut = [](const std::string& l) { return l.substr(0, l.find(',', l.find(',', l.find(',') + 1) + 1)); };
+        EXPECT_EQ(cut(a[i]), cut(b[i])) << "line " << i;  // ray, hit, t (ties may pick another primitive)
+    }
+    const auto j = nlohmann::json::parse(read_text(dir.file("t.json")));
+    EXPECT_GT(j["timing"]["prefetch"]["sent"].get<uint64_t>(), 0u);
+    const Result bad = rtsim(dir, base + "--fidelity at --prefetcher treelet");
+    EXPECT_EQ(bad.status, 2);
+    EXPECT_NE(bad.err.find("--traversal treelet"), std::string::npos) << bad.err;
+}

@@ -7,8 +7,8 @@ namespace rtu {
 using namespace sc_core;
 
 RtUnit::RtUnit(sc_module_name name, uint32_t sm, const HwConfig& cfg, const BvhImage& image, TraversalOrder order,
-               WorkloadDriver& driver, PayloadPool& pool, const ClockDomain& clock, Fidelity fidelity)
-    : sc_module(name), socket("to_l1"), sm_(sm), core_(cfg, image, order), image_(image), driver_(driver), pool_(pool),
+               WorkloadDriver& driver, PayloadPool& pool, const ClockDomain& clock, Fidelity fidelity, const Treelets* treelets)
+    : sc_module(name), socket("to_l1"), sm_(sm), core_(cfg, image, order, treelets), image_(image), driver_(driver), pool_(pool),
       clock_(clock) {
     if (fidelity == Fidelity::AT) {
         socket.register_nb_transport_bw(this, &RtUnit::nb_transport_bw);

@@ -24,7 +24,8 @@ public:
     tlm_utils::simple_initiator_socket<RtUnit> socket;
 
     RtUnit(sc_core::sc_module_name name, uint32_t sm, const HwConfig& cfg, const BvhImage& image, TraversalOrder order,
-           WorkloadDriver& driver, PayloadPool& pool, const ClockDomain& clock, Fidelity fidelity);
+           WorkloadDriver& driver, PayloadPool& pool, const ClockDomain& clock, Fidelity fidelity,
+           const Treelets* treelets = nullptr);
     SC_HAS_PROCESS(RtUnit);
 
     RtUnitCore& core() { return core_; }
