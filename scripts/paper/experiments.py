@@ -46,6 +46,11 @@ def experiments(size, spp, with_256):
     ]
     runs = [(eid, f"--fidelity at --width {size} --height {size} --spp {spp} " + (a if "--workload" in a else "--workload pt " + a))
             for eid, a in e]
+    runs.append(("treelet", f"--fidelity at --width {size} --height {size} --spp {spp} --workload pt --traversal treelet --prefetcher treelet"))
+    runs.append(("treelet_trav", f"--fidelity at --width {size} --height {size} --spp {spp} --workload pt --traversal treelet"))
+    for small in (32, 64):  # the paper's resolution study of Treelet against TTP
+        for eid, extra in (("base", ""), ("ttp", "--prefetcher ttp"), ("treelet", "--traversal treelet --prefetcher treelet")):
+            runs.append((f"res{small}_{eid}", f"--fidelity at --width {small} --height {small} --spp {spp} --workload pt {extra}".strip()))
     if with_256:
         runs += [("res256_base", f"--fidelity at --width 256 --height 256 --spp {spp} --workload pt"),
                  ("res256_ttp", f"--fidelity at --width 256 --height 256 --spp {spp} --workload pt --prefetcher ttp")]
