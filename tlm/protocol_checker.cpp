@@ -51,6 +51,13 @@ void ProtocolChecker::apply(tlm::tlm_generic_payload& t, tlm::tlm_phase ph, cons
     }
 }
 
+// TLM_COMPLETED ends the transaction whatever phase it was in.
+void ProtocolChecker::complete(tlm::tlm_generic_payload& t) {
+    if (open_request_ == &t) open_request_ = nullptr;
+    if (open_response_ == &t) open_response_ = nullptr;
+    state_.erase(&t);
+}
+
 void ProtocolChecker::pre_fw(tlm::tlm_generic_payload& t, tlm::tlm_phase before) {
     if (before != tlm::BEGIN_REQ && before != tlm::END_RESP) violation(std::string("forward path carries ") + before.get_name());
     apply(t, before, "forward call");
@@ -67,14 +74,7 @@ void ProtocolChecker::post_fw(tlm::tlm_generic_payload& t, tlm::tlm_phase before
         else if (after != tlm::END_REQ && after != tlm::BEGIN_RESP) violation(std::string("forward return updates phase to ") + after.get_name());
         else apply(t, after, "forward return");
     } else if (ret == tlm::TLM_COMPLETED) {
-        if (state_.count(&t)) {
-            if (state_[&t] != Phase::Resp) {
-                // Completed at once: the response is implied (END_RESP reached).
-                if (open_request_ == &t) open_request_ = nullptr;
-            }
-            if (open_response_ == &t) open_response_ = nullptr;
-            state_.erase(&t);
-        }
+        complete(t);  // completed at once: END_REQ and the response are implied
     } else if (after != before) {
         violation("phase changed on a TLM_ACCEPTED return");
     }
@@ -96,8 +96,7 @@ void ProtocolChecker::post_bw(tlm::tlm_generic_payload& t, tlm::tlm_phase before
         else apply(t, after, "backward return");
     } else if (ret == tlm::TLM_COMPLETED) {
         if (before == tlm::END_REQ) violation("TLM_COMPLETED returned for END_REQ");
-        if (open_response_ == &t) open_response_ = nullptr;
-        state_.erase(&t);
+        complete(t);
     } else if (after != before) {
         violation("phase changed on a TLM_ACCEPTED return");
     }

@@ -51,6 +51,7 @@ private:
     void pre_bw(tlm::tlm_generic_payload& t, tlm::tlm_phase before);
     void post_bw(tlm::tlm_generic_payload& t, tlm::tlm_phase before, tlm::tlm_phase after, tlm::tlm_sync_enum ret);
     void violation(const std::string& what);
+    void complete(tlm::tlm_generic_payload& t);
 
     std::unordered_map<tlm::tlm_generic_payload*, Phase> state_;
     tlm::tlm_generic_payload* open_request_ = nullptr;   // request not yet at END_REQ
