@@ -107,14 +107,16 @@ TEST(PrefetchAccounting, UsefulLateAndUnusedOnAHandBuiltSequence) {
     EXPECT_DOUBLE_EQ(double(d.useful_prefetches) / double(p.prefetch_fills), 2.0 / 3.0);
 }
 
-// In the RT unit, every prefetch TTP generates is for a node that is in the thread's stack at
-// that moment, and TTP with all depths 0 sends none.
-TEST(Ttp, RtUnitPrefetchesOnlyCurrentStackEntries) {
+namespace {
+// In the RT unit, every prefetch TTP generates is for a node that is in the thread's stack (DFS)
+// or queue (BFS) at that moment.
+void prefetches_only_current_entries(TraversalOrder order) {
     const Scene s = load_scene("bunny", rtu::test::shared_dir() + "/scenes/bunny");
     const BvhImage img = build_bvh_image(s);
     HwConfig hw = Config::load("mobile").resolve();
     hw.prefetch.kind = PrefetcherKind::Ttp;
-    RtUnitCore core(hw, img, TraversalOrder::DFS);
+    hw.prefetch.bfs_n = 4;
+    RtUnitCore core(hw, img, order);
     // A warp of 32 rays from the camera at the bunny; memory answers every request 50 cycles later.
     std::vector<WarpRay> rays;
     for (int i = 0; i < 32; ++i) {
@@ -154,6 +156,10 @@ TEST(Ttp, RtUnitPrefetchesOnlyCurrentStackEntries) {
     EXPECT_EQ(core.stats().prefetches_generated, generated + core.stats().prefetch_duplicates);
     EXPECT_EQ(core.stats().prefetches_sent, prefetches);
 }
+}  // namespace
+
+TEST(Ttp, RtUnitPrefetchesOnlyCurrentStackEntries) { prefetches_only_current_entries(TraversalOrder::DFS); }
+TEST(Ttp, RtUnitPrefetchesOnlyCurrentQueueEntries) { prefetches_only_current_entries(TraversalOrder::BFS); }
 
 // Treelets: every node of the image in exactly one treelet, no treelet over the byte budget
 // (a single node may exceed a budget smaller than itself), each grown from its first node.
