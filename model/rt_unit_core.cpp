@@ -117,7 +117,18 @@ uint32_t RtUnitCore::math_latency(const StepInfo& s) const {
     return std::max<uint32_t>(l, 1);
 }
 
+bool RtUnitCore::has_request(uint64_t now) {
+    if (!selected_) {
+        while (!pfq_.empty() && pfq_.front().deadline < now) {
+            pfq_.pop_front();
+            ++stats_.prefetches_expired;
+        }
+    }
+    return !maq_.empty() || !pfq_.empty();
+}
+
 const ChunkRequest& RtUnitCore::front_request(uint64_t now) {
+    if (!has_request(now)) throw std::logic_error("front_request without a request");
     if (!selected_) {
         const uint32_t x = cfg_.prefetch.priority_after;
         const bool starving = x > 0 && now >= last_prefetch_sent_ + x;
@@ -140,7 +151,7 @@ void RtUnitCore::pop_request(uint64_t now) {
     selected_ = false;
 }
 
-void RtUnitCore::prefetch_entry(const StackEntry& e, uint32_t warp, uint32_t thread) {
+void RtUnitCore::prefetch_entry(const StackEntry& e, uint32_t warp, uint32_t thread, uint64_t deadline) {
     for (uint32_t c = 0; c < node_bytes(e.type) / kChunkBytes; ++c) {
         const uint64_t addr = e.addr + uint64_t(c) * kChunkBytes;
         ++stats_.prefetches_generated;
@@ -155,6 +166,7 @@ void RtUnitCore::prefetch_entry(const StackEntry& e, uint32_t warp, uint32_t thr
         r.thread = thread;
         r.streak = 0;
         r.prefetch = true;
+        r.deadline = deadline;
         if (on_prefetch_generated) on_prefetch_generated(r);
         pfq_.push_back(r);
     }
@@ -215,17 +227,19 @@ void RtUnitCore::cycle(uint64_t now) {
                 t.ttp_dfs.on_push(t.trav.stack().size());
             }
             // Park et al. (as the TTP paper models them): while a leaf test runs, prefetch as many
-            // stack entries as can leave during its latency (one 32 B chunk per cycle), next pop first.
+            // stack entries as can leave during it (one 32 B chunk per cycle), next pop first;
+            // what has not left when the test ends is dropped.
             if (cfg_.prefetch.kind == PrefetcherKind::Park && (info.type == NodeType::Triangle || info.type == NodeType::Procedural)) {
                 const auto& st = t.trav.stack();
                 // Chunk slots during the intersection test itself (8 cycles in the paper's setup).
                 uint32_t budget = info.type == NodeType::Triangle ? cfg_.lat.ray_triangle : cfg_.lat.procedural;
+                const uint64_t test_end = now + math_latency(info);
                 for (size_t k = 0; k < st.size(); ++k) {
                     const StackEntry& e = order_ == TraversalOrder::DFS ? st[st.size() - 1 - k] : st[k];
                     const uint32_t chunks = node_bytes(e.type) / kChunkBytes;
                     if (chunks > budget) break;
                     budget -= chunks;
-                    prefetch_entry(e, p.warp, ti);
+                    prefetch_entry(e, p.warp, ti, test_end);
                 }
             }
             set_status(t, ThreadStatus::InMath, now);

@@ -47,6 +47,7 @@ struct ChunkRequest {
     uint32_t thread;   // first thread waiting on the node (others coalesced onto it)
     uint8_t streak;    // pop-streak class of the node fetch: 0 not a pop, 1, 2, 3, 4 = 4th or later
     bool prefetch = false;
+    uint64_t deadline = ~0ull;  // prefetch not sent by this cycle is dropped (Park: end of the leaf test)
 };
 
 enum class ThreadStatus : uint8_t { Idle, WaitSchedule, WaitMemory, InMath, Count };
@@ -58,6 +59,7 @@ struct RtUnitStats {
     std::array<uint64_t, 5> streak_fetches{}, streak_l1_misses{}, streak_dram_misses{};
     uint64_t max_response_fifo = 0, max_request_queue = 0;
     uint64_t prefetches_generated = 0, prefetch_duplicates = 0, prefetches_sent = 0, prefetch_responses = 0;
+    uint64_t prefetches_expired = 0;  // dropped unsent at their deadline
     uint64_t perfect_hits = 0;  // chunk fetches answered as L1 hits by a perfect-up/down limit study
 };
 
@@ -77,7 +79,8 @@ public:
     // The request to send this cycle: demand first; a prefetch when no demand is waiting, or
     // first when none was sent in the last prefetch.priority_after cycles. The choice sticks
     // until pop_request() (a request held by backpressure stays the one to send).
-    bool has_request() const { return !maq_.empty() || !pfq_.empty(); }
+    // Drops prefetches past their deadline first (unless one is already selected).
+    bool has_request(uint64_t now);
     const ChunkRequest& front_request(uint64_t now);
     void pop_request(uint64_t now);
 
@@ -143,7 +146,7 @@ private:
     void set_status(Thread& t, ThreadStatus s, uint64_t now);
     void after_step(uint32_t w, uint32_t t, uint64_t now);
     uint32_t math_latency(const StepInfo& s) const;
-    void prefetch_entry(const StackEntry& e, uint32_t warp, uint32_t thread);
+    void prefetch_entry(const StackEntry& e, uint32_t warp, uint32_t thread, uint64_t deadline = ~0ull);
     void prefetch_on_pop(Thread& t, uint32_t warp, uint32_t thread);
     void prefetch_popular_treelet(Warp& w, uint32_t warp);
 

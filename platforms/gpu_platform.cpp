@@ -324,6 +324,7 @@ TimingResult GpuPlatform::run() {
         rs.prefetches_sent += s.prefetches_sent;
         rs.prefetch_responses += s.prefetch_responses;
         rs.perfect_hits += s.perfect_hits;
+        rs.prefetches_expired += s.prefetches_expired;
     }
     for (const auto& c : m.checkers) {
         r.protocol_transactions += c->transactions();
@@ -366,6 +367,7 @@ TimingResult GpuPlatform::run() {
                      {"generated", rs.prefetches_generated},
                      {"duplicates_dropped", rs.prefetch_duplicates},
                      {"sent", rs.prefetches_sent},
+                     {"expired_unsent", rs.prefetches_expired},
                      {"perfect_hits", rs.perfect_hits},
                      {"l1", prefetch_json(l1[0], l1[1])},
                      {"l2", prefetch_json(l2[0], l2[1])}};

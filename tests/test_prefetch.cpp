@@ -141,7 +141,7 @@ void prefetches_only_current_entries(TraversalOrder order) {
     for (uint64_t c = 0; c < 200000 && !core.idle(); ++c) {
         for (auto it = answers.begin(); it != answers.end() && it->first <= c; it = answers.erase(it))
             core.on_response(it->second, true, true, c);
-        if (core.has_request()) {
+        if (core.has_request(c)) {
             const ChunkRequest r = core.front_request(c);
             prefetches += r.prefetch;
             core.pop_request(c);

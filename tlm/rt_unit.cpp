@@ -52,7 +52,7 @@ void RtUnit::tick() {
         last_cycle_ = c;
         pull_work(c);
         // At most one 32 B request leaves per cycle.
-        if (!waiting_end_req_ && core_.has_request()) {
+        if (!waiting_end_req_ && core_.has_request(c)) {
             tlm::tlm_generic_payload* t = make_payload(core_.front_request(c));
             tlm::tlm_phase ph = tlm::BEGIN_REQ;
             sc_time d = SC_ZERO_TIME;
@@ -71,7 +71,7 @@ void RtUnit::tick() {
         if (on_cycle) on_cycle(c);
     }
     uint64_t next = core_.next_event(c);
-    if (!waiting_end_req_ && core_.has_request()) next = c + 1;
+    if (!waiting_end_req_ && core_.has_request(c + 1)) next = c + 1;
     if (core_.has_free_slot()) {
         const uint64_t r = driver_.earliest_ready(sm_);
         if (r != ~0ull) next = std::min(next, std::max(c + 1, r));
@@ -114,7 +114,7 @@ void RtUnit::lt_loop() {
             it = responses.erase(it);
         }
         pull_work(c);
-        if (core_.has_request()) {
+        if (core_.has_request(c)) {
             tlm::tlm_generic_payload* t = make_payload(core_.front_request(c));
             sc_time d = clock_.time_of(c) - sc_time_stamp();
             socket->b_transport(*t, d);
@@ -129,7 +129,7 @@ void RtUnit::lt_loop() {
         if (on_cycle) on_cycle(c);
 
         uint64_t next = core_.next_event(c);
-        if (core_.has_request()) next = c + 1;
+        if (core_.has_request(c + 1)) next = c + 1;
         if (!responses.empty()) next = std::min(next, std::max(c + 1, responses.begin()->first));
         if (core_.has_free_slot()) {
             const uint64_t r = driver_.earliest_ready(sm_);

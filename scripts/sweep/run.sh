@@ -8,5 +8,5 @@ here=$(cd "$(dirname "$0")" && pwd)
 mkdir -p "$outdir"
 n=$(($(wc -l <"$manifest") - 1))
 echo "sweep: $n runs from $manifest, $jobs at a time, into $outdir" >&2
-seq 1 "$n" | parallel --will-cite -j "$jobs" --joblog "$outdir/joblog" "$here/worker.sh" "$manifest" {} "$outdir" || true
+seq 1 "$n" | parallel --will-cite -j "$jobs" --joblog "+$outdir/joblog" "$here/worker.sh" "$manifest" {} "$outdir" || true
 /usr/bin/python3 "$here/collect.py" "$manifest" "$outdir"
