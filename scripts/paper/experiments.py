@@ -2,6 +2,7 @@
 """The TTP paper's Results section as a sweep manifest: one line per run (scene, rtsim arguments,
 output path). Usage: experiments.py MANIFEST [--size N] [--spp N] [--scenes a,b,...] [--no-256]"""
 import argparse
+import json
 
 SCENES = {  # name -> rtsim scene arguments ({shared} is substituted by the worker)
     "wknd": "--scene wknd",
@@ -69,6 +70,8 @@ def main():
     for s in scenes:
         if s not in SCENES:
             raise SystemExit(f"experiments: unknown scene '{s}' (known: {', '.join(SCENES)})")
+    with open(a.manifest + ".meta.json", "w") as f:  # read by report.py
+        json.dump({"size": a.size, "spp": a.spp, "scenes": scenes, "with_256": not a.no_256}, f)
     with open(a.manifest, "w") as f:
         f.write("id\targs\toutput\n")
         for eid, args in experiments(a.size, a.spp, not a.no_256):

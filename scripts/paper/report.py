@@ -6,6 +6,7 @@ import math
 import pathlib
 import sys
 import datetime
+import json
 
 import matplotlib
 
@@ -114,7 +115,9 @@ def main():
     outdir.mkdir(parents=True, exist_ok=True)
     R = Report(load(results), outdir)
     d = R.d
-    size = "128x128"
+    meta_file = results.parent / "manifest.tsv.meta.json"
+    meta = json.loads(meta_file.read_text()) if meta_file.exists() else {"size": 128, "spp": 2}
+    size = f"{meta['size']}x{meta['size']}"
     runs = len(d)
     failed = [k for k, r in d.items() if r["exit"] not in ("0", 0, "")]
     missing = [k for k, r in d.items() if r["exit"] == ""]
@@ -124,7 +127,7 @@ def main():
     R.p(f"Generated {datetime.date.today()} by `scripts/paper.sh` from `{results.name}`: {runs} runs "
         f"({len(failed)} failed, {len(missing)} not run); the runs took {wall / 60:.1f} minutes summed, about {wall / 120:.0f} "
         f"minutes of wall clock two at a time on this 2-core machine. AT fidelity, mobile preset "
-        f"(paper Table 2) unless stated, path tracing {size}, 2 spp, DFS, seed 1.")
+        f"(paper Table 2) unless stated, path tracing {size}, {meta['spp']} spp, DFS, seed 1.")
     R.p()
     R.p("Scenes: ours are 7 (wknd, cornell, ship, bunny, ref, bath, sprng) of the paper's 16, with stand-ins "
         "for bunny (Stanford scan), ref (Stanford dragon with our placement), bath (no bathtub) and sprng "
