@@ -1,6 +1,6 @@
 // Booking of a shared resource by request timestamp (LT fidelity): a request asks for `len`
 // cycles starting at its own timestamp and gets the earliest free gap at or after it, whatever
-// order the requests arrive in. Old bookings below a watermark are dropped to bound memory.
+// order the requests arrive in. Bookings behind simulated time are dropped as it advances.
 #pragma once
 #include <cstdint>
 #include <iterator>
@@ -10,8 +10,11 @@ namespace rtu {
 
 class Calendar {
 public:
-    // Books [s, s + len) with s >= start the earliest free gap; returns s.
-    uint64_t book(uint64_t start, uint64_t len) {
+    // Books [s, s + len) with s >= start the earliest free gap; returns s. Bookings that end by
+    // `horizon` are forgotten first: no request can be timestamped before it (in LT no
+    // requester is behind simulated time).
+    uint64_t book(uint64_t start, uint64_t len, uint64_t horizon = 0) {
+        while (!busy_.empty() && busy_.begin()->second <= horizon) busy_.erase(busy_.begin());
         if (len == 0) return start;
         uint64_t s = std::max(start, floor_);
         auto it = busy_.upper_bound(s);

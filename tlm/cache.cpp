@@ -156,7 +156,8 @@ tlm::tlm_sync_enum Cache::nb_transport_bw(tlm::tlm_generic_payload& t, tlm::tlm_
 
 void Cache::b_transport(tlm::tlm_generic_payload& t, sc_time& d) {
     RtExtension& e = ext(t);
-    uint64_t c = port_.book(clock_.cycle_at_or_after(sc_time_stamp() + d), 1);  // one lookup per cycle
+    const uint64_t horizon = clock_.cycle_at_or_before(sc_time_stamp());
+    uint64_t c = port_.book(clock_.cycle_at_or_after(sc_time_stamp() + d), 1, horizon);  // one lookup per cycle
     const uint64_t sector = tags_.sector_of(t.get_address());
     uint64_t done;
     auto f = fill_at_.find(sector);

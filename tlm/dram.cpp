@@ -134,8 +134,9 @@ void Dram::b_transport(int id, tlm::tlm_generic_payload& t, sc_time& d) {
     b.open = true;
     b.row = at.row;
     const uint64_t xfer = channels_[at.channel].transfer_cycles(t.get_data_length());
-    const uint64_t bank_start = lt_bank_busy_[at.channel][at.bank].book(now, std::max<uint64_t>(access - cfg_.tCL + cfg_.tCCD, 1));
-    const uint64_t bus_start = lt_bus_[at.channel].book(bank_start + access, xfer);
+    const uint64_t horizon = clock_.cycle_at_or_before(sc_time_stamp());
+    const uint64_t bank_start = lt_bank_busy_[at.channel][at.bank].book(now, std::max<uint64_t>(access - cfg_.tCL + cfg_.tCCD, 1), horizon);
+    const uint64_t bus_start = lt_bus_[at.channel].book(bank_start + access, xfer, horizon);
     const uint64_t done = bus_start + xfer;
     ++st.reads;
     st.bytes += t.get_data_length();
