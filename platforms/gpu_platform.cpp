@@ -145,7 +145,8 @@ struct GpuPlatform::Impl {
     std::vector<int> stack_depth;
 
     Impl(const HwConfig& c, const BvhImage& img, Workload& w, const TimingOptions& o)
-        : cfg(c), image(img), opt(o), core(c.core_mhz), mem(c.memory_mhz), driver(w, c.sms, c.warp_size, c.shade_latency) {}
+        : cfg(c), image(img), opt(o), core(c.core_mhz), mem(c.memory_mhz),
+          driver(w, c.sms, c.warp_size, c.shade_latency, o.sample_rate, o.sample_seed, c.sms * c.warp_buffer, c.sms * c.warp_buffer) {}
 };
 
 GpuPlatform::GpuPlatform(const HwConfig& cfg, const BvhImage& image, Workload& workload, const TimingOptions& opt)
@@ -278,7 +279,9 @@ TimingResult GpuPlatform::run() {
     TimingResult r;
     if (m.monitor->printed_) std::cerr << "\n";
     // The frame ends when its last ray retires (the monitor may wake once more after that).
-    r.cycles = m.driver.last_progress();
+    r.cycles_simulated = r.cycles = m.driver.last_progress();
+    const WorkloadDriver::Estimate est = m.driver.estimate();
+    if (m.driver.sampled()) r.cycles = uint64_t(std::llround(est.cycles_estimate(double(r.cycles_simulated))));
     r.stuck = m.monitor->stuck;
     r.stuck_report = m.monitor->report;
     if (!r.stuck && !m.driver.finished()) {
@@ -303,7 +306,7 @@ TimingResult GpuPlatform::run() {
     }
     RtUnitStats rs;
     for (const auto& u : m.rt) {
-        u->core().account(r.cycles);
+        u->core().account(r.cycles_simulated);
         const RtUnitStats& s = u->core().stats();
         rs.warps += s.warps;
         rs.rays += s.rays;
@@ -336,9 +339,25 @@ TimingResult GpuPlatform::run() {
     if (!r.stuck && rs.chunk_requests != rs.responses) fail("RT units sent " + std::to_string(rs.chunk_requests) + " requests but drained " + std::to_string(rs.responses) + " responses");
 
     const DramStats ds = m.dram->stats();
-    const double mem_cycles = double(r.cycles) * double(m.core.period_fs()) / double(m.mem.period_fs());
+    const double mem_cycles = double(r.cycles_simulated) * double(m.core.period_fs()) / double(m.mem.period_fs());
     nlohmann::ordered_json j;
     j["cycles"] = r.cycles;
+    if (m.driver.sampled()) {
+        // Cycles scale with the frame's work (node fetches) over the simulated warps' work; the
+        // interval is the stratified sampling error of that work (95 %, normal approximation).
+        const double c = double(r.cycles), h = 1.96 * est.relative_se * est.work_estimate / est.throughput(double(r.cycles_simulated));
+        j["sampling"] = {{"rate", m.opt.sample_rate},
+                         {"warps_total", est.warps_total},
+                         {"warps_simulated", est.warps_simulated},
+                         {"cycles_simulated", r.cycles_simulated},
+                         {"work_simulated_node_fetches", est.work_simulated},
+                         {"work_estimate_node_fetches", est.work_estimate},
+                         {"cycles_estimate", r.cycles},
+                         {"saturated_until_cycle", est.saturated_until},
+                         {"work_done_saturated", est.work_saturated},
+                         {"cycles_ci95", {c - h, c + h}},
+                         {"relative_se", est.relative_se}};
+    }
     j["rt_unit"] = {{"warps", rs.warps}, {"rays", rs.rays}, {"node_fetches", rs.node_fetches},
                     {"chunk_requests", rs.chunk_requests}, {"coalesced_fetches", rs.coalesced},
                     {"max_response_fifo", rs.max_response_fifo}, {"max_request_queue", rs.max_request_queue}};
@@ -379,7 +398,8 @@ TimingResult GpuPlatform::run() {
     // included), DRAM bursts and activations, and static power over the frame's time.
     {
         const EnergyTable& e = m.cfg.energy;
-        const double seconds = double(r.cycles) * double(m.core.period_fs()) * 1e-15;
+        // Of the simulated part; a sampled run's frame energy is total_j x the work scale.
+        const double seconds = double(r.cycles_simulated) * double(m.core.period_fs()) * 1e-15;
         const uint64_t l1_acc = l1[0].accesses + l1[1].accesses, l2_acc = l2[0].accesses + l2[1].accesses;
         const uint64_t activates = ds.row_misses + ds.row_conflicts;
         const double dyn_pj = double(l1_acc) * e.l1_access_pj + double(l2_acc) * e.l2_access_pj +
@@ -393,7 +413,8 @@ TimingResult GpuPlatform::run() {
                        {"static_j", static_j},
                        {"total_j", total_j},
                        {"seconds", seconds},
-                       {"average_power_w", seconds > 0 ? total_j / seconds : 0.0}};
+                       {"average_power_w", seconds > 0 ? total_j / seconds : 0.0},
+                       {"frame_total_j_estimate", total_j * est.scale()}};
     }
     j["payloads_allocated"] = m.pool.allocated();
     r.stats = j;

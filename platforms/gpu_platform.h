@@ -29,11 +29,14 @@ struct TimingOptions {
     int trace_sm = -1, trace_warp = -1;  // one warp-buffer slot whose threads' stack depths are traced
     uint32_t trace_window = 1000;     // cycles per sample of windowed waveforms (miss rate, bandwidth)
     bool check_protocol = false;      // AT: a base-protocol checker on every socket
+    double sample_rate = 1.0;         // < 1: sampled simulation of this share of the frame's warps
+    uint64_t sample_seed = 1;
 };
 
 struct TimingResult {
     std::vector<TracedRay> rays;
-    uint64_t cycles = 0;
+    uint64_t cycles = 0;            // the frame's cycles (extrapolated when sampled)
+    uint64_t cycles_simulated = 0;  // cycles of what was actually simulated
     bool stuck = false;
     std::string stuck_report;
     std::vector<std::string> invariant_failures;

@@ -36,6 +36,7 @@ struct Args {
     std::vector<std::string> sets;
     int width = 128, height = 128, spp = 2, bounces = 16;
     uint64_t seed = 1, quantum = 0;
+    double sample = 1.0;
     bool verify = false, quiet = false;
 };
 
@@ -86,8 +87,10 @@ int run(const Args& a) {
     else throw InputError("--traversal '" + a.traversal + "': allowed are dfs, bfs, treelet");
     const WorkloadKind kind = a.rays.empty() ? parse_workload(a.workload) : WorkloadKind::RayFile;
     if (!a.rays.empty() && !a.image.empty()) throw InputError("--image needs a scene workload, not --rays");
-    if (!timing && (!a.vcd.empty() || !a.trace_warp.empty() || !a.sets.empty() || a.quantum || !a.prefetcher.empty()))
-        throw InputError("--vcd, --trace-warp, --set, --quantum and --prefetcher need --fidelity at or lt");
+    if (!timing && (!a.vcd.empty() || !a.trace_warp.empty() || !a.sets.empty() || a.quantum || !a.prefetcher.empty() || a.sample != 1.0))
+        throw InputError("--vcd, --trace-warp, --set, --quantum, --prefetcher and --sample need --fidelity at or lt");
+    if (!(a.sample > 0.0 && a.sample <= 1.0))
+        throw InputError("--sample " + std::to_string(a.sample) + ": the share of the frame to simulate must be in (0, 1]");
 
     // Configuration first: a bad key should not wait for a scene to load.
     Config config;
@@ -174,6 +177,8 @@ int run(const Args& a) {
         to.order = order;
         to.progress = !a.quiet;
         to.vcd = a.vcd;
+        to.sample_rate = a.sample;
+        to.sample_seed = a.seed;
         if (to.vcd.size() > 4 && to.vcd.compare(to.vcd.size() - 4, 4, ".vcd") == 0) to.vcd.resize(to.vcd.size() - 4);
         if (!a.trace_warp.empty()) std::tie(to.trace_sm, to.trace_warp) = parse_trace_warp(a.trace_warp, hw);
         GpuPlatform platform(hw, image, *workload, to);
@@ -252,6 +257,11 @@ int run(const Args& a) {
                   << a.fidelity << ", " << run_s << " s\n";
         if (timing) {
             const auto& t = timing_result.stats;
+            if (t.contains("sampling"))
+                std::cout << "sampled " << t["sampling"]["warps_simulated"] << " of " << t["sampling"]["warps_total"]
+                          << " warps: " << timing_result.cycles_simulated << " cycles simulated, frame estimate "
+                          << timing_result.cycles << " (95 % interval " << uint64_t(t["sampling"]["cycles_ci95"][0].get<double>())
+                          << ".." << uint64_t(t["sampling"]["cycles_ci95"][1].get<double>()) << ")\n";
             std::cout << "cycles " << timing_result.cycles << ", L1 miss rate " << t["l1"]["demand"]["miss_rate"].get<double>()
                       << ", L2 miss rate " << t["l2"]["demand"]["miss_rate"].get<double>() << ", DRAM reads "
                       << t["dram"]["reads"] << " (bandwidth " << t["dram"]["bandwidth_utilisation"].get<double>() * 100
@@ -289,7 +299,7 @@ int sc_main(int argc, char** argv) {
         "usage: rtsim --scene NAME|PATH [--assets DIR] [--workload primary|pt|ao|sh] [--rays FILE] [--hits FILE]\n"
         "             [--width W --height H --spp N --bounces B --seed S] [--traversal dfs|bfs|treelet]\n"
         "             [--fidelity functional|at|lt] [--config NAME|FILE] [--set KEY=VALUE]... [--quantum CYCLES]\n"
-        "             [--prefetcher none|ttp|park|treelet|perfect-up|perfect-down]\n"
+        "             [--prefetcher none|ttp|park|treelet|perfect-up|perfect-down] [--sample RATE]\n"
         "             [--stats FILE.json] [--image FILE.png] [--vcd FILE] [--trace-warp SM:WARP] [--verify] [--quiet]\n"
         "exit status: 0 ok, 1 a check failed (--verify mismatches), 2 bad input, 3 internal error\noptions");
     desc.add_options()
@@ -310,6 +320,7 @@ int sc_main(int argc, char** argv) {
         ("set", po::value(&a.sets)->composing(), "override one configuration key, e.g. --set l1.size_kb=64 (repeatable)")
         ("quantum", po::value(&a.quantum), "LT quantum in core cycles (same as --set sim.quantum=N)")
         ("prefetcher", po::value(&a.prefetcher), "none, ttp, park, treelet, perfect-up, perfect-down (same as --set prefetch.kind=...)")
+        ("sample", po::value(&a.sample), "simulate this share (0..1] of the frame's warps, stratified, and extrapolate (timing only)")
         ("vcd", po::value(&a.vcd), "write waveforms to this VCD file")
         ("trace-warp", po::value(&a.trace_warp), "with --vcd: trace each thread's stack depth of warp-buffer slot WARP of SM")
         ("stats", po::value(&a.stats), "write statistics JSON")

@@ -313,3 +313,31 @@ TEST(RtsimPrefetch, TreeletTraversalAndPrefetcher) {
     EXPECT_EQ(bad.status, 2);
     EXPECT_NE(bad.err.find("--traversal treelet"), std::string::npos) << bad.err;
 }
+
+// Sampled simulation: selecting the whole frame is the unsampled run, bit for bit; a half-frame
+// sample reports its estimate with an interval and simulates about half the rays.
+TEST(RtsimSampling, FullFrameSampleEqualsTheUnsampledRun) {
+    TempDir dir;
+    const std::string base = "--scene bunny --assets " + rtu::test::shared_dir() + "/scenes/bunny --fidelity at --width 32 --height 32 ";
+    ASSERT_EQ(rtsim(dir, base + "--stats " + dir.file("full.json")).status, 0);
+    ASSERT_EQ(rtsim(dir, base + "--sample 1 --stats " + dir.file("one.json")).status, 0);
+    const Result half = rtsim(dir, base + "--sample 0.5 --stats " + dir.file("half.json"));
+    ASSERT_EQ(half.status, 0) << half.err;
+    auto full = nlohmann::json::parse(read_text(dir.file("full.json")));
+    auto one = nlohmann::json::parse(read_text(dir.file("one.json")));
+    const auto h = nlohmann::json::parse(read_text(dir.file("half.json")));
+    for (auto* j : {&full, &one}) {
+        j->erase("time_s");
+        j->erase("simulation_rate");
+    }
+    EXPECT_EQ(full, one);
+    EXPECT_FALSE(full["timing"].contains("sampling"));
+    const auto& s = h["timing"]["sampling"];
+    EXPECT_EQ(s["warps_total"], 64);  // 32 x 32 pixels x 2 spp / 32
+    EXPECT_EQ(s["warps_simulated"], 32);
+    EXPECT_LT(h["rays"].get<double>(), 0.6 * full["rays"].get<double>());
+    EXPECT_LE(s["cycles_ci95"][0].get<double>(), h["cycles"].get<double>());
+    EXPECT_GE(s["cycles_ci95"][1].get<double>(), h["cycles"].get<double>());
+    EXPECT_EQ(rtsim(dir, base + "--sample 0").status, 2);
+    EXPECT_EQ(rtsim(dir, base + "--sample 1.5").status, 2);
+}

@@ -25,7 +25,13 @@ struct TracedRay {
 
 class WorkloadDriver {
 public:
-    WorkloadDriver(Workload& workload, uint32_t sms, uint32_t warp_size, uint32_t shade_latency);
+    // sample_rate < 1: sampled simulation. Clusters of `cluster` consecutive shader warps (groups
+    // of warp_size neighbouring pixel samples) are split into round(clusters x rate) equal strata
+    // in frame order; one cluster per stratum, chosen by `seed`, is simulated, and estimate()
+    // extrapolates to the whole frame.
+    // `capacity`: shader warps the GPU keeps in flight at once (for the estimator).
+    WorkloadDriver(Workload& workload, uint32_t sms, uint32_t warp_size, uint32_t shade_latency,
+                   double sample_rate = 1.0, uint64_t seed = 1, uint32_t cluster = 1, uint32_t capacity = 32);
 
     // The next trace of one of this SM's warps that is ready by `now`, or nothing.
     std::optional<std::vector<WarpRay>> next_trace(uint32_t sm, uint64_t now);
@@ -46,6 +52,28 @@ public:
     // Which SM and shader warp the oldest trace in flight belongs to (for the watchdog).
     std::string oldest_in_flight() const;
 
+    // Sampled simulation: work is measured in node fetches of each simulated warp's rays.
+    struct Estimate {
+        uint64_t warps_total = 0, warps_simulated = 0;
+        double work_simulated = 0, work_estimate = 0;  // node fetches
+        double relative_se = 0;  // standard error of work_estimate / work_estimate
+        // While at least `capacity` shader warps were unfinished the GPU ran full; after that
+        // comes the tail. The frame's extra work runs at the full-GPU throughput, the tail
+        // stays: cycles = simulated cycles + (work_estimate - work_simulated) / throughput.
+        uint64_t saturated_until = 0;
+        double work_saturated = 0;
+        double scale() const { return work_simulated > 0 ? work_estimate / work_simulated : 1.0; }
+        double throughput(double cycles_simulated) const {
+            if (saturated_until > 0 && work_saturated > 0) return work_saturated / double(saturated_until);
+            return cycles_simulated > 0 ? work_simulated / cycles_simulated : 1.0;
+        }
+        double cycles_estimate(double cycles_simulated) const {
+            return cycles_simulated + (work_estimate - work_simulated) / throughput(cycles_simulated);
+        }
+    };
+    Estimate estimate() const;
+    bool sampled() const { return sampled_; }
+
 private:
     struct Thread {
         uint32_t path;
@@ -53,7 +81,10 @@ private:
         std::deque<WorkRay> pending;
     };
     struct ShaderWarp {
-        uint32_t sm;
+        uint32_t sm = 0;
+        double weight = 1.0;  // warps of the frame this one stands for (its stratum's size)
+        double work = 0;      // node fetches of its rays so far
+        uint32_t stratum = 0; // sampled: the stratum it was drawn for
         std::vector<Thread> threads;
         uint32_t in_flight = 0;  // rays of the current trace not yet retired
         uint64_t issued_at = 0;
@@ -73,6 +104,11 @@ private:
     std::vector<std::set<std::pair<uint64_t, uint32_t>>> ready_;  // per SM: (ready cycle, warp)
     std::vector<Record> records_;
     uint64_t live_warps_ = 0, retired_ = 0, last_progress_ = 0, invalid_ = 0;
+    uint64_t warps_total_ = 0;
+    bool sampled_ = false;
+    uint32_t capacity_ = 32;
+    double work_done_ = 0, work_saturated_ = 0;
+    uint64_t saturated_until_ = 0;
 };
 
 }  // namespace rtu
