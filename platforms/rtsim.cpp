@@ -9,6 +9,8 @@
 #include <boost/program_options.hpp>
 #include <nlohmann/json.hpp>
 
+#include <sys/resource.h>
+
 #include <systemc>
 
 #include "functional_run.h"
@@ -221,6 +223,20 @@ int run(const Args& a) {
                 {"triangle_leaves", bs.triangle_leaves}, {"procedural_leaves", bs.procedural_leaves},
                 {"instance_leaves", bs.instance_leaves}, {"blas", bs.blas_count}, {"depth", bs.depth}, {"tlas_depth", bs.tlas_depth}};
     j["time_s"] = {{"load", load_s}, {"build", build_s}, {"run", run_s}};
+    {
+        // What the scene needs in memory against what the process holds at its peak.
+        uint64_t scene_bytes = 0;
+        for (const Mesh& m : scene.meshes)
+            scene_bytes += m.vertices.size() * sizeof(glm::vec3) + m.triangles.size() * sizeof(glm::uvec3) +
+                           m.spheres.size() * sizeof(Sphere) + m.material.size() * sizeof(uint32_t);
+        struct rusage ru {};
+        getrusage(RUSAGE_SELF, &ru);
+        const double mb = 1.0 / (1024.0 * 1024.0);
+        j["memory_mb"] = {{"scene", double(scene_bytes) * mb},
+                          {"bvh_image", double(bs.image_bytes) * mb},
+                          {"peak_resident", double(ru.ru_maxrss) / 1024.0},
+                          {"target_1_5x_plus_200", 1.5 * double(scene_bytes + bs.image_bytes) * mb + 200.0}};
+    }
     if (timing) {
         j["cycles"] = timing_result.cycles;
         j["timing"] = timing_result.stats;

@@ -10,14 +10,21 @@
 namespace rtu {
 namespace {
 
-// Node of the tree Embree's builder hands back through our callbacks.
-struct BuildNode {
+// Nodes of the tree Embree's builder hands back through our callbacks. Leaves are small (one
+// per primitive: 871 k for the full dragon), internal nodes carry six child boxes.
+struct NodeBase {
     bool leaf = false;
-    uint32_t count = 0;
-    BuildNode* child[kMaxChildren] = {};
-    Aabb box[kMaxChildren];
-    uint32_t geom = 0, prim = 0;  // leaf: which primitive (geom = index into the build's item list)
 };
+struct BuildLeaf : NodeBase {
+    uint32_t geom = 0, prim = 0;  // which primitive (geom: the build primitive's geomID)
+};
+struct BuildNode : NodeBase {
+    uint32_t count = 0;
+    NodeBase* child[kMaxChildren] = {};
+    Aabb box[kMaxChildren];
+};
+const BuildLeaf* as_leaf(const NodeBase* n) { return static_cast<const BuildLeaf*>(n); }
+const BuildNode* as_node(const NodeBase* n) { return static_cast<const BuildNode*>(n); }
 
 Aabb to_aabb(const RTCBounds& b) {
     Aabb a;
@@ -35,7 +42,7 @@ struct EmbreeDevice {
 };
 
 // Builds a 6-wide tree over `prims`; returns the root (never a bare leaf) and the root box.
-BuildNode* build_tree(RTCDevice dev, RTCBVH bvh, std::vector<RTCBuildPrimitive>& prims) {
+NodeBase* build_tree(RTCDevice dev, RTCBVH bvh, std::vector<RTCBuildPrimitive>& prims) {
     RTCBuildArguments args = rtcDefaultBuildArguments();
     args.byteSize = sizeof(args);
     args.buildQuality = RTC_BUILD_QUALITY_MEDIUM;
@@ -54,22 +61,22 @@ BuildNode* build_tree(RTCDevice dev, RTCBVH bvh, std::vector<RTCBuildPrimitive>&
         return node;
     };
     args.setNodeChildren = [](void* node, void** children, unsigned n, void*) {
-        for (unsigned i = 0; i < n; ++i) static_cast<BuildNode*>(node)->child[i] = static_cast<BuildNode*>(children[i]);
+        for (unsigned i = 0; i < n; ++i) static_cast<BuildNode*>(node)->child[i] = static_cast<NodeBase*>(children[i]);
     };
     args.setNodeBounds = [](void* node, const RTCBounds** bounds, unsigned n, void*) {
         for (unsigned i = 0; i < n; ++i) static_cast<BuildNode*>(node)->box[i] = to_aabb(*bounds[i]);
     };
     args.createLeaf = [](RTCThreadLocalAllocator alloc, const RTCBuildPrimitive* p, size_t n, void*) -> void* {
         if (n != 1) throw std::logic_error("Embree made a leaf with more than one primitive");
-        void* mem = rtcThreadLocalAlloc(alloc, sizeof(BuildNode), 16);
-        BuildNode* node = new (mem) BuildNode();
+        void* mem = rtcThreadLocalAlloc(alloc, sizeof(BuildLeaf), 16);
+        BuildLeaf* node = new (mem) BuildLeaf();
         node->leaf = true;
         node->geom = p[0].geomID;
         node->prim = p[0].primID;
         return node;
     };
     (void)dev;
-    BuildNode* root = static_cast<BuildNode*>(rtcBuildBVH(&args));
+    NodeBase* root = static_cast<NodeBase*>(rtcBuildBVH(&args));
     if (!root) throw std::runtime_error("Embree rtcBuildBVH failed");
     return root;
 }
@@ -113,9 +120,9 @@ public:
         uint64_t at = base;
         for (uint32_t i = 0; i < n->count; ++i) {
             if (types[i] == NodeType::Internal)
-                depth = std::max(depth, write_internal(n->child[i], n->box[i], at, leaf_type, write_leaf));
+                depth = std::max(depth, write_internal(as_node(n->child[i]), n->box[i], at, leaf_type, write_leaf));
             else
-                write_leaf(n->child[i], at);
+                write_leaf(as_leaf(n->child[i]), at);
             at += node_bytes(types[i]);
         }
         return depth + 1;
@@ -123,8 +130,8 @@ public:
 };
 
 // A bare leaf root (one primitive) is wrapped in an internal node with one child.
-BuildNode* ensure_internal_root(BuildNode* root, const Aabb& box, BuildNode& holder) {
-    if (!root->leaf) return root;
+const BuildNode* ensure_internal_root(NodeBase* root, const Aabb& box, BuildNode& holder) {
+    if (!root->leaf) return as_node(root);
     holder.count = 1;
     holder.child[0] = root;
     holder.box[0] = box;
@@ -172,7 +179,7 @@ BvhImage build_bvh_image(const Scene& scene) {
 
     // Leaf writer for a mesh's own primitives.
     auto mesh_leaf_writer = [&](const Mesh& mesh, uint32_t geom) {
-        return [&w, &mesh, geom](const BuildNode* leaf, uint64_t at) {
+        return [&w, &mesh, geom](const BuildLeaf* leaf, uint64_t at) {
             if (mesh.procedural()) {
                 const Sphere& s = mesh.spheres[leaf->prim];
                 encode_sphere({s.center, s.radius, geom, leaf->prim}, &w.bytes[at]);
@@ -191,9 +198,8 @@ BvhImage build_bvh_image(const Scene& scene) {
         auto prims = mesh_primitives(mesh, geom);
         RTCBVH bvh = rtcNewBVH(device.dev);
         BuildNode holder;
-        BuildNode* root = build_tree(device.dev, bvh, prims);
         const Aabb box = mesh.bounds();
-        root = ensure_internal_root(root, box, holder);
+        const BuildNode* root = ensure_internal_root(build_tree(device.dev, bvh, prims), box, holder);
         header.root = w.alloc(kBlockBytes);
         header.root_box = box;
         auto writer = mesh_leaf_writer(mesh, geom);
@@ -212,18 +218,18 @@ BvhImage build_bvh_image(const Scene& scene) {
         }
         RTCBVH tlas_bvh = rtcNewBVH(device.dev);
         BuildNode holder;
-        BuildNode* troot = build_tree(device.dev, tlas_bvh, inst_prims);
+        NodeBase* tree = build_tree(device.dev, tlas_bvh, inst_prims);
         Aabb world;
         for (const auto& p : inst_prims) {
             world.lo = glm::min(world.lo, glm::vec3(p.lower_x, p.lower_y, p.lower_z));
             world.hi = glm::max(world.hi, glm::vec3(p.upper_x, p.upper_y, p.upper_z));
         }
-        troot = ensure_internal_root(troot, world, holder);
+        const BuildNode* troot = ensure_internal_root(tree, world, holder);
         header.root = w.alloc(kBlockBytes);
         header.root_box = world;
         header.has_instances = true;
         std::vector<std::pair<uint32_t, uint64_t>> inst_leaves;  // instance, leaf address
-        auto inst_writer = [&](const BuildNode* leaf, uint64_t at) {
+        auto inst_writer = [&](const BuildLeaf* leaf, uint64_t at) {
             inst_leaves.push_back({leaf->prim, at});
             ++w.stats.instance_leaves;
         };
@@ -240,7 +246,7 @@ BvhImage build_bvh_image(const Scene& scene) {
             auto prims = mesh_primitives(mesh, geom);
             RTCBVH bvh = rtcNewBVH(device.dev);
             BuildNode bholder;
-            BuildNode* root = ensure_internal_root(build_tree(device.dev, bvh, prims), mesh.bounds(), bholder);
+            const BuildNode* root = ensure_internal_root(build_tree(device.dev, bvh, prims), mesh.bounds(), bholder);
             blas_root[geom] = w.alloc(kBlockBytes);
             auto writer = mesh_leaf_writer(mesh, geom);
             blas_depth[geom] = w.write_internal(root, union_of(root), blas_root[geom],

@@ -133,7 +133,7 @@ Scene load_folder(const std::string& dir, const std::string& skip_prefix, float 
 std::string require_assets(const std::string& name, const std::string& assets) {
     if (assets.empty())
         throw InputError("scene '" + name + "' needs its asset folder: --assets DIR (e.g. ../shared/scenes/" +
-                         (name == "ref" ? std::string("dragon") : name) + ")");
+                         (name.rfind("ref", 0) == 0 ? std::string("dragon") : name) + ")");
     std::error_code ec;
     if (!fs::is_directory(assets, ec)) throw input_error(assets, 0, "asset folder not found");
     return assets;
@@ -244,7 +244,7 @@ Camera read_camera_file(const std::string& path, float vfov) {
     return c;
 }
 
-std::vector<std::string> scene_names() { return {"wknd", "cornell", "ship", "bunny", "ref", "bath", "sprng"}; }
+std::vector<std::string> scene_names() { return {"wknd", "cornell", "ship", "bunny", "ref", "ref-full", "bath", "sprng"}; }
 
 Scene load_scene(const std::string& name, const std::string& assets) {
     Scene s;
@@ -271,9 +271,13 @@ Scene load_scene(const std::string& name, const std::string& assets) {
         s.sky = false;
         s.light = glm::vec3(280, 500, 400);
         s.light_radius = 10;
-    } else if (name == "ref") {
+    } else if (name == "ref" || name == "ref-full") {
+        // ref: the 202 k-triangle dragon; ref-full: the 871 k-triangle one, same placement.
         const std::string dir = require_assets(name, assets);
-        load_mesh_file(s, require_file(dir, {"dragon_vrip_res2.ply.gz", "dragon_vrip.ply.gz", "dragon_vrip_res2.ply", "dragon_vrip.ply"}));
+        if (name == "ref")
+            load_mesh_file(s, require_file(dir, {"dragon_vrip_res2.ply.gz", "dragon_vrip.ply.gz", "dragon_vrip_res2.ply", "dragon_vrip.ply"}));
+        else
+            load_mesh_file(s, require_file(dir, {"dragon_vrip.ply.gz", "dragon_vrip.ply"}));
         add_cornell_box(s, true);
         Mesh glass;
         glass.name = "glass-sphere";
