@@ -39,7 +39,7 @@ struct Args {
     int width = 128, height = 128, spp = 2, bounces = 16;
     uint64_t seed = 1, quantum = 0;
     double sample = 1.0;
-    bool verify = false, quiet = false;
+    bool verify = false, quiet = false, flatten = false;
 };
 
 // Hits in (path, seq) order: for ray files the line order, for generated workloads each pixel
@@ -112,7 +112,8 @@ int run(const Args& a) {
     }
 
     auto t0 = Clock::now();
-    const Scene scene = load_scene(a.scene, a.assets);
+    Scene scene = load_scene(a.scene, a.assets);
+    scene.flatten = a.flatten;
     const double load_s = seconds_since(t0);
     t0 = Clock::now();
     const BvhImage image = build_bvh_image(scene);
@@ -342,6 +343,7 @@ int sc_main(int argc, char** argv) {
         ("stats", po::value(&a.stats), "write statistics JSON")
         ("image", po::value(&a.image), "write the rendered frame as PNG")
         ("verify", po::bool_switch(&a.verify), "compare every ray with Embree (robust mode); exit 1 on mismatches")
+        ("flatten", po::bool_switch(&a.flatten), "scenes whose meshes are all placed as they are: one single-level BVH instead of TLAS + BLAS")
         ("quiet,q", po::bool_switch(&a.quiet), "no progress or summary");
     try {
         po::variables_map vm;

@@ -345,3 +345,34 @@ TEST(RtsimSampling, FullFrameSampleEqualsTheUnsampledRun) {
     EXPECT_EQ(rtsim(dir, base + "--sample 0").status, 2);
     EXPECT_EQ(rtsim(dir, base + "--sample 1.5").status, 2);
 }
+
+// Modelling only what a scene needs: --flatten builds one single-level BVH when every mesh is
+// placed as it is (no instance leaves, same answers); a scene that needs its transforms (the
+// ship) is left exactly as it was, statistic for statistic.
+TEST(RtsimFlatten, SameAnswersAndNoChangeWhereTransformsAreNeeded) {
+    TempDir dir;
+    write_text(dir.file("a.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nf 1 2 3\nf 2 4 3\n");
+    write_text(dir.file("b.obj"), "v 0 0 -2\nv 3 0 -2\nv 0 3 -2\nf 1 2 3\n");
+    write_text(dir.file("c.ply"), "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                                  "element face 1\nproperty list uchar int vertex_indices\nend_header\n-1 -1 -1\n2 -1 -1\n-1 2 -1\n3 0 1 2\n");
+    const std::string folder = dir.path().string();
+    const std::string args = " --workload primary --width 24 --height 24 --verify --hits ";
+    ASSERT_EQ(rtsim(dir, "--scene " + folder + args + dir.file("two.csv") + " --stats " + dir.file("two.json")).status, 0);
+    const Result r = rtsim(dir, "--scene " + folder + " --flatten" + args + dir.file("one.csv") + " --stats " + dir.file("one.json"));
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_EQ(read_text(dir.file("one.csv")), read_text(dir.file("two.csv")));
+    const auto one = nlohmann::json::parse(read_text(dir.file("one.json")));
+    const auto two = nlohmann::json::parse(read_text(dir.file("two.json")));
+    EXPECT_EQ(one["bvh"]["instance_leaves"], 0);
+    EXPECT_EQ(two["bvh"]["instance_leaves"], 3);
+    EXPECT_FALSE(one["bvh"]["two_level"].get<bool>());
+
+    const std::string ship = "--scene ship --assets " + rtu::test::shared_dir() + "/scenes/ship --fidelity at --width 16 --height 16 --stats ";
+    ASSERT_EQ(rtsim(dir, ship + dir.file("s1.json")).status, 0);
+    ASSERT_EQ(rtsim(dir, ship + dir.file("s2.json") + " --flatten").status, 0);
+    auto s1 = nlohmann::json::parse(read_text(dir.file("s1.json")));
+    auto s2 = nlohmann::json::parse(read_text(dir.file("s2.json")));
+    for (auto* j : {&s1, &s2})
+        for (const char* k : {"time_s", "simulation_rate", "memory_mb"}) j->erase(k);
+    EXPECT_EQ(s1, s2);
+}

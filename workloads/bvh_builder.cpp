@@ -102,16 +102,16 @@ public:
     }
 
     // Writes the internal node `n` (whose own box is `box`) at `addr`, then its child block and
-    // the subtrees below it depth-first. `leaf_type` is the node type of this tree's leaves;
+    // the subtrees below it depth-first. `leaf_type` gives the node type of each leaf;
     // `write_leaf` encodes leaf `n` at a given address. Returns the subtree's internal depth.
-    template <typename LeafWriter>
-    uint32_t write_internal(const BuildNode* n, const Aabb& box, uint64_t addr, NodeType leaf_type,
+    template <typename LeafType, typename LeafWriter>
+    uint32_t write_internal(const BuildNode* n, const Aabb& box, uint64_t addr, const LeafType& leaf_type,
                             LeafWriter& write_leaf) {
         ++stats.internal_nodes;
         NodeType types[kMaxChildren];
         uint64_t block = 0;
         for (uint32_t i = 0; i < n->count; ++i) {
-            types[i] = n->child[i]->leaf ? leaf_type : NodeType::Internal;
+            types[i] = n->child[i]->leaf ? leaf_type(as_leaf(n->child[i])) : NodeType::Internal;
             block += node_bytes(types[i]);
         }
         const uint64_t base = alloc(block);
@@ -192,18 +192,31 @@ BvhImage build_bvh_image(const Scene& scene) {
         };
     };
 
+    auto mesh_leaf_type = [&](const BuildLeaf* leaf) {
+        return scene.meshes[leaf->geom].procedural() ? NodeType::Procedural : NodeType::Triangle;
+    };
     if (!scene.two_level()) {
-        const uint32_t geom = scene.instances.front().mesh;
-        const Mesh& mesh = scene.meshes[geom];
-        auto prims = mesh_primitives(mesh, geom);
+        // One tree over the primitives of every (identity-placed) mesh; leaves keep their geom.
+        std::vector<RTCBuildPrimitive> prims;
+        std::vector<uint8_t> used(scene.meshes.size(), 0);
+        Aabb box;
+        for (const Instance& inst : scene.instances) {
+            if (used[inst.mesh]++) continue;
+            const Mesh& mesh = scene.meshes[inst.mesh];
+            if (mesh.primitives() == 0) continue;
+            auto p = mesh_primitives(mesh, inst.mesh);
+            prims.insert(prims.end(), p.begin(), p.end());
+            const Aabb b = mesh.bounds();
+            box.lo = glm::min(box.lo, b.lo);
+            box.hi = glm::max(box.hi, b.hi);
+        }
         RTCBVH bvh = rtcNewBVH(device.dev);
         BuildNode holder;
-        const Aabb box = mesh.bounds();
         const BuildNode* root = ensure_internal_root(build_tree(device.dev, bvh, prims), box, holder);
         header.root = w.alloc(kBlockBytes);
         header.root_box = box;
-        auto writer = mesh_leaf_writer(mesh, geom);
-        w.stats.depth = w.write_internal(root, union_of(root), header.root, mesh.procedural() ? NodeType::Procedural : NodeType::Triangle, writer) + 1;
+        auto writer = [&](const BuildLeaf* leaf, uint64_t at) { mesh_leaf_writer(scene.meshes[leaf->geom], leaf->geom)(leaf, at); };
+        w.stats.depth = w.write_internal(root, union_of(root), header.root, mesh_leaf_type, writer) + 1;
         rtcReleaseBVH(bvh);
     } else {
         // TLAS over the instances of non-empty meshes.
@@ -233,7 +246,8 @@ BvhImage build_bvh_image(const Scene& scene) {
             inst_leaves.push_back({leaf->prim, at});
             ++w.stats.instance_leaves;
         };
-        w.stats.tlas_depth = w.write_internal(troot, union_of(troot), header.root, NodeType::Instance, inst_writer);
+        auto instance_type = [](const BuildLeaf*) { return NodeType::Instance; };
+        w.stats.tlas_depth = w.write_internal(troot, union_of(troot), header.root, instance_type, inst_writer);
         rtcReleaseBVH(tlas_bvh);
 
         // One BLAS per mesh that is instanced, laid out after the TLAS.
@@ -249,8 +263,7 @@ BvhImage build_bvh_image(const Scene& scene) {
             const BuildNode* root = ensure_internal_root(build_tree(device.dev, bvh, prims), mesh.bounds(), bholder);
             blas_root[geom] = w.alloc(kBlockBytes);
             auto writer = mesh_leaf_writer(mesh, geom);
-            blas_depth[geom] = w.write_internal(root, union_of(root), blas_root[geom],
-                                                mesh.procedural() ? NodeType::Procedural : NodeType::Triangle, writer);
+            blas_depth[geom] = w.write_internal(root, union_of(root), blas_root[geom], mesh_leaf_type, writer);
             rtcReleaseBVH(bvh);
             ++w.stats.blas_count;
         }

@@ -11,9 +11,8 @@ struct EmbreeReference::Impl {
     RTCDevice dev = nullptr;
     RTCScene top = nullptr;
     std::vector<RTCScene> blas;            // per mesh (two-level)
-    std::vector<uint32_t> inst_mesh;       // Embree instance geomID -> mesh index
+    std::vector<uint32_t> inst_mesh;       // Embree instance (or, single-level, geometry) ID -> mesh index
     bool two_level = false;
-    uint32_t single_mesh = 0;
 
     RTCGeometry make_geometry(const Mesh& m) {
         RTCGeometry g;
@@ -58,10 +57,16 @@ EmbreeReference::EmbreeReference(const Scene& scene) : impl_(new Impl) {
     m.top = m.new_scene();
     m.two_level = scene.two_level();
     if (!m.two_level) {
-        m.single_mesh = scene.instances.front().mesh;
-        RTCGeometry g = m.make_geometry(scene.meshes[m.single_mesh]);
-        rtcAttachGeometry(m.top, g);
-        rtcReleaseGeometry(g);
+        // Every (identity-placed) mesh straight into one scene; geomID -> mesh index.
+        std::vector<uint8_t> used(scene.meshes.size(), 0);
+        for (const Instance& inst : scene.instances) {
+            if (used[inst.mesh]++ || scene.meshes[inst.mesh].primitives() == 0) continue;
+            RTCGeometry g = m.make_geometry(scene.meshes[inst.mesh]);
+            const unsigned id = rtcAttachGeometry(m.top, g);
+            rtcReleaseGeometry(g);
+            if (m.inst_mesh.size() <= id) m.inst_mesh.resize(id + 1, kNoId);
+            m.inst_mesh[id] = inst.mesh;
+        }
     } else {
         m.blas.assign(scene.meshes.size(), nullptr);
         for (const Instance& inst : scene.instances) {
@@ -132,7 +137,7 @@ Hit EmbreeReference::trace(const Ray& ray) const {
     h.u = rh.hit.u;
     h.v = rh.hit.v;
     h.ng = {rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z};
-    h.geom = impl_->two_level ? impl_->inst_mesh.at(rh.hit.instID[0]) : impl_->single_mesh;
+    h.geom = impl_->inst_mesh.at(impl_->two_level ? rh.hit.instID[0] : rh.hit.geomID);
     return h;
 }
 

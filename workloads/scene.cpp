@@ -43,10 +43,10 @@ Aabb Mesh::bounds() const {
 }
 
 bool Scene::two_level() const {
-    if (instances.size() > 1) return true;
     for (const Instance& i : instances)
         if (!is_identity(i.object_to_world)) return true;
-    return false;
+    if (flatten) return false;
+    return instances.size() > 1;
 }
 
 bool Scene::has_procedural() const {

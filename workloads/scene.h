@@ -61,8 +61,13 @@ struct Scene {
     std::optional<glm::vec3> light;   // point light for shadow rays
     float light_radius = 0.0f;
 
+    // With only identity instances, build one single-level BVH over all meshes (`--flatten`):
+    // no instance leaves, no transforms, fewer levels. Off by default (LumiBench places every
+    // mesh in its own BLAS).
+    bool flatten = false;
+
     // Two-level (TLAS of instance leaves over one BLAS per mesh) when there is more than one
-    // instance or any non-identity transform; otherwise a single-level BVH over the one mesh.
+    // instance or any non-identity transform, unless `flatten` applies; otherwise single-level.
     bool two_level() const;
     bool has_procedural() const;
     uint64_t triangle_count() const;

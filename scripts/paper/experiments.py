@@ -3,16 +3,11 @@
 output path). Usage: experiments.py MANIFEST [--size N] [--spp N] [--scenes a,b,...] [--no-256]"""
 import argparse
 import json
+import os
+import sys
 
-SCENES = {  # name -> rtsim scene arguments ({shared} is substituted by the worker)
-    "wknd": "--scene wknd",
-    "cornell": "--scene cornell",
-    "ship": "--scene ship --assets {shared}/ship",
-    "bunny": "--scene bunny --assets {shared}/bunny",
-    "ref": "--scene ref --assets {shared}/dragon",
-    "bath": "--scene bath --assets {shared}/bath",
-    "sprng": "--scene sprng --assets {shared}/sprng",
-}
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "sweep"))
+from scenes import SCENES  # noqa: E402
 
 
 def experiments(size, spp, with_256):

@@ -6,8 +6,8 @@ import json
 import os
 import sys
 
-sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "paper"))
-from experiments import SCENES  # noqa: E402
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "sweep"))
+from scenes import SCENES  # noqa: E402
 
 FIDELITIES = {  # id -> rtsim arguments
     "at": "--fidelity at",
