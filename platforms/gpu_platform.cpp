@@ -343,15 +343,15 @@ TimingResult GpuPlatform::run() {
     nlohmann::ordered_json j;
     j["cycles"] = r.cycles;
     if (m.driver.sampled()) {
-        // Cycles scale with the frame's work (node fetches) over the simulated warps' work; the
-        // interval is the stratified sampling error of that work (95 %, normal approximation).
+        // Cycles: the simulated cycles plus the frame's further work (warp-buffer residence) at the
+        // full-GPU rate; the interval is the stratified sampling error of that work (95 %).
         const double c = double(r.cycles), h = 1.96 * est.relative_se * est.work_estimate / est.throughput(double(r.cycles_simulated));
         j["sampling"] = {{"rate", m.opt.sample_rate},
                          {"warps_total", est.warps_total},
                          {"warps_simulated", est.warps_simulated},
                          {"cycles_simulated", r.cycles_simulated},
-                         {"work_simulated_node_fetches", est.work_simulated},
-                         {"work_estimate_node_fetches", est.work_estimate},
+                         {"work_simulated_residence_cycles", est.work_simulated},
+                         {"work_estimate_residence_cycles", est.work_estimate},
                          {"cycles_estimate", r.cycles},
                          {"saturated_until_cycle", est.saturated_until},
                          {"work_done_saturated", est.work_saturated},

@@ -132,8 +132,6 @@ void WorkloadDriver::retire(uint32_t sm, const std::vector<RetiredRay>& rays, ui
         rec.r.hit = rr.hit;
         if (rec.r.hit.hit) rec.r.hit.t = std::ldexp(rec.r.hit.t, -rec.scale);
         rec.r.nodes_visited = rr.nodes_visited;
-        warps_[rec.warp].work += rr.nodes_visited;
-        work_done_ += rr.nodes_visited;
         ++retired_;
         last_progress_ = now;
         follow.clear();
@@ -144,6 +142,11 @@ void WorkloadDriver::retire(uint32_t sm, const std::vector<RetiredRay>& rays, ui
             it->pending.push_back(f);
         }
         if (--sw.in_flight == 0) {
+            // The trace left the RT unit: its residence there is the warp's work (cycles of a
+            // warp-buffer slot), which is what the GPU's throughput is made of.
+            const double residence = double(now - sw.issued_at);
+            sw.work += residence;
+            work_done_ += residence;
             const bool more = std::any_of(sw.threads.begin(), sw.threads.end(), [](const Thread& t) { return !t.pending.empty(); });
             if (more) {
                 enqueue(rec.warp, now + shade_);

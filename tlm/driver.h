@@ -52,10 +52,10 @@ public:
     // Which SM and shader warp the oldest trace in flight belongs to (for the watchdog).
     std::string oldest_in_flight() const;
 
-    // Sampled simulation: work is measured in node fetches of each simulated warp's rays.
+    // Sampled simulation: a warp's work is the cycles its traces spent in an RT unit's warp buffer.
     struct Estimate {
         uint64_t warps_total = 0, warps_simulated = 0;
-        double work_simulated = 0, work_estimate = 0;  // node fetches
+        double work_simulated = 0, work_estimate = 0;  // warp-buffer residence cycles
         double relative_se = 0;  // standard error of work_estimate / work_estimate
         // While at least `capacity` shader warps were unfinished the GPU ran full; after that
         // comes the tail. The frame's extra work runs at the full-GPU throughput, the tail
@@ -83,7 +83,7 @@ private:
     struct ShaderWarp {
         uint32_t sm = 0;
         double weight = 1.0;  // warps of the frame this one stands for (its stratum's size)
-        double work = 0;      // node fetches of its rays so far
+        double work = 0;      // cycles its traces spent in an RT unit so far
         uint32_t stratum = 0; // sampled: the stratum it was drawn for
         std::vector<Thread> threads;
         uint32_t in_flight = 0;  // rays of the current trace not yet retired

@@ -81,9 +81,9 @@ def main():
         p(f"| {LABEL[fid]} | {gm:.2f}x | {me:.2f} % | {mx:.2f} % | {mt:.2f} % |")
     p("")
     fig, ax = plt.subplots(figsize=(6.5, 4))
-    for fid, gm, me in pts:
+    for i, (fid, gm, me) in enumerate(pts):
         ax.scatter(gm, me, s=30)
-        ax.annotate(LABEL[fid], (gm, me), fontsize=7, xytext=(4, 3), textcoords="offset points")
+        ax.annotate(LABEL[fid], (gm, me), fontsize=7, xytext=(4, 3 if i % 2 else -9), textcoords="offset points")
     ax.set_xscale("log")
     ax.set_xlabel("speed-up over AT (geomean over scenes)")
     ax.set_ylabel("mean |error| in total cycles (%)")
@@ -119,8 +119,9 @@ def main():
           f"(50 %) and {s10[3]:.1f} % (10 %) of AT's, because baseline and TTP share the same sample. Total cycles "
           f"are off by {s50[1]:.1f} % on average at 50 % and {s10[1]:.1f} % at 10 %, worst on scenes whose regions "
           "differ most (sprng, wknd). Use it to compare configurations in a sweep, then confirm the chosen points in "
-          "full AT. Zatel's <1 % at 10x is not matched yet; the estimator (docs/sampling.md) assumes that cycles "
-          "scale with node fetches, which regions with different memory behaviour break.")
+          "full AT. Zatel's <1 % at 10x is not matched yet: the estimator (docs/sampling.md) extrapolates warp-buffer "
+          "residence at the full-GPU rate and keeps the sample's tail, which breaks on tiny frames (wknd) and on frames "
+          "whose regions differ strongly (sprng).")
     p("")
     (outdir / "README.md").write_text("\n".join(lines) + "\n")
     print(f"report: {outdir / 'README.md'}", file=sys.stderr)
