@@ -104,7 +104,6 @@ public:
     uint32_t active_threads() const;
     size_t response_fifo_depth() const { return fifo_.size(); }
     size_t request_queue_depth() const { return maq_.size(); }
-    size_t prefetch_queue_depth() const { return pfq_.size(); }
     // Stack depth of thread t of slot w (for waveforms); -1 if empty slot.
     int stack_depth(uint32_t w, uint32_t t) const;
     // Whether thread t of slot w has the node at `addr` in its stack (tests).

@@ -35,7 +35,6 @@ public:
 
     const SectorCache& tags() const { return tags_; }
     size_t mshrs_in_use() const { return fidelity_ == Fidelity::AT ? tags_.mshrs_in_use() : lt_mshr_.size(); }
-    uint64_t outstanding_down() const { return waiting_.size(); }
 
 private:
     // AT

@@ -88,7 +88,6 @@ void Dram::schedule() {
         DramRequest r;
         uint64_t done;
         ch.schedule(now, &r, &done);
-        window_busy_ += ch.transfer_cycles(r.bytes);
         auto* t = reinterpret_cast<tlm::tlm_generic_payload*>(r.token);
         resp_peq_.notify(*t, clock_.time_of(done) - sc_time_stamp());
         // A queue slot freed: admit the oldest blocked request of this channel.

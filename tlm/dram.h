@@ -28,7 +28,6 @@ public:
 
     DramStats stats() const;
     size_t queue_depth() const;
-    uint64_t busy_cycles_window() const { return window_busy_; }
 
 private:
     tlm::tlm_sync_enum nb_transport_fw(int id, tlm::tlm_generic_payload& t, tlm::tlm_phase& ph, sc_core::sc_time& d);
@@ -44,7 +43,6 @@ private:
     std::vector<std::deque<tlm::tlm_generic_payload*>> blocked_;  // per channel: END_REQ withheld
     tlm_utils::peq_with_get<tlm::tlm_generic_payload> resp_peq_;
     sc_core::sc_event wake_;
-    uint64_t window_busy_ = 0;
     // LT
     struct LtBank {
         bool open = false;

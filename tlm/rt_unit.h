@@ -30,7 +30,6 @@ public:
 
     RtUnitCore& core() { return core_; }
     const RtUnitCore& core() const { return core_; }
-    uint64_t last_cycle() const { return last_cycle_ == ~0ull ? 0 : last_cycle_; }
     // Called after every cycle the unit works (waveform sampling); may be empty.
     std::function<void(uint64_t cycle)> on_cycle;
 
