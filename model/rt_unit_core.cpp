@@ -208,10 +208,10 @@ void RtUnitCore::cycle(uint64_t now) {
         const auto [id, flags] = fifo_.front();
         fifo_.pop_front();
         ++stats_.responses;
-        auto it = inflight_.find(id);
-        if (it == inflight_.end()) throw std::logic_error("response for an unknown or answered request");
-        const Pending p = std::move(it->second);
-        inflight_.erase(it);
+        Pending& p = inflight_[id & (kInflightSlots - 1)];
+        if (p.id != id) throw std::logic_error("response for an unknown or answered request");
+        p.id = 0;  // free again; `p` stays valid below (nothing is issued while responses drain)
+        --inflight_count_;
         Warp& w = warps_[p.warp];
         for (uint16_t ti : p.threads) {
             Thread& t = w.threads[ti];
@@ -273,8 +273,12 @@ void RtUnitCore::cycle(uint64_t now) {
         Warp& w = warps_[wi];
         if (!w.used || w.ready == 0) continue;
         rr_ = wi + 1;
-        std::vector<std::pair<uint64_t, std::vector<uint16_t>>> nodes;  // address -> threads
-        std::vector<NodeType> types;
+        // Unique node addresses of this warp's ready threads (at most one per thread), on the stack.
+        uint32_t n_nodes = 0;
+        std::array<uint64_t, 64> keys;
+        std::array<NodeType, 64> types;
+        std::array<uint8_t, 64> counts;
+        std::array<std::array<uint16_t, 64>, 64> members;
         for (uint16_t ti = 0; ti < w.threads.size(); ++ti) {
             Thread& t = w.threads[ti];
             if (t.status != ThreadStatus::WaitSchedule) continue;
@@ -296,29 +300,37 @@ void RtUnitCore::cycle(uint64_t now) {
             ++stats_.node_fetches;
             // Coalesce identical addresses (a limit-study hit does not merge with a real fetch).
             const uint64_t key = e.addr | (perfect ? 1ull : 0ull);  // node addresses are 64 B aligned
-            auto it = std::find_if(nodes.begin(), nodes.end(), [&](const auto& n) { return n.first == key; });
-            if (it == nodes.end()) {
-                nodes.push_back({key, {ti}});
-                types.push_back(e.type);
+            uint32_t k = 0;
+            while (k < n_nodes && keys[k] != key) ++k;
+            if (k == n_nodes) {
+                keys[k] = key;
+                types[k] = e.type;
+                counts[k] = 0;
+                ++n_nodes;
             } else {
-                it->second.push_back(ti);
                 ++stats_.coalesced;
             }
+            members[k][counts[k]++] = ti;
         }
         w.ready = 0;
         if (cfg_.prefetch.kind == PrefetcherKind::Treelet) prefetch_popular_treelet(w, wi);
-        for (size_t n = 0; n < nodes.size(); ++n) {
+        for (uint32_t n = 0; n < n_nodes; ++n) {
             const uint32_t chunks = node_bytes(types[n]) / kChunkBytes;
-            const bool perfect = nodes[n].first & 1ull;
-            const uint64_t base = nodes[n].first & ~1ull;
+            const bool perfect = keys[n] & 1ull;
+            const uint64_t base = keys[n] & ~1ull;
             for (uint32_t c = 0; c < chunks; ++c) {
                 ChunkRequest r;
                 r.id = next_id_++;
                 r.addr = base + uint64_t(c) * kChunkBytes;
                 r.warp = wi;
-                r.thread = nodes[n].second.front();
-                r.streak = w.threads[nodes[n].second.front()].fetch_class;
-                inflight_[r.id] = Pending{wi, nodes[n].second};
+                r.thread = members[n][0];
+                r.streak = w.threads[members[n][0]].fetch_class;
+                Pending& slot = inflight_[r.id & (kInflightSlots - 1)];
+                if (slot.id != 0) throw std::logic_error("more chunks in flight than the RT unit's tracking ring holds");
+                slot.id = r.id;
+                slot.warp = wi;
+                slot.threads.assign(members[n].begin(), members[n].begin() + counts[n]);
+                ++inflight_count_;
                 ++stats_.chunk_requests;
                 if (perfect) {
                     perfect_.push_back({now + std::max<uint64_t>(1, cfg_.l1_hit_latency) + c, r.id});
@@ -340,7 +352,7 @@ std::vector<RetiredRay> RtUnitCore::take_retired() {
 }
 
 bool RtUnitCore::idle() const {
-    return maq_.empty() && pfq_.empty() && fifo_.empty() && math_.empty() && inflight_.empty() && perfect_.empty() &&
+    return maq_.empty() && pfq_.empty() && fifo_.empty() && math_.empty() && inflight_count_ == 0 && perfect_.empty() &&
            warps_resident() == 0;
 }
 

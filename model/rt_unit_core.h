@@ -133,8 +133,9 @@ private:
         uint32_t ready = 0; // threads in WaitSchedule
     };
     struct Pending {  // chunk in flight: which threads wait for it
-        uint32_t warp;
-        std::vector<uint16_t> threads;
+        uint64_t id = 0;  // 0: slot free
+        uint32_t warp = 0;
+        std::vector<uint16_t> threads;  // capacity is kept when the slot is reused
     };
     struct MathDone {
         uint64_t at;
@@ -161,7 +162,11 @@ private:
     std::unordered_set<uint64_t> prefetch_ids_;  // prefetch chunks in flight
     std::deque<std::pair<uint64_t, uint64_t>> perfect_;  // (cycle, chunk id) answered without memory
     std::deque<std::pair<uint64_t, std::pair<bool, bool>>> fifo_;  // chunk id, (l1 miss, dram)
-    std::unordered_map<uint64_t, Pending> inflight_;
+    // Chunks in flight, in a ring indexed by id (ids are sequential, so a slot is free again long
+    // before its index comes round; reuse of a busy slot is a logic error, never silent).
+    static constexpr size_t kInflightSlots = 1 << 13;
+    std::vector<Pending> inflight_ = std::vector<Pending>(kInflightSlots);
+    size_t inflight_count_ = 0;
     std::priority_queue<MathDone, std::vector<MathDone>, std::greater<MathDone>> math_;
     std::vector<RetiredRay> retired_;
     uint64_t next_id_ = 1;
