@@ -8,7 +8,6 @@
 #include <filesystem>
 #include <iostream>
 #include <map>
-#include <sstream>
 
 #include <assimp/Importer.hpp>
 #include <assimp/postprocess.h>
@@ -51,12 +50,30 @@ void check_finite(const std::string& file, size_t line, const std::string& tok, 
         throw input_error(file, line, "vertex coordinate '" + tok + "' is not finite (NaN or infinity)");
 }
 
+// Whitespace-separated tokens (a hand loop: string streams dominated the load time of the
+// 981-file sprng folder).
 std::vector<std::string> split(const std::string& s) {
     std::vector<std::string> out;
-    std::istringstream in(s);
-    std::string t;
-    while (in >> t) out.push_back(t);
+    const size_t n = s.size();
+    size_t i = 0;
+    while (i < n) {
+        while (i < n && std::isspace(static_cast<unsigned char>(s[i]))) ++i;
+        size_t j = i;
+        while (j < n && !std::isspace(static_cast<unsigned char>(s[j]))) ++j;
+        if (j > i) out.emplace_back(s, i, j - i);
+        i = j;
+    }
     return out;
+}
+
+// Next line of `data` from `pos` (without its newline); false at the end.
+bool next_line(const std::string& data, size_t& pos, std::string& line) {
+    if (pos >= data.size()) return false;
+    const size_t nl = data.find('\n', pos);
+    const size_t end = nl == std::string::npos ? data.size() : nl;
+    line.assign(data, pos, end - pos);
+    pos = end + 1;
+    return true;
 }
 
 void fan(Mesh& m, const std::vector<uint32_t>& poly, uint32_t material) {
@@ -74,7 +91,8 @@ void load_mtl(Scene& scene, const std::string& path, std::map<std::string, uint3
         std::cerr << "warning: " << path << ": material library not found, using default materials\n";
         return;
     }
-    std::istringstream in(read_file_maybe_gz(path));
+    const std::string data = read_file_maybe_gz(path);
+    size_t pos = 0;
     std::string line;
     Material* cur = nullptr;
     std::vector<Material> mats;
@@ -87,7 +105,7 @@ void load_mtl(Scene& scene, const std::string& path, std::map<std::string, uint3
             if (!parse_float(t[i + 1], &v[i])) throw input_error(path, lineno, "bad number '" + t[i + 1] + "'");
         return v;
     };
-    while (std::getline(in, line)) {
+    while (next_line(data, pos, line)) {
         ++lineno;
         const auto hash = line.find('#');
         if (hash != std::string::npos) line.resize(hash);
@@ -126,14 +144,15 @@ void load_mtl(Scene& scene, const std::string& path, std::map<std::string, uint3
 }
 
 void load_obj(Scene& scene, Mesh& mesh, const std::string& path) {
-    std::istringstream in(read_file_maybe_gz(path));
+    const std::string data = read_file_maybe_gz(path);
+    size_t pos = 0;
     std::map<std::string, uint32_t> materials;
     const uint32_t default_material = add_material(scene, Material{});
     uint32_t current = default_material;
     std::string line;
     size_t lineno = 0;
     std::vector<uint32_t> poly;
-    while (std::getline(in, line)) {
+    while (next_line(data, pos, line)) {
         ++lineno;
         const auto hash = line.find('#');
         if (hash != std::string::npos) line.resize(hash);
