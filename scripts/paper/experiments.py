@@ -1,13 +1,11 @@
 #!/usr/bin/env python3
 """The TTP paper's Results section as a sweep manifest: one line per run (scene, rtsim arguments,
 output path). Usage: experiments.py MANIFEST [--size N] [--spp N] [--scenes a,b,...] [--no-256]"""
-import argparse
-import json
 import os
 import sys
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "sweep"))
-from scenes import SCENES  # noqa: E402
+from scenes import arguments, write_manifest  # noqa: E402
 
 
 def experiments(size, spp, with_256):
@@ -54,24 +52,8 @@ def experiments(size, spp, with_256):
 
 
 def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("manifest")
-    ap.add_argument("--size", type=int, default=128)
-    ap.add_argument("--spp", type=int, default=2)
-    ap.add_argument("--scenes", default=",".join(SCENES))
-    ap.add_argument("--no-256", action="store_true", help="skip the 256x256 runs (4x longer)")
-    a = ap.parse_args()
-    scenes = [s for s in a.scenes.split(",") if s]
-    for s in scenes:
-        if s not in SCENES:
-            raise SystemExit(f"experiments: unknown scene '{s}' (known: {', '.join(SCENES)})")
-    with open(a.manifest + ".meta.json", "w") as f:  # read by report.py
-        json.dump({"size": a.size, "spp": a.spp, "scenes": scenes, "with_256": not a.no_256}, f)
-    with open(a.manifest, "w") as f:
-        f.write("id\targs\toutput\n")
-        for eid, args in experiments(a.size, a.spp, not a.no_256):
-            for s in scenes:
-                f.write(f"{eid}/{s}\t{SCENES[s]} {args.strip()}\t{eid}/{s}.json\n")
+    a = arguments(__doc__, lambda ap: ap.add_argument("--no-256", action="store_true", help="skip the 256x256 runs (4x longer)"))
+    write_manifest(a, experiments(a.size, a.spp, not a.no_256), with_256=not a.no_256)
 
 
 if __name__ == "__main__":

@@ -1,13 +1,11 @@
 #!/usr/bin/env python3
 """Speed against error: every fidelity on every scene, baseline and TTP, as a sweep manifest.
 Usage: experiments.py MANIFEST [--size N] [--spp N] [--scenes a,b,...]"""
-import argparse
-import json
 import os
 import sys
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "sweep"))
-from scenes import SCENES  # noqa: E402
+from scenes import arguments, write_manifest  # noqa: E402
 
 FIDELITIES = {  # id -> rtsim arguments
     "at": "--fidelity at",
@@ -24,22 +22,12 @@ FIDELITIES = {  # id -> rtsim arguments
 
 
 def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("manifest")
-    ap.add_argument("--size", type=int, default=128)
-    ap.add_argument("--spp", type=int, default=2)
-    ap.add_argument("--scenes", default=",".join(SCENES))
-    a = ap.parse_args()
-    scenes = [s for s in a.scenes.split(",") if s]
-    with open(a.manifest + ".meta.json", "w") as f:
-        json.dump({"size": a.size, "spp": a.spp, "scenes": scenes}, f)
-    with open(a.manifest, "w") as f:
-        f.write("id\targs\toutput\n")
-        for fid, fargs in FIDELITIES.items():
-            for pf, pargs in (("base", ""), ("ttp", "--prefetcher ttp")):
-                for s in scenes:
-                    args = f"{SCENES[s]} {fargs} --workload pt --width {a.size} --height {a.size} --spp {a.spp} {pargs}".strip()
-                    f.write(f"{fid}_{pf}/{s}\t{args}\t{fid}_{pf}/{s}.json\n")
+    a = arguments(__doc__)
+    runs = []
+    for fid, fargs in FIDELITIES.items():
+        for pf, pargs in (("base", ""), ("ttp", "--prefetcher ttp")):
+            runs.append((f"{fid}_{pf}", f"{fargs} --workload pt --width {a.size} --height {a.size} --spp {a.spp} {pargs}"))
+    write_manifest(a, runs)
 
 
 if __name__ == "__main__":
