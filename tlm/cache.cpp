@@ -88,11 +88,7 @@ void Cache::send_responses() {
     tlm::tlm_generic_payload* t = resp_queue_.front();
     resp_queue_.pop_front();
     t->set_response_status(tlm::TLM_OK_RESPONSE);
-    tlm::tlm_phase ph = tlm::BEGIN_RESP;
-    sc_time d = SC_ZERO_TIME;
-    const tlm::tlm_sync_enum s = in->nb_transport_bw(*t, ph, d);
-    if (s != tlm::TLM_COMPLETED) SC_REPORT_FATAL(name(), "requester must complete the response phase at once");
-    t->release();
+    send_response(in.operator->(), *t, name());
     if (!resp_queue_.empty()) resp_event_.notify(clock_.period());
 }
 
@@ -145,9 +141,7 @@ tlm::tlm_sync_enum Cache::nb_transport_bw(tlm::tlm_generic_payload& t, tlm::tlm_
     if (blocked_ && lookup(*blocked_)) {
         tlm::tlm_generic_payload* b = blocked_;
         blocked_ = nullptr;
-        tlm::tlm_phase end = tlm::END_REQ;
-        sc_time zero = SC_ZERO_TIME;
-        in->nb_transport_bw(*b, end, zero);
+        send_end_request(in.operator->(), *b);
     }
     return tlm::TLM_COMPLETED;
 }

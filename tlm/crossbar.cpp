@@ -70,13 +70,7 @@ tlm::tlm_sync_enum Crossbar::nb_transport_bw(int id, tlm::tlm_generic_payload& t
 }
 
 void Crossbar::forward_responses() {
-    while (tlm::tlm_generic_payload* t = resp_peq_.get_next_transaction()) {
-        tlm::tlm_phase ph = tlm::BEGIN_RESP;
-        sc_time d = SC_ZERO_TIME;
-        if (in[ext(*t).source]->nb_transport_bw(*t, ph, d) != tlm::TLM_COMPLETED)
-            SC_REPORT_FATAL(name(), "requester must complete the response phase at once");
-        t->release();
-    }
+    while (tlm::tlm_generic_payload* t = resp_peq_.get_next_transaction()) send_response(in[ext(*t).source], *t, name());
 }
 
 void Crossbar::b_transport(int id, tlm::tlm_generic_payload& t, sc_time& d) {

@@ -94,9 +94,7 @@ void Dram::schedule() {
         if (!blocked_[c].empty() && admit(*blocked_[c].front(), now)) {
             tlm::tlm_generic_payload* b = blocked_[c].front();
             blocked_[c].pop_front();
-            tlm::tlm_phase end = tlm::END_REQ;
-            sc_time zero = SC_ZERO_TIME;
-            in[ext(*b).source]->nb_transport_bw(*b, end, zero);
+            send_end_request(in[ext(*b).source], *b);
         }
         if (!ch.empty()) next = std::min(next, std::max(now + 1, ch.next_decision()));
     }
@@ -107,11 +105,7 @@ void Dram::respond() {
     while (tlm::tlm_generic_payload* t = resp_peq_.get_next_transaction()) {
         t->set_response_status(tlm::TLM_OK_RESPONSE);
         ext(*t).dram = true;
-        tlm::tlm_phase ph = tlm::BEGIN_RESP;
-        sc_time d = SC_ZERO_TIME;
-        if (in[ext(*t).source]->nb_transport_bw(*t, ph, d) != tlm::TLM_COMPLETED)
-            SC_REPORT_FATAL(name(), "requester must complete the response phase at once");
-        t->release();
+        send_response(in[ext(*t).source], *t, name());
     }
 }
 

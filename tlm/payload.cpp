@@ -30,6 +30,20 @@ tlm::tlm_generic_payload* PayloadPool::acquire(uint64_t addr, uint32_t bytes, un
     return t;
 }
 
+void send_end_request(tlm::tlm_bw_transport_if<>* bw, tlm::tlm_generic_payload& t) {
+    tlm::tlm_phase ph = tlm::END_REQ;
+    sc_core::sc_time d = sc_core::SC_ZERO_TIME;
+    bw->nb_transport_bw(t, ph, d);
+}
+
+void send_response(tlm::tlm_bw_transport_if<>* bw, tlm::tlm_generic_payload& t, const char* who) {
+    tlm::tlm_phase ph = tlm::BEGIN_RESP;
+    sc_core::sc_time d = sc_core::SC_ZERO_TIME;
+    if (bw->nb_transport_bw(t, ph, d) != tlm::TLM_COMPLETED)
+        SC_REPORT_FATAL(who, "requester must complete the response phase at once");
+    t.release();
+}
+
 void PayloadPool::free(tlm::tlm_generic_payload* t) {
     --outstanding_;
     free_.push_back(t);

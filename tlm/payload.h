@@ -43,6 +43,13 @@ private:
     uint64_t outstanding_ = 0;
 };
 
+// The target side of the base protocol as every module here uses it, on a backward interface:
+// END_REQ for a request whose acceptance was withheld (backpressure), and BEGIN_RESP, whose
+// phase every requester here ends at once (TLM_COMPLETED); the sender then lets go of the
+// payload. `who` names the sender in the fatal report if a requester does not complete.
+void send_end_request(tlm::tlm_bw_transport_if<>* bw, tlm::tlm_generic_payload& t);
+void send_response(tlm::tlm_bw_transport_if<>* bw, tlm::tlm_generic_payload& t, const char* who);
+
 inline RtExtension& ext(tlm::tlm_generic_payload& t) {
     RtExtension* e = nullptr;
     t.get_extension(e);

@@ -80,6 +80,9 @@ Aabb Scene::world_bounds() const {
 }
 
 const Instance& Scene::instance_of(uint32_t mesh) const {
+    // Called per hit (shading, verification): the usual layout, instance i placing mesh i,
+    // answers at once; other layouts are searched.
+    if (mesh < instances.size() && instances[mesh].mesh == mesh) return instances[mesh];
     for (const Instance& i : instances)
         if (i.mesh == mesh) return i;
     throw std::logic_error("mesh without instance");

@@ -73,7 +73,8 @@ struct Scene {
     uint64_t triangle_count() const;
     uint64_t primitive_count() const;
     Aabb world_bounds() const;
-    // Index of the first instance of a mesh (used to map hits back to world space).
+    // An instance placing the mesh (used to map hits back to world space): instance i when it
+    // places mesh i, else the first that does. Meshes placed twice are not distinguished.
     const Instance& instance_of(uint32_t mesh) const;
     // Checks invariants (non-empty, finite vertices, valid indices); throws InputError.
     void validate() const;
