@@ -115,8 +115,9 @@ Surface surface_at(const Scene& scene, const Ray& ray, const Hit& h) {
     float err = 0.0f;
     if (mesh.procedural()) {
         const Sphere& s = mesh.spheres.at(h.prim);
-        const Affine w2o = invert_affine(inst.object_to_world);
-        const glm::vec3 po = transform_point(w2o, ray.org + h.t * ray.dir);
+        const glm::vec3 pw = ray.org + h.t * ray.dir;
+        const bool placed = !is_identity(inst.object_to_world);  // the inverse is needed only then
+        const glm::vec3 po = placed ? transform_point(invert_affine(inst.object_to_world), pw) : pw;
         const glm::vec3 d = po - s.center;
         const float len = glm::length(d);
         p = transform_point(inst.object_to_world, len > 0.0f ? s.center + d * (s.radius / len) : po);

@@ -288,24 +288,13 @@ def main():
                       "1.85x, 2.05x and 2.20x; L1/L2 MPKI down 44.10 % / 92.04 % at N=4.",
                       "Agrees in shape: larger N helps, with diminishing returns, and BFS gains far more from TTP than DFS does "
                       "(its queue head is known early). The magnitudes are smaller for the reason given in the first section.", plot="bfs")
-    R.p("## BFS against DFS, with and without TTP (paper Figure 'bfsvsdfs'), normalised to DFS without TTP")
-    R.p()
-    rows, cols = [], {"DFS+TTP": "ttp", "BFS": "bfs_base", "BFS+TTP N=4": "bfs_ttp_n4"}
-    ser = {k: {} for k in cols}
-    for s in R.scenes_with("base", *cols.values()):
-        row = [s]
-        for k, e in cols.items():
-            ser[k][s] = R.speedup(e, "base", s)
-            row.append(f"{ser[k][s]:.3f}x")
-        rows.append(row)
-    rows.append(["**geomean**"] + [f"**{R.geomean(ser[k].values()):.3f}x**" for k in cols])
-    R.table(["scene"] + list(cols), rows)
-    R.p("Paper: without prefetching BFS is always slower than DFS; with TTP, BFS beats DFS on average (1.61x).")
-    R.p()
-    R.p("Agrees in the main: BFS alone is slower than DFS on every scene, and BFS with TTP (N=4) overtakes DFS with TTP "
-        "on average, winning on bunny, bath and sprng and losing on ship and ref (and the two tiny scenes). Unlike the "
-        "paper, the losses do not follow the nodes-per-ray difference of Table 1 (bath has the largest and still wins).")
-    R.p()
+    R.speedup_section("BFS against DFS, with and without TTP (paper Figure 'bfsvsdfs'), normalised to DFS without TTP",
+                      {"DFS+TTP": "ttp", "BFS": "bfs_base", "BFS+TTP N=4": "bfs_ttp_n4"}, "base",
+                      "without prefetching BFS is always slower than DFS; with TTP, BFS beats DFS on average (1.61x).",
+                      "Agrees in the main: BFS alone is slower than DFS on every scene, and BFS with TTP (N=4) overtakes DFS "
+                      "with TTP on average, winning on bunny, bath and sprng and losing on ship and ref (and the two tiny "
+                      "scenes). Unlike the paper, the losses do not follow the nodes-per-ray difference of Table 1 (bath has "
+                      "the largest and still wins).")
 
     # 13-14. Treelet, Park.
     R.p("## Treelet prefetcher against TTP (paper Figures 'treeletvs_pt', 'treeletres', 'treelet_dram_reads')")
