@@ -26,7 +26,7 @@ void TraversalThread::start(const Ray& ray, const ImageHeader& header, Traversal
     stack_.clear();
     deferred_.clear();
     has_next_ = false;
-    nodes_visited_ = max_stack_ = 0;
+    nodes_visited_ = 0;
     space_inst_ = kNoId;
     org_ = ray.org;
     dir_ = ray.dir;
@@ -168,7 +168,6 @@ StepInfo TraversalThread::step(const BvhImage& image) {
             break;
     }
     if (info.hit && ray_.query == Query::Any) finish();
-    max_stack_ = std::max<uint32_t>(max_stack_, uint32_t(stack_.size() + deferred_.size()));
     return info;
 }
 

@@ -53,14 +53,12 @@ public:
     // (~0 when it has none waiting).
     uint32_t current_treelet() const { return current_treelet_; }
     uint32_t next_treelet() const;
-    const std::deque<StackEntry>& deferred() const { return deferred_; }
     // Takes the next node, reads its bytes from the image and runs its tests.
     StepInfo step(const BvhImage& image);
 
     const Hit& hit() const { return hit_; }
     const Ray& ray() const { return ray_; }
     uint32_t nodes_visited() const { return nodes_visited_; }
-    uint32_t max_stack() const { return max_stack_; }
     const std::deque<StackEntry>& stack() const { return stack_; }
 
 private:
@@ -80,7 +78,7 @@ private:
     uint32_t current_treelet_ = ~0u;
     StackEntry next_;
     bool has_next_ = false;
-    uint32_t nodes_visited_ = 0, max_stack_ = 0;
+    uint32_t nodes_visited_ = 0;
 
     // Ray in the space of the node being processed (world, or an instance's object space).
     uint32_t space_inst_ = kNoId;
