@@ -16,6 +16,8 @@
 
 #include <unordered_set>
 
+#include <absl/container/flat_hash_set.h>
+
 #include "bvh_image.h"
 #include "config.h"
 #include "prefetcher.h"
@@ -159,7 +161,7 @@ private:
     std::deque<ChunkRequest> maq_, pfq_;        // demand / prefetch chunks waiting to leave
     bool selected_ = false, selected_prefetch_ = false;
     uint64_t last_prefetch_sent_ = 0;
-    std::unordered_set<uint64_t> prefetch_ids_;  // prefetch chunks in flight
+    absl::flat_hash_set<uint64_t> prefetch_ids_;  // prefetch chunks in flight
     std::deque<std::pair<uint64_t, uint64_t>> perfect_;  // (cycle, chunk id) answered without memory
     std::deque<std::pair<uint64_t, std::pair<bool, bool>>> fifo_;  // chunk id, (l1 miss, dram)
     // Chunks in flight, in a ring indexed by id (ids are sequential, so a slot is free again long

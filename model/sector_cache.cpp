@@ -112,10 +112,10 @@ CacheOutcome SectorCache::read(uint64_t addr, uint64_t token, ReqKind kind) {
     return out;
 }
 
-std::vector<uint64_t> SectorCache::fill(uint64_t sector_addr) {
+SectorCache::Tokens SectorCache::fill(uint64_t sector_addr) {
     auto it = mshr_.find(sector_addr);
     if (it == mshr_.end()) throw std::logic_error("fill of a sector without MSHR");
-    std::vector<uint64_t> tokens = std::move(it->second.tokens);
+    Tokens tokens = std::move(it->second.tokens);
     const bool unused_prefetch = it->second.prefetch && !it->second.demanded;
     const bool by_prefetch = it->second.prefetch;
     mshr_.erase(it);

@@ -5,7 +5,8 @@
 #pragma once
 #include <array>
 #include <cstdint>
-#include <unordered_map>
+#include <absl/container/flat_hash_map.h>
+#include <absl/container/inlined_vector.h>
 #include <vector>
 
 #include "config.h"
@@ -35,6 +36,8 @@ struct CacheStats {
 
 class SectorCache {
 public:
+    using Tokens = absl::InlinedVector<uint64_t, 8>;  // requests waiting on one sector (merge limit 8 by default)
+
     explicit SectorCache(const CacheConfig& c);
 
     uint64_t sector_of(uint64_t addr) const { return addr & ~uint64_t(sector_ - 1); }
@@ -44,7 +47,7 @@ public:
     CacheOutcome read(uint64_t addr, uint64_t token, ReqKind kind);
     // The sector arrived: valid from now on; returns the tokens that waited on it (allocating
     // request first, then merged ones in arrival order) and frees the MSHR.
-    std::vector<uint64_t> fill(uint64_t sector_addr);
+    Tokens fill(uint64_t sector_addr);
 
     size_t mshrs_in_use() const { return mshr_.size(); }
     // LT bookkeeping: a read found valid in the tags whose data was still in flight at its
@@ -70,7 +73,7 @@ private:
         uint64_t lru = 0;
     };
     struct Mshr {
-        std::vector<uint64_t> tokens;
+        Tokens tokens;
         bool prefetch = false;   // allocated by a prefetch
         bool demanded = false;   // a demand read merged into it
     };
@@ -78,8 +81,8 @@ private:
 
     uint32_t line_, sector_, assoc_, sets_, mshrs_, merge_;
     std::vector<Way> ways_;  // set-major: set s owns ways [s*assoc, (s+1)*assoc)
-    std::unordered_map<uint64_t, uint32_t> where_;  // line address -> way index
-    std::unordered_map<uint64_t, Mshr> mshr_;        // sector address -> waiting tokens
+    absl::flat_hash_map<uint64_t, uint32_t> where_;  // line address -> way index
+    absl::flat_hash_map<uint64_t, Mshr> mshr_;       // sector address -> waiting tokens
     uint64_t clock_ = 0;
     std::array<CacheStats, kReqKinds> stats_{};
 };

@@ -12,6 +12,7 @@ packages=(
   libassimp-dev zlib1g-dev  # glTF/OFF meshes through Assimp; gzip for .ply.gz
   nlohmann-json3-dev        # statistics and configuration files
   libstb-dev                # PNG output
+  libabsl-dev               # Abseil flat hash maps (cache tags, MSHRs)
 )
 # --reports: also what the experiment sweeps and reports need (GNU parallel, matplotlib).
 if [ "${1:-}" = "--reports" ]; then packages+=(parallel python3-matplotlib gawk); fi

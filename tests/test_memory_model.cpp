@@ -23,13 +23,13 @@ TEST(SectorCache, HandWorkedSequence) {
     EXPECT_EQ(c.read(0x020, 4, ReqKind::Prefetch), CacheOutcome::SectorMiss);  // line 0, sector 1
     EXPECT_EQ(c.read(0x100, 5, ReqKind::Demand), CacheOutcome::ReservationFail);  // both MSHRs busy
     EXPECT_EQ(c.mshrs_in_use(), 2u);
-    EXPECT_EQ(c.fill(0x000), (std::vector<uint64_t>{1, 2}));
+    EXPECT_EQ(c.fill(0x000), (SectorCache::Tokens{1, 2}));
     EXPECT_EQ(c.read(0x01F, 6, ReqKind::Demand), CacheOutcome::Hit);
     EXPECT_EQ(c.read(0x100, 7, ReqKind::Demand), CacheOutcome::LineMiss);     // set 0, second way
     // Set 0 now holds line 0 (sector 1 pending) and line 0x100 (pending): no victim.
     EXPECT_EQ(c.read(0x200, 8, ReqKind::Demand), CacheOutcome::ReservationFail);
-    EXPECT_EQ(c.fill(0x020), (std::vector<uint64_t>{4}));
-    EXPECT_EQ(c.fill(0x100), (std::vector<uint64_t>{7}));
+    EXPECT_EQ(c.fill(0x020), (SectorCache::Tokens{4}));
+    EXPECT_EQ(c.fill(0x100), (SectorCache::Tokens{7}));
     // Touch line 0 so that 0x100 is least recently used, then 0x200 evicts 0x100.
     EXPECT_EQ(c.read(0x030, 9, ReqKind::Demand), CacheOutcome::Hit);
     EXPECT_EQ(c.read(0x200, 10, ReqKind::Demand), CacheOutcome::LineMiss);

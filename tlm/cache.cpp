@@ -7,12 +7,12 @@ using namespace sc_core;
 Cache::Cache(sc_module_name name, int level, const CacheConfig& cfg, uint32_t hit_latency, PayloadPool& pool,
              const ClockDomain& clock, Fidelity fidelity)
     : sc_module(name), in("in"), out("out"), level_(level), cfg_(cfg), hit_latency_(hit_latency), tags_(cfg), pool_(pool),
-      clock_(clock), fidelity_(fidelity), resp_peq_("resp_peq") {
+      clock_(clock), fidelity_(fidelity), resp_due_("resp_due"), hit_peq_(resp_due_, resp_seq_), fill_peq_(resp_due_, resp_seq_) {
     if (fidelity == Fidelity::AT) {
         in.register_nb_transport_fw(this, &Cache::nb_transport_fw);
         out.register_nb_transport_bw(this, &Cache::nb_transport_bw);
         SC_METHOD(send_responses);
-        sensitive << resp_peq_.get_event() << resp_event_;
+        sensitive << resp_due_ << resp_event_;
         dont_initialize();
         SC_METHOD(send_misses);
         sensitive << miss_event_;
@@ -32,7 +32,7 @@ bool Cache::lookup(tlm::tlm_generic_payload& t) {
         case CacheOutcome::ReservationFail:
             return false;
         case CacheOutcome::Hit:
-            respond_later(t, hit_latency_);
+            respond_later(t, true);
             return true;
         case CacheOutcome::MshrHit:
             waiting_[token] = &t;
@@ -57,8 +57,9 @@ bool Cache::lookup(tlm::tlm_generic_payload& t) {
     return false;
 }
 
-void Cache::respond_later(tlm::tlm_generic_payload& t, uint64_t cycles) {
-    resp_peq_.notify(t, clock_.period() * double(cycles));
+void Cache::respond_later(tlm::tlm_generic_payload& t, bool hit) {
+    if (hit) hit_peq_.notify(t, clock_.period() * double(hit_latency_));
+    else fill_peq_.notify(t, SC_ZERO_TIME);
 }
 
 tlm::tlm_sync_enum Cache::nb_transport_fw(tlm::tlm_generic_payload& t, tlm::tlm_phase& ph, sc_time& d) {
@@ -77,7 +78,7 @@ tlm::tlm_sync_enum Cache::nb_transport_fw(tlm::tlm_generic_payload& t, tlm::tlm_
 }
 
 void Cache::send_responses() {
-    while (tlm::tlm_generic_payload* t = resp_peq_.get_next_transaction()) resp_queue_.push_back(t);
+    while (tlm::tlm_generic_payload* t = FifoPeq<tlm::tlm_generic_payload>::merge_next(hit_peq_, fill_peq_)) resp_queue_.push_back(t);
     if (resp_queue_.empty()) return;
     const uint64_t c = clock_.cycle_at_or_after(sc_time_stamp());
     if (c == last_resp_cycle_ || clock_.time_of(c) != sc_time_stamp()) {
@@ -134,7 +135,7 @@ tlm::tlm_sync_enum Cache::nb_transport_bw(tlm::tlm_generic_payload& t, tlm::tlm_
         RtExtension& e = ext(*up);
         if (level_ == 1) e.l1_miss = true;
         e.dram = e.dram || from_dram;
-        respond_later(*up, 0);
+        respond_later(*up, false);
     }
     t.release();
     // An MSHR freed: retry the request held by a reservation fail.
@@ -168,10 +169,10 @@ void Cache::b_transport(tlm::tlm_generic_payload& t, sc_time& d) {
     } else {
         // Miss: wait for a free MSHR at this timestamp, fetch, and fill at once (the sector is
         // marked with the cycle its data arrives).
-        while (!lt_mshr_.empty() && *lt_mshr_.begin() <= c) lt_mshr_.erase(lt_mshr_.begin());
+        while (!lt_mshr_.empty() && lt_mshr_.top() <= c) lt_mshr_.pop();
         if (lt_mshr_.size() >= cfg_.mshrs) {
             tags_.count_reservation_fail(e.kind);
-            c = *lt_mshr_.begin();
+            c = lt_mshr_.top();
         }
         tlm::tlm_generic_payload* down = pool_.acquire(sector, cfg_.sector, t.get_data_ptr() - (t.get_address() - sector));
         ext(*down) = e;
@@ -185,7 +186,7 @@ void Cache::b_transport(tlm::tlm_generic_payload& t, sc_time& d) {
         down->release();
         tags_.fill(sector);
         fill_at_[sector] = done;
-        lt_mshr_.insert(done);
+        lt_mshr_.push(done);
         if (fill_at_.size() > 8 * tags_.lines()) fill_at_.clear();  // stale entries: all in the past
     }
     t.set_response_status(tlm::TLM_OK_RESPONSE);

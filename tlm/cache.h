@@ -5,16 +5,17 @@
 // MSHRs by request timestamp.
 #pragma once
 #include <deque>
-#include <set>
-#include <unordered_map>
+#include <functional>
+#include <queue>
+#include <absl/container/flat_hash_map.h>
 
 #include <systemc>
 #include <tlm>
-#include <tlm_utils/peq_with_get.h>
 #include <tlm_utils/simple_initiator_socket.h>
 #include <tlm_utils/simple_target_socket.h>
 
 #include "clock.h"
+#include "fifo_peq.h"
 #include "model/calendar.h"
 #include "model/sector_cache.h"
 #include "payload.h"
@@ -41,7 +42,7 @@ private:
     tlm::tlm_sync_enum nb_transport_fw(tlm::tlm_generic_payload& t, tlm::tlm_phase& ph, sc_core::sc_time& d);
     tlm::tlm_sync_enum nb_transport_bw(tlm::tlm_generic_payload& t, tlm::tlm_phase& ph, sc_core::sc_time& d);
     bool lookup(tlm::tlm_generic_payload& t);  // false: reservation fail
-    void respond_later(tlm::tlm_generic_payload& t, uint64_t cycles);
+    void respond_later(tlm::tlm_generic_payload& t, bool hit);
     void send_responses();  // SC_METHOD: one response per cycle
     void send_misses();     // SC_METHOD: one miss per cycle downstream
     // LT
@@ -56,9 +57,13 @@ private:
     Fidelity fidelity_;
 
     uint64_t next_token_ = 1;
-    std::unordered_map<uint64_t, tlm::tlm_generic_payload*> waiting_;  // token -> upstream request
+    absl::flat_hash_map<uint64_t, tlm::tlm_generic_payload*> waiting_;  // token -> upstream request
     tlm::tlm_generic_payload* blocked_ = nullptr;                      // held by a reservation fail
-    tlm_utils::peq_with_get<tlm::tlm_generic_payload> resp_peq_;
+    // Responses on their way to the response port: hits after the hit latency, fills at once.
+    // Each queue is in due order; together they hand out as one payload event queue would.
+    sc_core::sc_event resp_due_;
+    uint64_t resp_seq_ = 0;
+    FifoPeq<tlm::tlm_generic_payload> hit_peq_, fill_peq_;
     std::deque<tlm::tlm_generic_payload*> resp_queue_;
     sc_core::sc_event resp_event_, miss_event_;
     uint64_t last_resp_cycle_ = ~0ull, last_miss_cycle_ = ~0ull;
@@ -67,8 +72,8 @@ private:
 
     // LT state: port bookings, fill times of sectors, MSHR release cycles.
     Calendar port_;
-    std::unordered_map<uint64_t, uint64_t> fill_at_;
-    std::multiset<uint64_t> lt_mshr_;
+    absl::flat_hash_map<uint64_t, uint64_t> fill_at_;
+    std::priority_queue<uint64_t, std::vector<uint64_t>, std::greater<uint64_t>> lt_mshr_;  // release cycles
 };
 
 }  // namespace rtu

@@ -10,9 +10,9 @@
 #include <tlm>
 #include <tlm_utils/multi_passthrough_initiator_socket.h>
 #include <tlm_utils/multi_passthrough_target_socket.h>
-#include <tlm_utils/peq_with_get.h>
 
 #include "clock.h"
+#include "fifo_peq.h"
 #include "payload.h"
 #include "rt_unit.h"
 
@@ -43,7 +43,7 @@ private:
         bool waiting_end_req = false;
     };
     std::vector<Output> outputs_;
-    tlm_utils::peq_with_get<tlm::tlm_generic_payload> req_peq_, resp_peq_;
+    FifoPeq<tlm::tlm_generic_payload> req_peq_, resp_peq_;  // fixed latency: due in queue order
 };
 
 }  // namespace rtu

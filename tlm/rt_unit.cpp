@@ -1,5 +1,7 @@
 #include "rt_unit.h"
 
+#include <queue>
+
 #include <tlm_utils/tlm_quantumkeeper.h>
 
 namespace rtu {
@@ -102,16 +104,20 @@ void RtUnit::lt_loop() {
     tlm_utils::tlm_quantumkeeper qk;
     qk.reset();
     struct Resp {
+        uint64_t at;   // cycle the response reaches the FIFO
+        uint64_t seq;  // order of sending: responses due the same cycle arrive in it
         uint64_t id;
         bool l1_miss, dram;
+        bool operator>(const Resp& o) const { return at != o.at ? at > o.at : seq > o.seq; }
     };
-    std::multimap<uint64_t, Resp> responses;  // cycle the response reaches the FIFO
+    std::priority_queue<Resp, std::vector<Resp>, std::greater<Resp>> responses;
+    uint64_t sent = 0;
     uint64_t c = clock_.cycle_at_or_after(sc_time_stamp());
     for (;;) {
         last_cycle_ = c;
-        for (auto it = responses.begin(); it != responses.end() && it->first <= c;) {
-            core_.on_response(it->second.id, it->second.l1_miss, it->second.dram, c);
-            it = responses.erase(it);
+        while (!responses.empty() && responses.top().at <= c) {
+            core_.on_response(responses.top().id, responses.top().l1_miss, responses.top().dram, c);
+            responses.pop();
         }
         pull_work(c);
         if (core_.has_request(c)) {
@@ -119,7 +125,7 @@ void RtUnit::lt_loop() {
             sc_time d = clock_.time_of(c) - sc_time_stamp();
             socket->b_transport(*t, d);
             const RtExtension& e = ext(*t);
-            responses.insert({std::max(c + 1, clock_.cycle_at_or_after(sc_time_stamp() + d)), Resp{e.id, e.l1_miss, e.dram}});
+            responses.push({std::max(c + 1, clock_.cycle_at_or_after(sc_time_stamp() + d)), sent++, e.id, e.l1_miss, e.dram});
             t->release();
             core_.pop_request(c);
         }
@@ -130,7 +136,7 @@ void RtUnit::lt_loop() {
 
         uint64_t next = core_.next_event(c);
         if (core_.has_request(c + 1)) next = c + 1;
-        if (!responses.empty()) next = std::min(next, std::max(c + 1, responses.begin()->first));
+        if (!responses.empty()) next = std::min(next, std::max(c + 1, responses.top().at));
         if (core_.has_free_slot()) {
             const uint64_t r = driver_.earliest_ready(sm_);
             if (r != ~0ull) next = std::min(next, std::max(c + 1, r));

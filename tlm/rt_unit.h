@@ -4,7 +4,6 @@
 // of simulated time by up to one quantum.
 #pragma once
 #include <functional>
-#include <map>
 
 #include <systemc>
 #include <tlm>
