@@ -76,30 +76,11 @@ CacheOutcome SectorCache::read(uint64_t addr, uint64_t token, ReqKind kind) {
     }
     CacheOutcome out = CacheOutcome::SectorMiss;
     if (!w) {
-        // LRU victim among the set's ways that have no pending sector.
-        const uint64_t set = (line / line_) % sets_;
-        Way* victim = nullptr;
-        for (uint64_t i = set * assoc_; i < (set + 1) * assoc_; ++i) {
-            Way& c = ways_[i];
-            if (c.pending) continue;
-            if (!victim || c.line == ~0ull || (victim->line != ~0ull && c.lru < victim->lru)) victim = &c;
-            if (c.line == ~0ull) break;
-        }
-        if (!victim) {
+        w = allocate(line, &st);
+        if (!w) {
             ++st.reservation_fails;
             return CacheOutcome::ReservationFail;
         }
-        if (victim->line != ~0ull) {
-            where_.erase(victim->line);
-            if (victim->valid) ++st.evictions;
-            stats_[size_t(ReqKind::Prefetch)].unused_evictions += uint64_t(__builtin_popcount(victim->prefetched));
-        }
-        victim->line = line;
-        victim->valid = 0;
-        victim->pending = 0;
-        victim->prefetched = 0;
-        where_[line] = uint32_t(victim - ways_.data());
-        w = victim;
         out = CacheOutcome::LineMiss;
     }
     w->pending |= bit;
@@ -110,6 +91,48 @@ CacheOutcome SectorCache::read(uint64_t addr, uint64_t token, ReqKind kind) {
     if (out == CacheOutcome::LineMiss) ++st.line_misses;
     else ++st.sector_misses;
     return out;
+}
+
+// The LRU victim among the set's ways that have no pending sector, emptied and given to `line`;
+// null if every way has a pending sector. Counts the eviction into `st` when given.
+SectorCache::Way* SectorCache::allocate(uint64_t line, CacheStats* st) {
+    const uint64_t set = (line / line_) % sets_;
+    Way* victim = nullptr;
+    for (uint64_t i = set * assoc_; i < (set + 1) * assoc_; ++i) {
+        Way& c = ways_[i];
+        if (c.pending) continue;
+        if (!victim || c.line == ~0ull || (victim->line != ~0ull && c.lru < victim->lru)) victim = &c;
+        if (c.line == ~0ull) break;
+    }
+    if (!victim) return nullptr;
+    if (victim->line != ~0ull) {
+        where_.erase(victim->line);
+        if (st) {
+            if (victim->valid) ++st->evictions;
+            stats_[size_t(ReqKind::Prefetch)].unused_evictions += uint64_t(__builtin_popcount(victim->prefetched));
+        }
+    }
+    victim->line = line;
+    victim->valid = 0;
+    victim->pending = 0;
+    victim->prefetched = 0;
+    where_[line] = uint32_t(victim - ways_.data());
+    return victim;
+}
+
+bool SectorCache::warm(uint64_t addr) {
+    const uint64_t line = addr / line_ * line_;
+    const uint32_t bit = 1u << ((addr - line) / sector_);
+    Way* w = find(line);
+    if (w && (w->valid & bit)) {
+        w->lru = ++clock_;
+        return true;
+    }
+    if (w && (w->pending & bit)) return false;
+    if (!w && !(w = allocate(line, nullptr))) return false;
+    w->valid |= bit;
+    w->lru = ++clock_;
+    return false;
 }
 
 SectorCache::Tokens SectorCache::fill(uint64_t sector_addr) {

@@ -48,6 +48,10 @@ public:
     // The sector arrived: valid from now on; returns the tokens that waited on it (allocating
     // request first, then merged ones in arrival order) and frees the MSHR.
     Tokens fill(uint64_t sector_addr);
+    // Functional warming (sampled simulation): the sector holding `addr` becomes valid and most
+    // recently used at once, with no statistic counted; returns whether it was already valid.
+    // A sector whose fetch is pending, or a set with every way pending, is left alone.
+    bool warm(uint64_t addr);
 
     size_t mshrs_in_use() const { return mshr_.size(); }
     // LT bookkeeping: a read found valid in the tags whose data was still in flight at its
@@ -78,6 +82,7 @@ private:
         bool demanded = false;   // a demand read merged into it
     };
     Way* find(uint64_t line);
+    Way* allocate(uint64_t line, CacheStats* st);
 
     uint32_t line_, sector_, assoc_, sets_, mshrs_, merge_;
     std::vector<Way> ways_;  // set-major: set s owns ways [s*assoc, (s+1)*assoc)

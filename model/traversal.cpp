@@ -171,14 +171,18 @@ StepInfo TraversalThread::step(const BvhImage& image) {
     return info;
 }
 
-TraceResult trace_ray(const BvhImage& image, const Ray& ray, TraversalOrder order, const Treelets* treelets) {
+TraceResult trace_ray(const BvhImage& image, const Ray& ray, TraversalOrder order, const Treelets* treelets,
+                      std::vector<StackEntry>* fetched) {
     TraceResult r;
     if (!is_valid_ray(ray)) return r;
     Ray scaled = ray;
     const int k = scale_direction(scaled);
     TraversalThread th;
     th.start(scaled, image.header(), order, treelets);
-    while (!th.done()) th.step(image);
+    while (!th.done()) {
+        if (fetched) fetched->push_back(th.peek());
+        th.step(image);
+    }
     r.hit = th.hit();
     if (r.hit.hit) r.hit.t = std::ldexp(r.hit.t, -k);
     r.nodes_visited = th.nodes_visited();

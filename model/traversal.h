@@ -91,6 +91,8 @@ struct TraceResult {
     Hit hit;
     uint32_t nodes_visited = 0;
 };
-TraceResult trace_ray(const BvhImage& image, const Ray& ray, TraversalOrder order, const Treelets* treelets = nullptr);
+// `fetched`, when given, receives every node the traversal reads, in order.
+TraceResult trace_ray(const BvhImage& image, const Ray& ray, TraversalOrder order, const Treelets* treelets = nullptr,
+                      std::vector<StackEntry>* fetched = nullptr);
 
 }  // namespace rtu

@@ -122,6 +122,7 @@ struct GpuPlatform::Impl {
     TimingOptions opt;
     ClockDomain core, mem;
     PayloadPool pool;
+    std::unique_ptr<Treelets> treelets;  // before the driver: its pre-pass traverses with them
     WorkloadDriver driver;
     std::vector<std::unique_ptr<RtUnit>> rt;
     std::vector<std::unique_ptr<Cache>> l1, l2;
@@ -129,7 +130,6 @@ struct GpuPlatform::Impl {
     std::unique_ptr<Dram> dram;
     std::unique_ptr<Monitor> monitor;
     std::vector<std::unique_ptr<ProtocolChecker>> checkers;
-    std::unique_ptr<Treelets> treelets;
     sc_trace_file* tf = nullptr;
     // Traced values (sampled into the VCD when tracing is on).
     struct RtTrace {
@@ -146,7 +146,25 @@ struct GpuPlatform::Impl {
 
     Impl(const HwConfig& c, const BvhImage& img, Workload& w, const TimingOptions& o)
         : cfg(c), image(img), opt(o), core(c.core_mhz), mem(c.memory_mhz),
-          driver(w, c.sms, c.warp_size, c.shade_latency, o.sample_rate, o.sample_seed, c.sms * c.warp_buffer, c.sms * c.warp_buffer) {}
+          treelets(o.order == TraversalOrder::Treelet || c.prefetch.kind == PrefetcherKind::Treelet
+                       ? std::make_unique<Treelets>(form_treelets(img, c.prefetch.treelet_budget))
+                       : nullptr),
+          driver(w, c.sms, c.warp_size, c.shade_latency, sampling(c, img, o, treelets.get())) {}
+
+    static SamplingOptions sampling(const HwConfig& c, const BvhImage& img, const TimingOptions& o, const Treelets* treelets) {
+        SamplingOptions s;
+        s.rate = o.sample_rate;
+        s.seed = o.sample_seed;
+        s.cluster = s.capacity = c.sms * c.warp_buffer;
+        s.prepass = o.sample_prepass;
+        // Enough fetches to refill every cache twice over.
+        s.warm_window = 2 * (uint64_t(c.l2_slices) * c.l2.size_bytes + uint64_t(c.sms) * c.l1.size_bytes) / c.l1.sector;
+        const TraversalOrder order = o.order;
+        s.trace = [&img, order, treelets](const Ray& r, std::vector<StackEntry>* fetched) {
+            return trace_ray(img, r, order, treelets, fetched);
+        };
+        return s;
+    }
 };
 
 GpuPlatform::GpuPlatform(const HwConfig& cfg, const BvhImage& image, Workload& workload, const TimingOptions& opt)
@@ -157,8 +175,6 @@ GpuPlatform::GpuPlatform(const HwConfig& cfg, const BvhImage& image, Workload& w
     sc_report_handler::set_actions(SC_INFO, SC_DO_NOTHING);
     if (opt.fidelity == Fidelity::LT)
         tlm::tlm_global_quantum::instance().set(m.core.period() * double(cfg.quantum));
-    if (opt.order == TraversalOrder::Treelet || cfg.prefetch.kind == PrefetcherKind::Treelet)
-        m.treelets = std::make_unique<Treelets>(form_treelets(image, cfg.prefetch.treelet_budget));
     // Binds initiator to target, through a protocol checker when asked for.
     const bool check = opt.check_protocol && opt.fidelity == Fidelity::AT;
     auto link = [&](auto& initiator, auto& target, const std::string& name) {
@@ -186,6 +202,16 @@ GpuPlatform::GpuPlatform(const HwConfig& cfg, const BvhImage& image, Workload& w
         link(m.xbar->out, m.l2[s]->in, "crossbar_l2_" + id);
         link(m.l2[s]->out, m.dram->in, "l2_" + id + "_dram");
     }
+
+    // Sampled run: when a simulated cluster starts, the caches are warmed with the node fetches
+    // of the clusters skipped before it (L1 of the SM that made them, then L2 on an L1 miss).
+    m.driver.on_warm = [&m, sector = cfg.l1.sector](const std::deque<WarmFetch>& fetches) {
+        for (const WarmFetch& f : fetches)
+            for (uint32_t o = 0; o < f.bytes; o += sector) {
+                const uint64_t a = f.addr + o;
+                if (!m.l1[f.sm]->warm(a)) m.l2[m.xbar->slice_of(a)]->warm(a);
+            }
+    };
 
     std::function<void(uint64_t)> sample;
     if (!opt.vcd.empty()) {
@@ -343,20 +369,26 @@ TimingResult GpuPlatform::run() {
     nlohmann::ordered_json j;
     j["cycles"] = r.cycles;
     if (m.driver.sampled()) {
-        // Cycles: the simulated cycles plus the frame's further work (warp-buffer residence) at the
-        // full-GPU rate; the interval is the stratified sampling error of that work (95 %).
-        const double c = double(r.cycles), h = 1.96 * est.relative_se * est.work_estimate / est.throughput(double(r.cycles_simulated));
+        // Cycles and their 95 % interval: WorkloadDriver::Estimate (docs/sampling.md).
+        const double c = double(r.cycles), h = c * est.relative_half_width(double(r.cycles_simulated));
         j["sampling"] = {{"rate", m.opt.sample_rate},
                          {"warps_total", est.warps_total},
                          {"warps_simulated", est.warps_simulated},
                          {"cycles_simulated", r.cycles_simulated},
                          {"work_simulated_residence_cycles", est.work_simulated},
+                         {"estimator", est.schedule ? "schedule (functional pre-pass)" : "stratified"},
                          {"work_estimate_residence_cycles", est.work_estimate},
+                         {"work_estimate_stratified_residence_cycles", est.work_estimate_stratified},
+                         {"critical_path_node_fetches_frame", est.critical_nodes_total},
+                         {"residence_fit", {{"a", est.fit_a}, {"b_per_node", est.fit_b}, {"traces", est.fit_traces}}},
+                         {"schedule_model_cycles", {{"frame", est.model_frame}, {"sample", est.model_sample}}},
                          {"cycles_estimate", r.cycles},
                          {"saturated_until_cycle", est.saturated_until},
                          {"work_done_saturated", est.work_saturated},
                          {"cycles_ci95", {c - h, c + h}},
-                         {"relative_se", est.relative_se}};
+                         {"relative_se", est.relative_se},
+                         {"variance_pairs", est.variance_pairs},
+                         {"schedule_model_misfit", est.model_misfit(double(r.cycles_simulated))}};
     }
     j["rt_unit"] = {{"warps", rs.warps}, {"rays", rs.rays}, {"node_fetches", rs.node_fetches},
                     {"chunk_requests", rs.chunk_requests}, {"coalesced_fetches", rs.coalesced},

@@ -31,6 +31,9 @@ struct TimingOptions {
     bool check_protocol = false;      // AT: a base-protocol checker on every socket
     double sample_rate = 1.0;         // < 1: sampled simulation of this share of the frame's warps
     uint64_t sample_seed = 1;
+    // Sampled runs: a second, untouched instance of the workload for the functional pre-pass of
+    // the ratio estimator (docs/sampling.md); null: the plain stratified estimate.
+    Workload* sample_prepass = nullptr;
 };
 
 struct TimingResult {

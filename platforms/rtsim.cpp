@@ -4,6 +4,7 @@
 #include <cinttypes>
 #include <cstdio>
 #include <iostream>
+#include <optional>
 #include <sstream>
 
 #include <boost/program_options.hpp>
@@ -39,6 +40,7 @@ struct Args {
     int width = 128, height = 128, spp = 2, bounces = 16;
     uint64_t seed = 1, quantum = 0;
     double sample = 1.0;
+    std::optional<uint64_t> sample_seed;  // which clusters a sampled run simulates (default: --seed)
     bool verify = false, quiet = false, flatten = false;
 };
 
@@ -91,6 +93,7 @@ int run(const Args& a) {
     if (!a.rays.empty() && !a.image.empty()) throw InputError("--image needs a scene workload, not --rays");
     if (!timing && (!a.vcd.empty() || !a.trace_warp.empty() || !a.sets.empty() || a.quantum || !a.prefetcher.empty() || a.sample != 1.0))
         throw InputError("--vcd, --trace-warp, --set, --quantum, --prefetcher and --sample need --fidelity at or lt");
+    if (a.sample_seed && a.sample == 1.0) throw InputError("--sample-seed needs --sample RATE below 1");
     if (!(a.sample > 0.0 && a.sample <= 1.0))
         throw InputError("--sample " + std::to_string(a.sample) + ": the share of the frame to simulate must be in (0, 1]");
 
@@ -181,7 +184,14 @@ int run(const Args& a) {
         to.progress = !a.quiet;
         to.vcd = a.vcd;
         to.sample_rate = a.sample;
-        to.sample_seed = a.seed;
+        to.sample_seed = a.sample_seed.value_or(a.seed);
+        // The sampled run's ratio estimator traces the whole frame functionally first, with a
+        // second instance of the workload (the first one accumulates the simulated image).
+        std::unique_ptr<Workload> prepass;
+        if (a.sample < 1.0) {
+            prepass = kind == WorkloadKind::RayFile ? make_ray_file_workload(ray_entries) : make_scene_workload(kind, scene, params);
+            to.sample_prepass = prepass.get();
+        }
         if (to.vcd.size() > 4 && to.vcd.compare(to.vcd.size() - 4, 4, ".vcd") == 0) to.vcd.resize(to.vcd.size() - 4);
         if (!a.trace_warp.empty()) std::tie(to.trace_sm, to.trace_warp) = parse_trace_warp(a.trace_warp, hw);
         GpuPlatform platform(hw, image, *workload, to);
@@ -316,7 +326,7 @@ int sc_main(int argc, char** argv) {
         "usage: rtsim --scene NAME|PATH [--assets DIR] [--workload primary|pt|ao|sh] [--rays FILE] [--hits FILE]\n"
         "             [--width W --height H --spp N --bounces B --seed S] [--traversal dfs|bfs|treelet]\n"
         "             [--fidelity functional|at|lt] [--config NAME|FILE] [--set KEY=VALUE]... [--quantum CYCLES]\n"
-        "             [--prefetcher none|ttp|park|treelet|perfect-up|perfect-down] [--sample RATE]\n"
+        "             [--prefetcher none|ttp|park|treelet|perfect-up|perfect-down] [--sample RATE [--sample-seed S]]\n"
         "             [--stats FILE.json] [--image FILE.png] [--vcd FILE] [--trace-warp SM:WARP] [--verify] [--quiet]\n"
         "exit status: 0 ok, 1 a check failed (--verify mismatches), 2 bad input, 3 internal error\noptions");
     desc.add_options()
@@ -338,6 +348,8 @@ int sc_main(int argc, char** argv) {
         ("quantum", po::value(&a.quantum), "LT quantum in core cycles (same as --set sim.quantum=N)")
         ("prefetcher", po::value(&a.prefetcher), "none, ttp, park, treelet, perfect-up, perfect-down (same as --set prefetch.kind=...)")
         ("sample", po::value(&a.sample), "simulate this share (0..1] of the frame's warps, stratified, and extrapolate (timing only)")
+        ("sample-seed", po::value<uint64_t>()->notifier([&a](uint64_t v) { a.sample_seed = v; }),
+         "which clusters --sample draws (default: --seed, which also seeds the rays)")
         ("vcd", po::value(&a.vcd), "write waveforms to this VCD file")
         ("trace-warp", po::value(&a.trace_warp), "with --vcd: trace each thread's stack depth of warp-buffer slot WARP of SM")
         ("stats", po::value(&a.stats), "write statistics JSON")

@@ -35,6 +35,8 @@ public:
     SC_HAS_PROCESS(Cache);
 
     const SectorCache& tags() const { return tags_; }
+    // Functional warming before a sampled run (SectorCache::warm); returns whether it hit.
+    bool warm(uint64_t addr) { return tags_.warm(addr); }
     size_t mshrs_in_use() const { return fidelity_ == Fidelity::AT ? tags_.mshrs_in_use() : lt_mshr_.size(); }
 
 private:

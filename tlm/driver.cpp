@@ -4,11 +4,18 @@
 #include <cmath>
 #include <stdexcept>
 
+#include <boost/math/distributions/students_t.hpp>
+
+#include "model/trace_schedule.h"
+
 namespace rtu {
 
 WorkloadDriver::WorkloadDriver(Workload& workload, uint32_t sms, uint32_t warp_size, uint32_t shade_latency,
-                               double sample_rate, uint64_t seed, uint32_t cluster, uint32_t capacity)
-    : workload_(workload), shade_(shade_latency), ready_(sms), capacity_(capacity) {
+                               const SamplingOptions& sampling)
+    : workload_(workload), shade_(shade_latency), ready_(sms), capacity_(sampling.capacity),
+      slots_(std::max<uint32_t>(1, sampling.capacity / std::max<uint32_t>(1, sms))) {
+    const double sample_rate = sampling.rate;
+    const uint64_t seed = sampling.seed, cluster = sampling.cluster;
     std::vector<WorkRay> first;
     workload_.begin(first);
     // Paths in order; each run of warp_size paths (neighbouring pixels) is one shader warp.
@@ -40,11 +47,24 @@ WorkloadDriver::WorkloadDriver(Workload& workload, uint32_t sms, uint32_t warp_s
         const uint64_t cl = std::max<uint64_t>(1, cluster);
         const uint64_t n_all = (n_warps + cl - 1) / cl;
         const uint64_t n = std::max<uint64_t>(1, std::min<uint64_t>(n_all, uint64_t(std::llround(double(n_all) * sample_rate))));
-        std::vector<ShaderWarp> kept;
+        std::vector<uint64_t> picks(n);
         for (uint64_t h = 0; h < n; ++h) {
             const uint64_t lo = h * n_all / n, hi = (h + 1) * n_all / n;
             Rng rng(seed, h, 0x5A3B1E);
-            const uint64_t pick = lo + rng.next() % (hi - lo);
+            picks[h] = lo + rng.next() % (hi - lo);
+        }
+        // The pre-pass also records, for each simulated cluster, the last node fetches of the
+        // clusters skipped before it, to warm the caches with when it starts.
+        if (sampling.prepass && sampling.trace) {
+            std::vector<uint32_t> feeds(n_warps, ~0u);  // warp -> the stratum whose warming it feeds
+            for (uint64_t h = 0; h < n; ++h)
+                for (uint64_t w = (h ? picks[h - 1] + 1 : 0) * cl; w < std::min(n_warps, picks[h] * cl); ++w) feeds[w] = uint32_t(h);
+            prepass(*sampling.prepass, sampling.trace, feeds, n, sampling.warm_window);
+        }
+        std::vector<ShaderWarp> kept;
+        for (uint64_t h = 0; h < n; ++h) {
+            const uint64_t lo = h * n_all / n, hi = (h + 1) * n_all / n;
+            const uint64_t pick = picks[h];
             for (uint64_t w = pick * cl; w < std::min(n_warps, (pick + 1) * cl); ++w) {
                 ShaderWarp sw = std::move(warps_[w]);
                 sw.weight = double(hi - lo);
@@ -61,25 +81,113 @@ WorkloadDriver::WorkloadDriver(Workload& workload, uint32_t sms, uint32_t warp_s
     live_warps_ = warps_.size();
 }
 
+// The functional pre-pass: every path of the frame traced as the timing run will trace it (the
+// same rays, because a workload's random numbers depend only on path and depth), warp by warp
+// and trace by trace; a trace costs its longest ray, since the warp waits for its last thread.
+void WorkloadDriver::prepass(Workload& fresh, const TraceFn& trace, const std::vector<uint32_t>& feeds, size_t strata,
+                             size_t window) {
+    std::vector<WorkRay> first, follow;
+    fresh.begin(first);
+    std::vector<std::deque<WorkRay>> pending(path_warp_.size());
+    for (const WorkRay& w : first) pending[w.path].push_back(w);
+    std::vector<StackEntry> fetched;
+    warm_.assign(strata, {});
+    for (uint64_t wi = 0; wi < warps_.size(); ++wi) {
+        ShaderWarp& sw = warps_[wi];
+        std::deque<WarmFetch>* warm = feeds[wi] != ~0u && window > 0 ? &warm_[feeds[wi]] : nullptr;
+        for (;;) {
+            uint32_t longest = 0;
+            bool any = false;
+            for (const Thread& t : sw.threads) {
+                auto& q = pending[t.path];
+                if (q.empty()) continue;
+                any = true;
+                const WorkRay w = q.front();
+                q.pop_front();
+                TraceResult r;
+                fetched.clear();
+                if (is_valid_ray(w.ray)) r = trace(w.ray, warm ? &fetched : nullptr);  // invalid rays never reach the RT unit: a miss
+                for (const StackEntry& e : fetched) {
+                    warm->push_back({sw.sm, e.addr, node_bytes(e.type)});
+                    if (warm->size() > window) warm->pop_front();
+                }
+                longest = std::max(longest, r.nodes_visited);
+                follow.clear();
+                fresh.complete(w, r.hit, follow);
+                for (const WorkRay& f : follow) pending[f.path].push_back(f);
+            }
+            if (!any) break;
+            sw.trace_nodes.push_back(longest);
+            sw.critical_nodes += longest;
+        }
+        critical_nodes_total_ += sw.critical_nodes;
+        frame_traces_.push_back(sw.trace_nodes);
+    }
+    ratio_ = critical_nodes_total_ > 0;
+}
+
 WorkloadDriver::Estimate WorkloadDriver::estimate() const {
     Estimate e;
     e.warps_total = warps_total_;
     e.warps_simulated = warps_.size();
-    std::vector<double> weighted;  // per stratum: its cluster's work x the stratum's size
+    // Per stratum (one cluster each, weighted by the stratum's size): work and critical-path nodes.
+    std::vector<double> work, nodes;
+    double weighted_nodes = 0;
     for (const ShaderWarp& w : warps_) {
         e.work_simulated += w.work;
-        e.work_estimate += w.weight * w.work;
-        if (weighted.size() <= w.stratum) weighted.resize(w.stratum + 1, 0.0);
-        weighted[w.stratum] += w.weight * w.work;
+        e.work_estimate_stratified += w.weight * w.work;
+        weighted_nodes += w.weight * w.critical_nodes;
+        if (work.size() <= w.stratum) work.resize(w.stratum + 1, 0.0), nodes.resize(w.stratum + 1, 0.0);
+        work[w.stratum] += w.weight * w.work;
+        nodes[w.stratum] += w.weight * w.critical_nodes;
+    }
+    const bool ratio = sampled_ && ratio_ && weighted_nodes > 0;
+    e.critical_nodes_total = critical_nodes_total_;
+    const double r = ratio ? e.work_estimate_stratified / weighted_nodes : 0.0;  // work per critical-path node
+    e.work_estimate = e.work_estimate_stratified;
+    const double det = fit_n_ * fit_xx_ - fit_x_ * fit_x_;
+    if (ratio && fit_n_ >= 2 && det > 0) {
+        e.schedule = true;
+        e.fit_traces = uint64_t(fit_n_);
+        e.fit_b = (fit_n_ * fit_xy_ - fit_x_ * fit_y_) / det;
+        e.fit_a = (fit_y_ - e.fit_b * fit_x_) / fit_n_;
+        // A trace whose rays all miss the root box never occupies a slot.
+        auto duration = [&](uint32_t nodes) { return nodes == 0 ? 0.0 : std::max(0.0, e.fit_a + e.fit_b * double(nodes)); };
+        auto durations = [&](const std::vector<uint32_t>& nodes) {
+            std::vector<double> d(nodes.size());
+            for (size_t k = 0; k < nodes.size(); ++k) d[k] = duration(nodes[k]);
+            return d;
+        };
+        std::vector<std::vector<double>> frame, sample;
+        e.work_estimate = 0;
+        for (const auto& t : frame_traces_) {
+            frame.push_back(durations(t));
+            for (double d : frame.back()) e.work_estimate += d;
+        }
+        for (const ShaderWarp& w : warps_) sample.push_back(durations(w.trace_nodes));
+        const ScheduleShape shape{uint32_t(ready_.size()), slots_, shade_};
+        e.model_frame = schedule_cycles(frame, shape);
+        e.model_sample = schedule_cycles(sample, shape);
     }
     // One sample per stratum: the variance comes from collapsing neighbouring strata in pairs,
-    // sum over pairs of (W_a - W_b)^2 (Cochran, Sampling Techniques, 5A.12).
+    // sum over pairs of (d_a - d_b)^2 with d the stratum's weighted work, or for the ratio
+    // estimate its residual from the ratio line (Cochran, Sampling Techniques, 5A.12 and 6.12).
+    auto d = [&](size_t h) { return work[h] - r * nodes[h]; };
     double v = 0;
-    for (size_t i = 0; i + 1 < weighted.size(); i += 2) v += (weighted[i] - weighted[i + 1]) * (weighted[i] - weighted[i + 1]);
+    for (size_t i = 0; i + 1 < work.size(); i += 2) v += (d(i) - d(i + 1)) * (d(i) - d(i + 1));
+    if (ratio) v *= (critical_nodes_total_ / weighted_nodes) * (critical_nodes_total_ / weighted_nodes);
     e.relative_se = sampled_ && e.work_estimate > 0 ? std::sqrt(v) / e.work_estimate : 0.0;
+    e.variance_pairs = uint32_t(work.size() / 2);
     e.saturated_until = saturated_until_;
     e.work_saturated = work_saturated_;
     return e;
+}
+
+double WorkloadDriver::Estimate::relative_half_width(double cycles_simulated) const {
+    // One pair (or none, with a single stratum) leaves one degree of freedom at the least.
+    const double t = boost::math::quantile(boost::math::complement(boost::math::students_t(std::max<uint32_t>(1, variance_pairs)), 0.025));
+    const double model = 1.96 * std::sqrt(2.0) * model_misfit(cycles_simulated);
+    return std::hypot(t * relative_se, model);
 }
 
 void WorkloadDriver::enqueue(uint32_t warp, uint64_t ready_at) { ready_[warps_[warp].sm].insert({ready_at, warp}); }
@@ -92,6 +200,10 @@ std::optional<std::vector<WarpRay>> WorkloadDriver::next_trace(uint32_t sm, uint
         const uint32_t wi = q.begin()->second;
         q.erase(q.begin());
         ShaderWarp& sw = warps_[wi];
+        if (sw.stratum < warm_.size() && !warm_[sw.stratum].empty()) {  // the first trace of a simulated cluster
+            if (on_warm) on_warm(warm_[sw.stratum]);
+            std::deque<WarmFetch>().swap(warm_[sw.stratum]);
+        }
         std::vector<WarpRay> rays;
         std::vector<RetiredRay> invalid;
         for (Thread& t : sw.threads) {
@@ -145,6 +257,17 @@ void WorkloadDriver::retire(uint32_t sm, const std::vector<RetiredRay>& rays, ui
             // The trace left the RT unit: its residence there is the warp's work (cycles of a
             // warp-buffer slot), which is what the GPU's throughput is made of.
             const double residence = double(now - sw.issued_at);
+            if (sw.traces_done < sw.trace_nodes.size()) {  // pre-pass: fit residence against the critical path
+                const double x = sw.trace_nodes[sw.traces_done];
+                if (x > 0) {
+                    fit_n_ += 1;
+                    fit_x_ += x;
+                    fit_y_ += residence;
+                    fit_xx_ += x * x;
+                    fit_xy_ += x * residence;
+                }
+            }
+            ++sw.traces_done;
             sw.work += residence;
             work_done_ += residence;
             const bool more = std::any_of(sw.threads.begin(), sw.threads.end(), [](const Thread& t) { return !t.pending.empty(); });

@@ -4,8 +4,10 @@
 // next bounce / AO / shadow rays. RT units pull traces when they have a free warp-buffer slot,
 // which keeps their warp buffers full. Plain C++ with cycle numbers: it serves AT and LT alike.
 #pragma once
+#include <cmath>
 #include <cstdint>
 #include <deque>
+#include <functional>
 #include <optional>
 #include <set>
 #include <vector>
@@ -23,15 +25,35 @@ struct TracedRay {
     bool valid = true;
 };
 
+// Sampled simulation (docs/sampling.md). rate < 1: clusters of `cluster` consecutive shader warps
+// (groups of warp_size neighbouring pixel samples) are split into round(clusters x rate) equal
+// strata in frame order; one cluster per stratum, chosen by `seed`, is simulated, and
+// WorkloadDriver::estimate() extrapolates to the whole frame.
+struct SamplingOptions {
+    double rate = 1.0;
+    uint64_t seed = 1;
+    uint32_t cluster = 1;
+    uint32_t capacity = 32;  // shader warps the GPU keeps in flight at once (for the estimator)
+    // Functional pre-pass of the schedule estimator: a second, untouched instance of the run's
+    // workload and a functional tracer. Without them the estimator is the plain stratified one.
+    Workload* prepass = nullptr;
+    std::function<TraceResult(const Ray&, std::vector<StackEntry>* fetched)> trace;
+    // Functional warming: before each simulated cluster, the last `warm_window` node fetches of
+    // the clusters skipped before it are replayed into the caches (WorkloadDriver::on_warm).
+    size_t warm_window = 0;
+};
+
+// A node fetch of the functional pre-pass, replayed into an SM's L1 and the L2 (functional
+// warming) before a simulated cluster starts; `sm` is the SM that made it in the full frame.
+struct WarmFetch {
+    uint32_t sm;
+    uint64_t addr;
+    uint32_t bytes;
+};
+
 class WorkloadDriver {
 public:
-    // sample_rate < 1: sampled simulation. Clusters of `cluster` consecutive shader warps (groups
-    // of warp_size neighbouring pixel samples) are split into round(clusters x rate) equal strata
-    // in frame order; one cluster per stratum, chosen by `seed`, is simulated, and estimate()
-    // extrapolates to the whole frame.
-    // `capacity`: shader warps the GPU keeps in flight at once (for the estimator).
-    WorkloadDriver(Workload& workload, uint32_t sms, uint32_t warp_size, uint32_t shade_latency,
-                   double sample_rate = 1.0, uint64_t seed = 1, uint32_t cluster = 1, uint32_t capacity = 32);
+    WorkloadDriver(Workload& workload, uint32_t sms, uint32_t warp_size, uint32_t shade_latency, const SamplingOptions& sampling = {});
 
     // The next trace of one of this SM's warps that is ready by `now`, or nothing.
     std::optional<std::vector<WarpRay>> next_trace(uint32_t sm, uint64_t now);
@@ -53,10 +75,25 @@ public:
     std::string oldest_in_flight() const;
 
     // Sampled simulation: a warp's work is the cycles its traces spent in an RT unit's warp buffer.
+    // With the functional pre-pass (the schedule estimator):
+    // - each trace's residence is fitted as a + b x its critical path (the most nodes one of its
+    //   rays visits) over the simulated traces, and the frame's work is the fit summed over all
+    //   of the frame's traces;
+    // - cycles = simulated cycles x (schedule model of the frame / schedule model of the sample),
+    //   both models fed with the fitted durations (model/trace_schedule.h).
+    // Without it, the work is the stratified estimate and cycles come from the full-GPU
+    // throughput (cycles_estimate).
     struct Estimate {
         uint64_t warps_total = 0, warps_simulated = 0;
         double work_simulated = 0, work_estimate = 0;  // warp-buffer residence cycles
+        double work_estimate_stratified = 0;           // without the pre-pass
+        bool schedule = false;                         // the schedule estimator is in use
+        double critical_nodes_total = 0;               // of the frame (pre-pass)
+        double fit_a = 0, fit_b = 0;                   // residence = a + b x critical-path nodes
+        uint64_t fit_traces = 0;
+        double model_frame = 0, model_sample = 0;      // schedule-model cycles
         double relative_se = 0;  // standard error of work_estimate / work_estimate
+        uint32_t variance_pairs = 0;  // collapsed stratum pairs behind relative_se (degrees of freedom)
         // While at least `capacity` shader warps were unfinished the GPU ran full; after that
         // comes the tail. The frame's extra work runs at the full-GPU throughput, the tail
         // stays: cycles = simulated cycles + (work_estimate - work_simulated) / throughput.
@@ -68,11 +105,24 @@ public:
             return cycles_simulated > 0 ? work_simulated / cycles_simulated : 1.0;
         }
         double cycles_estimate(double cycles_simulated) const {
+            if (schedule && model_sample > 0) return cycles_simulated * model_frame / model_sample;
             return cycles_simulated + (work_estimate - work_simulated) / throughput(cycles_simulated);
         }
+        // How far the schedule model missed the simulated sample: |simulated / model - 1|.
+        double model_misfit(double cycles_simulated) const {
+            return schedule && model_sample > 0 ? std::fabs(cycles_simulated / model_sample - 1.0) : 0.0;
+        }
+        // Half-width of the 95 % interval of cycles_estimate, relative to it (docs/sampling.md):
+        // the work's sampling error with Student's t for the collapsed pairs, and, with the
+        // schedule estimator, the model's error, taken to be as large on the frame as on the
+        // sample and independent of it (1.96 x sqrt(2) x the misfit).
+        double relative_half_width(double cycles_simulated) const;
     };
     Estimate estimate() const;
     bool sampled() const { return sampled_; }
+    // Sampled runs with the pre-pass: called when a simulated cluster starts, with the last node
+    // fetches of the clusters skipped before it, in order.
+    std::function<void(const std::deque<WarmFetch>&)> on_warm;
 
 private:
     struct Thread {
@@ -84,6 +134,9 @@ private:
         uint32_t sm = 0;
         double weight = 1.0;  // warps of the frame this one stands for (its stratum's size)
         double work = 0;      // cycles its traces spent in an RT unit so far
+        std::vector<uint32_t> trace_nodes;  // pre-pass: per trace, the most nodes one of its rays visits
+        double critical_nodes = 0;          // their sum
+        uint32_t traces_done = 0;
         uint32_t stratum = 0; // sampled: the stratum it was drawn for
         std::vector<Thread> threads;
         uint32_t in_flight = 0;  // rays of the current trace not yet retired
@@ -96,6 +149,9 @@ private:
         int scale;
     };
     void enqueue(uint32_t warp, uint64_t ready_at);
+    using TraceFn = std::function<TraceResult(const Ray&, std::vector<StackEntry>*)>;
+    void prepass(Workload& fresh, const TraceFn& trace, const std::vector<uint32_t>& feeds, size_t strata, size_t window);
+    std::vector<std::deque<WarmFetch>> warm_;  // per stratum, until its cluster starts
 
     Workload& workload_;
     uint32_t shade_;
@@ -107,6 +163,11 @@ private:
     uint64_t warps_total_ = 0;
     bool sampled_ = false;
     uint32_t capacity_ = 32;
+    bool ratio_ = false;
+    double critical_nodes_total_ = 0;
+    std::vector<std::vector<uint32_t>> frame_traces_;  // pre-pass: every warp of the frame, in frame order
+    double fit_n_ = 0, fit_x_ = 0, fit_y_ = 0, fit_xx_ = 0, fit_xy_ = 0;  // least-squares sums over simulated traces
+    uint32_t slots_ = 1;
     double work_done_ = 0, work_saturated_ = 0;
     uint64_t saturated_until_ = 0;
 };

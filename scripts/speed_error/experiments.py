@@ -1,5 +1,7 @@
 #!/usr/bin/env python3
-"""Speed against error: every fidelity on every scene, baseline and TTP, as a sweep manifest.
+"""Speed against error: every fidelity on every scene, baseline and TTP, as a sweep manifest; and
+the sampled AT baseline with five more draws of the sample (sample seeds 2-6) for the accuracy
+and interval-coverage study.
 Usage: experiments.py MANIFEST [--size N] [--spp N] [--scenes a,b,...]"""
 import os
 import sys
@@ -19,6 +21,8 @@ FIDELITIES = {  # id -> rtsim arguments
     "lt_s25": "--fidelity lt --sample 0.25",
     "lt_s10": "--fidelity lt --sample 0.1",
 }
+SAMPLE_RATES = {"s50": "0.5", "s25": "0.25", "s10": "0.1"}
+EXTRA_SEEDS = range(2, 7)  # seed 1 is the rtsim default (--seed 1), run above as at_sNN_base
 
 
 def main():
@@ -27,6 +31,10 @@ def main():
     for fid, fargs in FIDELITIES.items():
         for pf, pargs in (("base", ""), ("ttp", "--prefetcher ttp")):
             runs.append((f"{fid}_{pf}", f"{fargs} --workload pt --width {a.size} --height {a.size} --spp {a.spp} {pargs}"))
+    for rid, rate in SAMPLE_RATES.items():
+        for seed in EXTRA_SEEDS:
+            runs.append((f"at_{rid}_seed{seed}_base", f"--fidelity at --sample {rate} --sample-seed {seed} --workload pt "
+                         f"--width {a.size} --height {a.size} --spp {a.spp}"))
     write_manifest(a, runs)
 
 

@@ -32,6 +32,7 @@ COLUMNS = [
     ("l2_pf_miss_free", "timing.prefetch.l2.response.mshr_miss_free_entry"), ("l2_pf_resfail", "timing.prefetch.l2.response.reservation_fail"),
     ("energy_j", "timing.energy.total_j"), ("power_w", "timing.energy.average_power_w"),
     ("sim_s", "time_s.run"),
+    ("ci95_lo", None), ("ci95_hi", None),
 ]
 STREAK = ["not_a_pop", "pop_1", "pop_2", "pop_3", "pop_4_or_more"]
 
@@ -54,6 +55,9 @@ def main():
             j = json.loads(stats.read_text())
             for name, path in COLUMNS:
                 row[name] = get(j, path) if path else ""
+            ci = get(j, "timing.sampling.cycles_ci95", [])
+            if len(ci) == 2:
+                row["ci95_lo"], row["ci95_hi"] = ci
             for lvl in ("l1", "l2"):
                 d = get(j, f"timing.{lvl}.demand", {})
                 if d:

@@ -1,0 +1,23 @@
+// The schedule model of sampled simulation (docs/sampling.md): how long a frame takes when each
+// trace of a shader warp occupies one warp-buffer slot of its SM's RT unit for a known number of
+// cycles. Shader warps are bound to SMs round robin in the order given; a warp's next trace is
+// ready `shade` cycles after its previous one left the RT unit; an RT unit takes ready traces in
+// order of readiness (ties: the earlier warp) into its earliest free slot. Memory contention is
+// not modelled here: it is in the trace durations, which come from the detailed simulation.
+// Plain C++ (no SystemC).
+#pragma once
+#include <cstdint>
+#include <vector>
+
+namespace rtu {
+
+struct ScheduleShape {
+    uint32_t sms = 1, slots = 1;  // RT units, warp-buffer slots per RT unit
+    uint64_t shade = 0;           // cycles between a warp's traces
+};
+
+// `traces[w]`: the durations, in cycles, of shader warp w's traces in order. Returns the cycle
+// the last trace leaves its RT unit (0 for no traces).
+double schedule_cycles(const std::vector<std::vector<double>>& traces, const ScheduleShape& shape);
+
+}  // namespace rtu
