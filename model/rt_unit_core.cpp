@@ -208,7 +208,7 @@ void RtUnitCore::cycle(uint64_t now) {
         const auto [id, flags] = fifo_.front();
         fifo_.pop_front();
         ++stats_.responses;
-        Pending& p = inflight_[id & (kInflightSlots - 1)];
+        Pending& p = slot_of(id);
         if (p.id != id) throw std::logic_error("response for an unknown or answered request");
         p.id = 0;  // free again; `p` stays valid below (nothing is issued while responses drain)
         --inflight_count_;
@@ -325,8 +325,7 @@ void RtUnitCore::cycle(uint64_t now) {
                 r.warp = wi;
                 r.thread = members[n][0];
                 r.streak = w.threads[members[n][0]].fetch_class;
-                Pending& slot = inflight_[r.id & (kInflightSlots - 1)];
-                if (slot.id != 0) throw std::logic_error("more chunks in flight than the RT unit's tracking ring holds");
+                Pending& slot = claim_slot(r.id);
                 slot.id = r.id;
                 slot.warp = wi;
                 slot.threads.assign(members[n].begin(), members[n].begin() + counts[n]);
@@ -342,6 +341,31 @@ void RtUnitCore::cycle(uint64_t now) {
         }
         stats_.max_request_queue = std::max<uint64_t>(stats_.max_request_queue, maq_.size());
         break;
+    }
+}
+
+RtUnitCore::Pending& RtUnitCore::claim_slot(uint64_t id) {
+    if (slot_of(id).id == 0) return slot_of(id);
+    for (size_t size = inflight_.size() * 2;; size *= 2) {
+        std::vector<Pending> grown(size);
+        bool clash = false;
+        for (Pending& p : inflight_) {
+            if (p.id == 0) continue;
+            Pending& q = grown[p.id & (size - 1)];
+            if (q.id != 0) {
+                clash = true;
+                break;
+            }
+            q = std::move(p);
+        }
+        if (clash || grown[id & (size - 1)].id != 0) {
+            // Put back what moved and try twice the size.
+            for (Pending& q : grown)
+                if (q.id != 0) inflight_[q.id & (inflight_.size() - 1)] = std::move(q);
+            continue;
+        }
+        inflight_ = std::move(grown);
+        return slot_of(id);
     }
 }
 

@@ -164,10 +164,13 @@ private:
     absl::flat_hash_set<uint64_t> prefetch_ids_;  // prefetch chunks in flight
     std::deque<std::pair<uint64_t, uint64_t>> perfect_;  // (cycle, chunk id) answered without memory
     std::deque<std::pair<uint64_t, std::pair<bool, bool>>> fifo_;  // chunk id, (l1 miss, dram)
-    // Chunks in flight, in a ring indexed by id (ids are sequential, so a slot is free again long
-    // before its index comes round; reuse of a busy slot is a logic error, never silent).
-    static constexpr size_t kInflightSlots = 1 << 13;
-    std::vector<Pending> inflight_ = std::vector<Pending>(kInflightSlots);
+    // Chunks in flight, in a ring indexed by id & (size - 1). Ids are sequential, so a slot is
+    // usually free again long before its index comes round; when it is not (a response held back
+    // for longer than the ring's size in requests, as LT with a large quantum can), the ring
+    // doubles until every chunk in flight has a slot of its own.
+    Pending& claim_slot(uint64_t id);
+    Pending& slot_of(uint64_t id) { return inflight_[id & (inflight_.size() - 1)]; }
+    std::vector<Pending> inflight_ = std::vector<Pending>(1 << 13);
     size_t inflight_count_ = 0;
     std::priority_queue<MathDone, std::vector<MathDone>, std::greater<MathDone>> math_;
     std::vector<RetiredRay> retired_;

@@ -161,3 +161,64 @@ TEST(ProtocolChecker, DetectsViolations) {
     b->release();
     EXPECT_EQ(pool.outstanding(), 0u);
 }
+
+// The RT unit tracks its chunks in flight in a ring indexed by chunk id. A response held back
+// while more chunks than the ring's 8192 slots leave after it (LT at a quantum of 10,000 did
+// this) must neither collide nor be lost: here the very first chunk is answered only after
+// 10,000 others, and every ray still gets the hit that functional traversal gives it.
+TEST(RtUnitCore, ResponseHeldBackPastTheTrackingRing) {
+    const Scene s = scene_named("bunny");
+    const BvhImage img = build_bvh_image(s);
+    const HwConfig hw = Config::load("mobile").resolve();
+    RtUnitCore core(hw, img, TraversalOrder::DFS);
+    std::vector<Ray> rays;
+    for (int i = 0; i < 4096; ++i) {
+        Ray r;
+        r.org = {278, 278, 800};
+        r.dir = glm::vec3(-0.3f + 0.6f * float(i % 64) / 64.0f, -0.3f + 0.6f * float(i / 64) / 64.0f, -1.0f);
+        rays.push_back(r);
+    }
+    size_t next = 0;
+    std::map<uint64_t, Hit> got;
+    std::multimap<uint64_t, uint64_t> answers;  // cycle -> chunk id
+    uint64_t held = 0, sent = 0;
+    for (uint64_t c = 0; c < 5000000 && (next < rays.size() || !core.idle()); ++c) {
+        while (next < rays.size() && core.has_free_slot()) {
+            std::vector<WarpRay> warp;
+            for (int t = 0; t < 32 && next < rays.size(); ++t, ++next) {
+                WarpRay w;
+                w.ray = rays[next];
+                w.scale = scale_direction(w.ray);
+                w.key = next;
+                warp.push_back(w);
+            }
+            core.accept_warp(warp, c);
+        }
+        for (auto it = answers.begin(); it != answers.end() && it->first <= c; it = answers.erase(it))
+            core.on_response(it->second, true, true, c);
+        if (held && sent == 10000) answers.insert({c + 1, held});
+        if (core.has_request(c)) {
+            const ChunkRequest r = core.front_request(c);
+            core.pop_request(c);
+            ++sent;
+            if (!held) held = r.id;
+            else answers.insert({c + 20, r.id});
+        }
+        core.cycle(c);
+        for (const RetiredRay& r : core.take_retired()) got[r.key] = r.hit;  // t in the rescaled ray's units
+    }
+    ASSERT_GT(sent, 10000u);
+    ASSERT_TRUE(core.idle());
+    ASSERT_EQ(got.size(), rays.size());
+    for (size_t i = 0; i < rays.size(); ++i) {
+        Ray scaled = rays[i];
+        scale_direction(scaled);
+        const TraceResult f = trace_ray(img, scaled, TraversalOrder::DFS);
+        ASSERT_EQ(got[i].hit, f.hit.hit) << "ray " << i;
+        if (f.hit.hit) {
+            EXPECT_EQ(got[i].geom, f.hit.geom) << "ray " << i;
+            EXPECT_EQ(got[i].prim, f.hit.prim) << "ray " << i;
+            EXPECT_EQ(got[i].t, f.hit.t) << "ray " << i;
+        }
+    }
+}
