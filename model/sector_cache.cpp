@@ -11,7 +11,28 @@ SectorCache::SectorCache(const CacheConfig& c)
     sets_ = uint32_t(lines / assoc_);
     if (line_ / sector_ > 32) throw std::invalid_argument("at most 32 sectors per line");
     ways_.resize(lines);
+    set_.resize(sets_);
     where_.reserve(lines * 2);
+}
+
+void SectorCache::link_front(Set& s, uint32_t i) {
+    Way& w = ways_[i];
+    w.prev = kNone;
+    w.next = s.head;
+    if (s.head != kNone) ways_[s.head].prev = i;
+    s.head = i;
+    if (s.tail == kNone) s.tail = i;
+}
+
+void SectorCache::touch(Way& w) {
+    const uint32_t i = uint32_t(&w - ways_.data());
+    Set& s = set_[i / assoc_];
+    if (s.head == i) return;
+    // Unlink, then put in front (most recently used).
+    ways_[w.prev].next = w.next;
+    if (w.next != kNone) ways_[w.next].prev = w.prev;
+    else s.tail = w.prev;
+    link_front(s, i);
 }
 
 SectorCache::Way* SectorCache::find(uint64_t line) {
@@ -46,7 +67,7 @@ CacheOutcome SectorCache::read(uint64_t addr, uint64_t token, ReqKind kind) {
     const uint32_t bit = 1u << ((addr - line) / sector_);
     Way* w = find(line);
     if (w && (w->valid & bit)) {
-        w->lru = ++clock_;
+        touch(*w);
         ++st.hits;
         if (kind == ReqKind::Demand && (w->prefetched & bit)) {
             w->prefetched &= ~bit;
@@ -61,7 +82,7 @@ CacheOutcome SectorCache::read(uint64_t addr, uint64_t token, ReqKind kind) {
             return CacheOutcome::ReservationFail;
         }
         m.tokens.push_back(token);
-        w->lru = ++clock_;
+        touch(*w);
         ++st.mshr_hits;
         if (kind == ReqKind::Demand && m.prefetch && !m.demanded) {
             m.demanded = true;
@@ -84,7 +105,7 @@ CacheOutcome SectorCache::read(uint64_t addr, uint64_t token, ReqKind kind) {
         out = CacheOutcome::LineMiss;
     }
     w->pending |= bit;
-    w->lru = ++clock_;
+    touch(*w);
     Mshr& m = mshr_[sector];
     m.tokens.push_back(token);
     m.prefetch = kind == ReqKind::Prefetch;
@@ -96,13 +117,22 @@ CacheOutcome SectorCache::read(uint64_t addr, uint64_t token, ReqKind kind) {
 // The LRU victim among the set's ways that have no pending sector, emptied and given to `line`;
 // null if every way has a pending sector. Counts the eviction into `st` when given.
 SectorCache::Way* SectorCache::allocate(uint64_t line, CacheStats* st) {
+    // Ways are taken into use in index order and never invalidated, so an unused way, if any, is
+    // the set's next one; else the victim is the least recently used way, from the recency
+    // list's tail, that has no pending sector.
     const uint64_t set = (line / line_) % sets_;
+    Set& s = set_[set];
     Way* victim = nullptr;
-    for (uint64_t i = set * assoc_; i < (set + 1) * assoc_; ++i) {
-        Way& c = ways_[i];
-        if (c.pending) continue;
-        if (!victim || c.line == ~0ull || (victim->line != ~0ull && c.lru < victim->lru)) victim = &c;
-        if (c.line == ~0ull) break;
+    if (s.unused < assoc_) {
+        const uint32_t i = uint32_t(set * assoc_ + s.unused++);
+        victim = &ways_[i];
+        link_front(s, i);
+    } else {
+        for (uint32_t i = s.tail; i != kNone; i = ways_[i].prev)
+            if (!ways_[i].pending) {
+                victim = &ways_[i];
+                break;
+            }
     }
     if (!victim) return nullptr;
     if (victim->line != ~0ull) {
@@ -125,13 +155,13 @@ bool SectorCache::warm(uint64_t addr) {
     const uint32_t bit = 1u << ((addr - line) / sector_);
     Way* w = find(line);
     if (w && (w->valid & bit)) {
-        w->lru = ++clock_;
+        touch(*w);
         return true;
     }
     if (w && (w->pending & bit)) return false;
     if (!w && !(w = allocate(line, nullptr))) return false;
     w->valid |= bit;
-    w->lru = ++clock_;
+    touch(*w);
     return false;
 }
 

@@ -74,8 +74,15 @@ private:
         uint64_t line = ~0ull;  // line address; ~0 = invalid
         uint32_t valid = 0, pending = 0;  // sector bit masks
         uint32_t prefetched = 0;          // filled by a prefetch and not yet read by a demand
-        uint64_t lru = 0;
+        uint32_t prev = kNone, next = kNone;  // recency list of the set (front: most recently used)
     };
+    struct Set {
+        uint32_t head = kNone, tail = kNone;  // way indices
+        uint32_t unused = 0;                  // ways [unused, assoc) were never taken
+    };
+    static constexpr uint32_t kNone = ~0u;
+    void touch(Way& w);  // most recently used now
+    void link_front(Set& s, uint32_t way);
     struct Mshr {
         Tokens tokens;
         bool prefetch = false;   // allocated by a prefetch
@@ -86,9 +93,9 @@ private:
 
     uint32_t line_, sector_, assoc_, sets_, mshrs_, merge_;
     std::vector<Way> ways_;  // set-major: set s owns ways [s*assoc, (s+1)*assoc)
+    std::vector<Set> set_;
     absl::flat_hash_map<uint64_t, uint32_t> where_;  // line address -> way index
     absl::flat_hash_map<uint64_t, Mshr> mshr_;       // sector address -> waiting tokens
-    uint64_t clock_ = 0;
     std::array<CacheStats, kReqKinds> stats_{};
 };
 
