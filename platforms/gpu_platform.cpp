@@ -205,7 +205,7 @@ GpuPlatform::GpuPlatform(const HwConfig& cfg, const BvhImage& image, Workload& w
 
     // Sampled run: when a simulated cluster starts, the caches are warmed with the node fetches
     // of the clusters skipped before it (L1 of the SM that made them, then L2 on an L1 miss).
-    m.driver.on_warm = [&m, sector = cfg.l1.sector](const std::deque<WarmFetch>& fetches) {
+    m.driver.on_warm = [&m, sector = cfg.l1.sector](const std::vector<WarmFetch>& fetches) {
         for (const WarmFetch& f : fetches)
             for (uint32_t o = 0; o < f.bytes; o += sector) {
                 const uint64_t a = f.addr + o;

@@ -88,33 +88,58 @@ void WorkloadDriver::prepass(Workload& fresh, const TraceFn& trace, const std::v
                              size_t window) {
     std::vector<WorkRay> first, follow;
     fresh.begin(first);
-    std::vector<std::deque<WorkRay>> pending(path_warp_.size());
-    for (const WorkRay& w : first) pending[w.path].push_back(w);
+    // First rays grouped by path (a counting sort: nothing allocated per path).
+    std::vector<uint32_t> start(path_warp_.size() + 1, 0);
+    for (const WorkRay& w : first) ++start[w.path + 1];
+    for (size_t p = 1; p < start.size(); ++p) start[p] += start[p - 1];
+    std::vector<WorkRay> by_path(first.size());
+    {
+        std::vector<uint32_t> at(start.begin(), start.end() - 1);
+        for (const WorkRay& w : first) by_path[at[w.path]++] = w;
+    }
+    // The last `window` fetches feeding each stratum's warming, in a ring each.
+    struct Ring {
+        std::vector<WarmFetch> buf;
+        size_t next = 0;
+        bool full = false;
+    };
+    std::vector<Ring> rings(strata);
+    std::vector<std::deque<WorkRay>> pending;  // per thread of the warp being traced (reused)
     std::vector<StackEntry> fetched;
-    warm_.assign(strata, {});
     for (uint64_t wi = 0; wi < warps_.size(); ++wi) {
         ShaderWarp& sw = warps_[wi];
-        std::deque<WarmFetch>* warm = feeds[wi] != ~0u && window > 0 ? &warm_[feeds[wi]] : nullptr;
+        Ring* ring = feeds[wi] != ~0u && window > 0 ? &rings[feeds[wi]] : nullptr;
+        if (ring && ring->buf.empty()) ring->buf.resize(window);
+        pending.resize(std::max(pending.size(), sw.threads.size()));
+        for (size_t i = 0; i < sw.threads.size(); ++i) {
+            pending[i].clear();
+            const uint32_t p = sw.threads[i].path;
+            pending[i].insert(pending[i].end(), by_path.begin() + start[p], by_path.begin() + start[p + 1]);
+        }
         for (;;) {
             uint32_t longest = 0;
             bool any = false;
-            for (const Thread& t : sw.threads) {
-                auto& q = pending[t.path];
+            for (size_t i = 0; i < sw.threads.size(); ++i) {
+                auto& q = pending[i];
                 if (q.empty()) continue;
                 any = true;
                 const WorkRay w = q.front();
                 q.pop_front();
                 TraceResult r;
                 fetched.clear();
-                if (is_valid_ray(w.ray)) r = trace(w.ray, warm ? &fetched : nullptr);  // invalid rays never reach the RT unit: a miss
+                if (is_valid_ray(w.ray)) r = trace(w.ray, ring ? &fetched : nullptr);  // invalid rays never reach the RT unit: a miss
                 for (const StackEntry& e : fetched) {
-                    warm->push_back({sw.sm, e.addr, node_bytes(e.type)});
-                    if (warm->size() > window) warm->pop_front();
+                    ring->buf[ring->next] = {sw.sm, e.addr, node_bytes(e.type)};
+                    if (++ring->next == window) ring->next = 0, ring->full = true;
                 }
                 longest = std::max(longest, r.nodes_visited);
                 follow.clear();
                 fresh.complete(w, r.hit, follow);
-                for (const WorkRay& f : follow) pending[f.path].push_back(f);
+                for (const WorkRay& f : follow) {  // a follow-up ray belongs to a path of this warp
+                    size_t k = sw.threads[i].path == f.path ? i : 0;
+                    while (sw.threads[k].path != f.path) ++k;
+                    pending[k].push_back(f);
+                }
             }
             if (!any) break;
             sw.trace_nodes.push_back(longest);
@@ -122,6 +147,13 @@ void WorkloadDriver::prepass(Workload& fresh, const TraceFn& trace, const std::v
         }
         critical_nodes_total_ += sw.critical_nodes;
         frame_traces_.push_back(sw.trace_nodes);
+    }
+    // Rings in fetch order.
+    warm_.assign(strata, {});
+    for (size_t h = 0; h < strata; ++h) {
+        const Ring& r = rings[h];
+        if (r.full) warm_[h].assign(r.buf.begin() + long(r.next), r.buf.end());
+        warm_[h].insert(warm_[h].end(), r.buf.begin(), r.buf.begin() + long(r.next));
     }
     ratio_ = critical_nodes_total_ > 0;
 }
@@ -202,7 +234,7 @@ std::optional<std::vector<WarpRay>> WorkloadDriver::next_trace(uint32_t sm, uint
         ShaderWarp& sw = warps_[wi];
         if (sw.stratum < warm_.size() && !warm_[sw.stratum].empty()) {  // the first trace of a simulated cluster
             if (on_warm) on_warm(warm_[sw.stratum]);
-            std::deque<WarmFetch>().swap(warm_[sw.stratum]);
+            std::vector<WarmFetch>().swap(warm_[sw.stratum]);
         }
         std::vector<WarpRay> rays;
         std::vector<RetiredRay> invalid;

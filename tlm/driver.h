@@ -122,7 +122,7 @@ public:
     bool sampled() const { return sampled_; }
     // Sampled runs with the pre-pass: called when a simulated cluster starts, with the last node
     // fetches of the clusters skipped before it, in order.
-    std::function<void(const std::deque<WarmFetch>&)> on_warm;
+    std::function<void(const std::vector<WarmFetch>&)> on_warm;
 
 private:
     struct Thread {
@@ -151,7 +151,7 @@ private:
     void enqueue(uint32_t warp, uint64_t ready_at);
     using TraceFn = std::function<TraceResult(const Ray&, std::vector<StackEntry>*)>;
     void prepass(Workload& fresh, const TraceFn& trace, const std::vector<uint32_t>& feeds, size_t strata, size_t window);
-    std::vector<std::deque<WarmFetch>> warm_;  // per stratum, until its cluster starts
+    std::vector<std::vector<WarmFetch>> warm_;  // per stratum, until its cluster starts
 
     Workload& workload_;
     uint32_t shade_;
