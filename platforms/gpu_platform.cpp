@@ -157,6 +157,7 @@ struct GpuPlatform::Impl {
         s.seed = o.sample_seed;
         s.cluster = s.capacity = c.sms * c.warp_buffer;
         s.prepass = o.sample_prepass;
+        s.progress = o.progress;
         // Enough fetches to refill every cache twice over.
         s.warm_window = 2 * (uint64_t(c.l2_slices) * c.l2.size_bytes + uint64_t(c.sms) * c.l1.size_bytes) / c.l1.sector;
         const TraversalOrder order = o.order;

@@ -1,7 +1,9 @@
 #include "driver.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <iostream>
 #include <stdexcept>
 
 #include <boost/math/distributions/students_t.hpp>
@@ -59,7 +61,7 @@ WorkloadDriver::WorkloadDriver(Workload& workload, uint32_t sms, uint32_t warp_s
             std::vector<uint32_t> feeds(n_warps, ~0u);  // warp -> the stratum whose warming it feeds
             for (uint64_t h = 0; h < n; ++h)
                 for (uint64_t w = (h ? picks[h - 1] + 1 : 0) * cl; w < std::min(n_warps, picks[h] * cl); ++w) feeds[w] = uint32_t(h);
-            prepass(*sampling.prepass, sampling.trace, feeds, n, sampling.warm_window);
+            prepass(*sampling.prepass, sampling.trace, feeds, n, sampling.warm_window, sampling.progress);
         }
         std::vector<ShaderWarp> kept;
         for (uint64_t h = 0; h < n; ++h) {
@@ -85,7 +87,10 @@ WorkloadDriver::WorkloadDriver(Workload& workload, uint32_t sms, uint32_t warp_s
 // same rays, because a workload's random numbers depend only on path and depth), warp by warp
 // and trace by trace; a trace costs its longest ray, since the warp waits for its last thread.
 void WorkloadDriver::prepass(Workload& fresh, const TraceFn& trace, const std::vector<uint32_t>& feeds, size_t strata,
-                             size_t window) {
+                             size_t window, bool progress) {
+    const auto t0 = std::chrono::steady_clock::now();
+    auto last = t0;
+    bool printed = false;
     std::vector<WorkRay> first, follow;
     fresh.begin(first);
     // First rays grouped by path (a counting sort: nothing allocated per path).
@@ -107,6 +112,16 @@ void WorkloadDriver::prepass(Workload& fresh, const TraceFn& trace, const std::v
     std::vector<std::deque<WorkRay>> pending;  // per thread of the warp being traced (reused)
     std::vector<StackEntry> fetched;
     for (uint64_t wi = 0; wi < warps_.size(); ++wi) {
+        if (progress && (wi & 63) == 0) {
+            const auto now = std::chrono::steady_clock::now();
+            if (std::chrono::duration<double>(now - last).count() > 2.0) {
+                last = now;
+                const double f = double(wi) / double(warps_.size()), wall = std::chrono::duration<double>(now - t0).count();
+                std::cerr << "\r  sampling pre-pass: " << wi << " of " << warps_.size() << " shader warps traced, ETA "
+                          << int(wall * (1.0 - f) / std::max(f, 1e-9)) << " s   " << std::flush;
+                printed = true;
+            }
+        }
         ShaderWarp& sw = warps_[wi];
         Ring* ring = feeds[wi] != ~0u && window > 0 ? &rings[feeds[wi]] : nullptr;
         if (ring && ring->buf.empty()) ring->buf.resize(window);
@@ -148,6 +163,7 @@ void WorkloadDriver::prepass(Workload& fresh, const TraceFn& trace, const std::v
         critical_nodes_total_ += sw.critical_nodes;
         frame_traces_.push_back(sw.trace_nodes);
     }
+    if (printed) std::cerr << "\n";
     // Rings in fetch order.
     warm_.assign(strata, {});
     for (size_t h = 0; h < strata; ++h) {

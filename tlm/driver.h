@@ -41,6 +41,7 @@ struct SamplingOptions {
     // Functional warming: before each simulated cluster, the last `warm_window` node fetches of
     // the clusters skipped before it are replayed into the caches (WorkloadDriver::on_warm).
     size_t warm_window = 0;
+    bool progress = false;  // report the pre-pass's progress on stderr every 2 s
 };
 
 // A node fetch of the functional pre-pass, replayed into an SM's L1 and the L2 (functional
@@ -150,7 +151,8 @@ private:
     };
     void enqueue(uint32_t warp, uint64_t ready_at);
     using TraceFn = std::function<TraceResult(const Ray&, std::vector<StackEntry>*)>;
-    void prepass(Workload& fresh, const TraceFn& trace, const std::vector<uint32_t>& feeds, size_t strata, size_t window);
+    void prepass(Workload& fresh, const TraceFn& trace, const std::vector<uint32_t>& feeds, size_t strata, size_t window,
+                 bool progress);
     std::vector<std::vector<WarmFetch>> warm_;  // per stratum, until its cluster starts
 
     Workload& workload_;
