@@ -156,7 +156,8 @@ struct GpuPlatform::Impl {
         s.rate = o.sample_rate;
         s.seed = o.sample_seed;
         s.cluster = s.capacity = c.sms * c.warp_buffer;
-        s.prepass = o.sample_prepass;
+        s.make_workload = o.sample_workload;
+        s.threads = o.sample_threads;
         s.progress = o.progress;
         // Enough fetches to refill every cache twice over.
         s.warm_window = 2 * (uint64_t(c.l2_slices) * c.l2.size_bytes + uint64_t(c.sms) * c.l1.size_bytes) / c.l1.sector;
@@ -381,6 +382,7 @@ TimingResult GpuPlatform::run() {
                          {"work_estimate_residence_cycles", est.work_estimate},
                          {"work_estimate_stratified_residence_cycles", est.work_estimate_stratified},
                          {"critical_path_node_fetches_frame", est.critical_nodes_total},
+                         {"prepass_threads", est.prepass_threads},
                          {"residence_fit", {{"a", est.fit_a}, {"b_per_node", est.fit_b}, {"traces", est.fit_traces}}},
                          {"schedule_model_cycles", {{"frame", est.model_frame}, {"sample", est.model_sample}}},
                          {"cycles_estimate", r.cycles},

@@ -2,6 +2,7 @@
 //   WorkloadDriver -> RtUnit[sm] -> L1[sm] -> Crossbar -> L2[slice] -> Dram
 // Built from a HwConfig, elaborated once per process, run with sc_start().
 #pragma once
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -31,9 +32,10 @@ struct TimingOptions {
     bool check_protocol = false;      // AT: a base-protocol checker on every socket
     double sample_rate = 1.0;         // < 1: sampled simulation of this share of the frame's warps
     uint64_t sample_seed = 1;
-    // Sampled runs: a second, untouched instance of the workload for the functional pre-pass of
-    // the ratio estimator (docs/sampling.md); null: the plain stratified estimate.
-    Workload* sample_prepass = nullptr;
+    // Sampled runs: makes fresh instances of the workload for the functional pre-pass
+    // (docs/sampling.md), one per thread; empty: the plain stratified estimate.
+    std::function<std::unique_ptr<Workload>()> sample_workload;
+    unsigned sample_threads = 1;
 };
 
 struct TimingResult {

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <iostream>
 #include <optional>
+#include <thread>
 #include <sstream>
 
 #include <boost/program_options.hpp>
@@ -41,6 +42,7 @@ struct Args {
     uint64_t seed = 1, quantum = 0;
     double sample = 1.0;
     std::optional<uint64_t> sample_seed;  // which clusters a sampled run simulates (default: --seed)
+    unsigned threads = std::max(1u, std::thread::hardware_concurrency());  // sampling pre-pass
     bool verify = false, quiet = false, flatten = false;
 };
 
@@ -185,12 +187,13 @@ int run(const Args& a) {
         to.vcd = a.vcd;
         to.sample_rate = a.sample;
         to.sample_seed = a.sample_seed.value_or(a.seed);
-        // The sampled run's ratio estimator traces the whole frame functionally first, with a
-        // second instance of the workload (the first one accumulates the simulated image).
-        std::unique_ptr<Workload> prepass;
+        // A sampled run traces the whole frame functionally first, with fresh instances of the
+        // workload (the run's own one accumulates the simulated image).
         if (a.sample < 1.0) {
-            prepass = kind == WorkloadKind::RayFile ? make_ray_file_workload(ray_entries) : make_scene_workload(kind, scene, params);
-            to.sample_prepass = prepass.get();
+            to.sample_workload = [&] {
+                return kind == WorkloadKind::RayFile ? make_ray_file_workload(ray_entries) : make_scene_workload(kind, scene, params);
+            };
+            to.sample_threads = a.threads;
         }
         if (to.vcd.size() > 4 && to.vcd.compare(to.vcd.size() - 4, 4, ".vcd") == 0) to.vcd.resize(to.vcd.size() - 4);
         if (!a.trace_warp.empty()) std::tie(to.trace_sm, to.trace_warp) = parse_trace_warp(a.trace_warp, hw);
@@ -350,6 +353,8 @@ int sc_main(int argc, char** argv) {
         ("sample", po::value(&a.sample), "simulate this share (0..1] of the frame's warps, stratified, and extrapolate (timing only)")
         ("sample-seed", po::value<uint64_t>()->notifier([&a](uint64_t v) { a.sample_seed = v; }),
          "which clusters --sample draws (default: --seed, which also seeds the rays)")
+        ("threads", po::value(&a.threads)->default_value(a.threads),
+         "threads for --sample's functional pre-pass (the simulation itself runs on one; results do not depend on it)")
         ("vcd", po::value(&a.vcd), "write waveforms to this VCD file")
         ("trace-warp", po::value(&a.trace_warp), "with --vcd: trace each thread's stack depth of warp-buffer slot WARP of SM")
         ("stats", po::value(&a.stats), "write statistics JSON")

@@ -319,7 +319,8 @@ TEST(RtsimPrefetch, TreeletTraversalAndPrefetcher) {
 }
 
 // Sampled simulation: selecting the whole frame is the unsampled run, bit for bit; a half-frame
-// sample reports its estimate with an interval and simulates about half the rays.
+// sample reports its estimate with an interval and simulates about half the rays, whatever the
+// number of pre-pass threads.
 TEST(RtsimSampling, FullFrameSampleEqualsTheUnsampledRun) {
     TempDir dir;
     const std::string base = "--scene bunny --assets " + rtu::test::shared_dir() + "/scenes/bunny --fidelity at --width 32 --height 32 ";
@@ -343,6 +344,18 @@ TEST(RtsimSampling, FullFrameSampleEqualsTheUnsampledRun) {
     EXPECT_LT(h["rays"].get<double>(), 0.6 * full["rays"].get<double>());
     EXPECT_LE(s["cycles_ci95"][0].get<double>(), h["cycles"].get<double>());
     EXPECT_GE(s["cycles_ci95"][1].get<double>(), h["cycles"].get<double>());
+    // The pre-pass's threads change nothing (64x64: 256 warps, enough for 3 threads).
+    std::vector<nlohmann::json> by_threads;
+    for (const char* threads : {"1", "3"}) {
+        const Result r = rtsim(dir, "--scene bunny --assets " + rtu::test::shared_dir() + "/scenes/bunny --fidelity at --width 64 "
+                                    "--height 64 --sample 0.5 --threads " + threads + " --stats " + dir.file("t.json"));
+        ASSERT_EQ(r.status, 0) << r.err;
+        by_threads.push_back(nlohmann::json::parse(read_text(dir.file("t.json"))));
+        EXPECT_EQ(by_threads.back()["timing"]["sampling"]["prepass_threads"].get<int>(), std::stoi(threads));
+        for (const char* k : {"time_s", "simulation_rate", "memory_mb"}) by_threads.back().erase(k);
+        by_threads.back()["timing"]["sampling"].erase("prepass_threads");
+    }
+    EXPECT_EQ(by_threads[0], by_threads[1]);
     EXPECT_EQ(rtsim(dir, base + "--sample 0").status, 2);
     EXPECT_EQ(rtsim(dir, base + "--sample 1.5").status, 2);
 }

@@ -1,10 +1,12 @@
 #include "driver.h"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <iostream>
 #include <stdexcept>
+#include <thread>
 
 #include <boost/math/distributions/students_t.hpp>
 
@@ -57,11 +59,11 @@ WorkloadDriver::WorkloadDriver(Workload& workload, uint32_t sms, uint32_t warp_s
         }
         // The pre-pass also records, for each simulated cluster, the last node fetches of the
         // clusters skipped before it, to warm the caches with when it starts.
-        if (sampling.prepass && sampling.trace) {
+        if (sampling.make_workload && sampling.trace) {
             std::vector<uint32_t> feeds(n_warps, ~0u);  // warp -> the stratum whose warming it feeds
             for (uint64_t h = 0; h < n; ++h)
                 for (uint64_t w = (h ? picks[h - 1] + 1 : 0) * cl; w < std::min(n_warps, picks[h] * cl); ++w) feeds[w] = uint32_t(h);
-            prepass(*sampling.prepass, sampling.trace, feeds, n, sampling.warm_window, sampling.progress);
+            prepass(sampling.make_workload, sampling.trace, feeds, n, sampling.warm_window, sampling.progress, sampling.threads);
         }
         std::vector<ShaderWarp> kept;
         for (uint64_t h = 0; h < n; ++h) {
@@ -86,13 +88,14 @@ WorkloadDriver::WorkloadDriver(Workload& workload, uint32_t sms, uint32_t warp_s
 // The functional pre-pass: every path of the frame traced as the timing run will trace it (the
 // same rays, because a workload's random numbers depend only on path and depth), warp by warp
 // and trace by trace; a trace costs its longest ray, since the warp waits for its last thread.
-void WorkloadDriver::prepass(Workload& fresh, const TraceFn& trace, const std::vector<uint32_t>& feeds, size_t strata,
-                             size_t window, bool progress) {
+// Contiguous ranges of warps go to `threads` threads, each with its own workload instance; the
+// results are put together in frame order, so they do not depend on the number of threads.
+void WorkloadDriver::prepass(const std::function<std::unique_ptr<Workload>()>& make_workload, const TraceFn& trace,
+                             const std::vector<uint32_t>& feeds, size_t strata, size_t window, bool progress,
+                             unsigned threads) {
     const auto t0 = std::chrono::steady_clock::now();
-    auto last = t0;
-    bool printed = false;
-    std::vector<WorkRay> first, follow;
-    fresh.begin(first);
+    std::vector<WorkRay> first;
+    make_workload()->begin(first);
     // First rays grouped by path (a counting sort: nothing allocated per path).
     std::vector<uint32_t> start(path_warp_.size() + 1, 0);
     for (const WorkRay& w : first) ++start[w.path + 1];
@@ -101,76 +104,111 @@ void WorkloadDriver::prepass(Workload& fresh, const TraceFn& trace, const std::v
     {
         std::vector<uint32_t> at(start.begin(), start.end() - 1);
         for (const WorkRay& w : first) by_path[at[w.path]++] = w;
+        std::vector<WorkRay>().swap(first);
     }
-    // The last `window` fetches feeding each stratum's warming, in a ring each.
-    struct Ring {
-        std::vector<WarmFetch> buf;
-        size_t next = 0;
-        bool full = false;
-    };
-    std::vector<Ring> rings(strata);
-    std::vector<std::deque<WorkRay>> pending;  // per thread of the warp being traced (reused)
-    std::vector<StackEntry> fetched;
-    for (uint64_t wi = 0; wi < warps_.size(); ++wi) {
-        if (progress && (wi & 63) == 0) {
-            const auto now = std::chrono::steady_clock::now();
-            if (std::chrono::duration<double>(now - last).count() > 2.0) {
-                last = now;
-                const double f = double(wi) / double(warps_.size()), wall = std::chrono::duration<double>(now - t0).count();
-                std::cerr << "\r  sampling pre-pass: " << wi << " of " << warps_.size() << " shader warps traced, ETA "
-                          << int(wall * (1.0 - f) / std::max(f, 1e-9)) << " s   " << std::flush;
-                printed = true;
-            }
+    // Only the last `window` fetches before a simulated cluster warm the caches. Each thread
+    // traces its range of warps backwards (warps are independent) and records the fetches of
+    // whole warps until it has `window` of them for that stratum; the rest are traced unrecorded.
+    const size_t n_warps = warps_.size();
+    threads = unsigned(std::max<size_t>(1, std::min<size_t>(threads, (n_warps + 63) / 64)));
+    prepass_threads_ = threads;
+    std::vector<std::vector<WarmFetch>> warp_fetches(n_warps);
+    std::vector<std::vector<size_t>> recorded(threads, std::vector<size_t>(strata, 0));
+    std::atomic<size_t> done{0};
+    auto work = [&](unsigned t) {
+        const std::unique_ptr<Workload> fresh = make_workload();
+        std::vector<WorkRay> follow;
+        {
+            std::vector<WorkRay> ignored;
+            fresh->begin(ignored);  // the workload's own set-up; the first rays are taken from `by_path`
         }
-        ShaderWarp& sw = warps_[wi];
-        Ring* ring = feeds[wi] != ~0u && window > 0 ? &rings[feeds[wi]] : nullptr;
-        if (ring && ring->buf.empty()) ring->buf.resize(window);
-        pending.resize(std::max(pending.size(), sw.threads.size()));
-        for (size_t i = 0; i < sw.threads.size(); ++i) {
-            pending[i].clear();
-            const uint32_t p = sw.threads[i].path;
-            pending[i].insert(pending[i].end(), by_path.begin() + start[p], by_path.begin() + start[p + 1]);
-        }
-        for (;;) {
-            uint32_t longest = 0;
-            bool any = false;
+        std::vector<std::deque<WorkRay>> pending;  // per thread of the warp being traced (reused)
+        std::vector<StackEntry> fetched;
+        auto last = t0;
+        bool printed = false;
+        const size_t lo = n_warps * t / threads, hi = n_warps * (t + 1) / threads;
+        for (size_t wi = hi; wi-- > lo;) {
+            ShaderWarp& sw = warps_[wi];
+            const uint32_t h = feeds[wi];
+            std::vector<WarmFetch>* rec = h != ~0u && recorded[t][h] < window ? &warp_fetches[wi] : nullptr;
+            pending.resize(std::max(pending.size(), sw.threads.size()));
             for (size_t i = 0; i < sw.threads.size(); ++i) {
-                auto& q = pending[i];
-                if (q.empty()) continue;
-                any = true;
-                const WorkRay w = q.front();
-                q.pop_front();
-                TraceResult r;
-                fetched.clear();
-                if (is_valid_ray(w.ray)) r = trace(w.ray, ring ? &fetched : nullptr);  // invalid rays never reach the RT unit: a miss
-                for (const StackEntry& e : fetched) {
-                    ring->buf[ring->next] = {sw.sm, e.addr, node_bytes(e.type)};
-                    if (++ring->next == window) ring->next = 0, ring->full = true;
+                pending[i].clear();
+                const uint32_t p = sw.threads[i].path;
+                pending[i].insert(pending[i].end(), by_path.begin() + start[p], by_path.begin() + start[p + 1]);
+            }
+            for (;;) {
+                uint32_t longest = 0;
+                bool any = false;
+                for (size_t i = 0; i < sw.threads.size(); ++i) {
+                    auto& q = pending[i];
+                    if (q.empty()) continue;
+                    any = true;
+                    const WorkRay w = q.front();
+                    q.pop_front();
+                    TraceResult r;
+                    fetched.clear();
+                    if (is_valid_ray(w.ray)) r = trace(w.ray, rec ? &fetched : nullptr);  // invalid rays never reach the RT unit: a miss
+                    for (const StackEntry& e : fetched) rec->push_back({sw.sm, e.addr, node_bytes(e.type)});
+                    longest = std::max(longest, r.nodes_visited);
+                    follow.clear();
+                    fresh->complete(w, r.hit, follow);
+                    for (const WorkRay& f : follow) {  // a follow-up ray belongs to a path of this warp
+                        size_t k = sw.threads[i].path == f.path ? i : 0;
+                        while (sw.threads[k].path != f.path) ++k;
+                        pending[k].push_back(f);
+                    }
                 }
-                longest = std::max(longest, r.nodes_visited);
-                follow.clear();
-                fresh.complete(w, r.hit, follow);
-                for (const WorkRay& f : follow) {  // a follow-up ray belongs to a path of this warp
-                    size_t k = sw.threads[i].path == f.path ? i : 0;
-                    while (sw.threads[k].path != f.path) ++k;
-                    pending[k].push_back(f);
+                if (!any) break;
+                sw.trace_nodes.push_back(longest);
+                sw.critical_nodes += longest;
+            }
+            if (rec) recorded[t][h] += rec->size();
+            const size_t d = ++done;
+            if (progress && t == 0 && (d & 63) == 0) {
+                const auto now = std::chrono::steady_clock::now();
+                if (std::chrono::duration<double>(now - last).count() > 2.0) {
+                    last = now;
+                    const double f = double(d) / double(n_warps), wall = std::chrono::duration<double>(now - t0).count();
+                    std::cerr << "\r  sampling pre-pass: " << d << " of " << n_warps << " shader warps traced (" << threads
+                              << " threads), ETA " << int(wall * (1.0 - f) / std::max(f, 1e-9)) << " s   " << std::flush;
+                    printed = true;
                 }
             }
-            if (!any) break;
-            sw.trace_nodes.push_back(longest);
-            sw.critical_nodes += longest;
         }
+        if (printed) std::cerr << "\n";
+    };
+    std::vector<std::thread> pool;
+    std::vector<std::exception_ptr> failed(threads);
+    for (unsigned t = 1; t < threads; ++t)
+        pool.emplace_back([&, t] {
+            try {
+                work(t);
+            } catch (...) {
+                failed[t] = std::current_exception();
+            }
+        });
+    try {
+        work(0);
+    } catch (...) {
+        failed[0] = std::current_exception();
+    }
+    for (std::thread& th : pool) th.join();
+    for (const std::exception_ptr& e : failed)
+        if (e) std::rethrow_exception(e);
+    for (const ShaderWarp& sw : warps_) {
         critical_nodes_total_ += sw.critical_nodes;
         frame_traces_.push_back(sw.trace_nodes);
     }
-    if (printed) std::cerr << "\n";
-    // Rings in fetch order.
+    // Each stratum's recorded fetches in frame order; the last `window` kept.
     warm_.assign(strata, {});
-    for (size_t h = 0; h < strata; ++h) {
-        const Ring& r = rings[h];
-        if (r.full) warm_[h].assign(r.buf.begin() + long(r.next), r.buf.end());
-        warm_[h].insert(warm_[h].end(), r.buf.begin(), r.buf.begin() + long(r.next));
-    }
+    for (size_t wi = 0; wi < n_warps; ++wi)
+        if (!warp_fetches[wi].empty()) {
+            warm_[feeds[wi]].insert(warm_[feeds[wi]].end(), warp_fetches[wi].begin(), warp_fetches[wi].end());
+            std::vector<WarmFetch>().swap(warp_fetches[wi]);
+        }
+    for (std::vector<WarmFetch>& w : warm_)
+        if (w.size() > window) w.erase(w.begin(), w.end() - long(window));
     ratio_ = critical_nodes_total_ > 0;
 }
 
@@ -191,6 +229,7 @@ WorkloadDriver::Estimate WorkloadDriver::estimate() const {
     }
     const bool ratio = sampled_ && ratio_ && weighted_nodes > 0;
     e.critical_nodes_total = critical_nodes_total_;
+    e.prepass_threads = prepass_threads_;
     const double r = ratio ? e.work_estimate_stratified / weighted_nodes : 0.0;  // work per critical-path node
     e.work_estimate = e.work_estimate_stratified;
     const double det = fit_n_ * fit_xx_ - fit_x_ * fit_x_;

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <deque>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <set>
 #include <vector>
@@ -34,10 +35,12 @@ struct SamplingOptions {
     uint64_t seed = 1;
     uint32_t cluster = 1;
     uint32_t capacity = 32;  // shader warps the GPU keeps in flight at once (for the estimator)
-    // Functional pre-pass of the schedule estimator: a second, untouched instance of the run's
-    // workload and a functional tracer. Without them the estimator is the plain stratified one.
-    Workload* prepass = nullptr;
+    // Functional pre-pass of the schedule estimator: a maker of fresh instances of the run's
+    // workload (one per pre-pass thread) and a functional tracer that may be called from several
+    // threads at once. Without them the estimator is the plain stratified one.
+    std::function<std::unique_ptr<Workload>()> make_workload;
     std::function<TraceResult(const Ray&, std::vector<StackEntry>* fetched)> trace;
+    unsigned threads = 1;  // pre-pass threads (results do not depend on the number)
     // Functional warming: before each simulated cluster, the last `warm_window` node fetches of
     // the clusters skipped before it are replayed into the caches (WorkloadDriver::on_warm).
     size_t warm_window = 0;
@@ -50,6 +53,23 @@ struct WarmFetch {
     uint32_t sm;
     uint64_t addr;
     uint32_t bytes;
+};
+
+// A path's rays waiting for their trace, first in first out. A vector and a read position: one
+// small allocation per path (a std::deque takes 512 B even for one ray, 270 MB for a 512x512
+// frame at 2 spp).
+class RayQueue {
+public:
+    bool empty() const { return head_ == rays_.size(); }
+    const WorkRay& front() const { return rays_[head_]; }
+    void pop_front() {
+        if (++head_ == rays_.size()) rays_.clear(), head_ = 0;
+    }
+    void push_back(const WorkRay& r) { rays_.push_back(r); }
+
+private:
+    std::vector<WorkRay> rays_;
+    size_t head_ = 0;
 };
 
 class WorkloadDriver {
@@ -92,6 +112,7 @@ public:
         double critical_nodes_total = 0;               // of the frame (pre-pass)
         double fit_a = 0, fit_b = 0;                   // residence = a + b x critical-path nodes
         uint64_t fit_traces = 0;
+        unsigned prepass_threads = 0;
         double model_frame = 0, model_sample = 0;      // schedule-model cycles
         double relative_se = 0;  // standard error of work_estimate / work_estimate
         uint32_t variance_pairs = 0;  // collapsed stratum pairs behind relative_se (degrees of freedom)
@@ -129,7 +150,7 @@ private:
     struct Thread {
         uint32_t path;
         uint32_t next_seq = 0;
-        std::deque<WorkRay> pending;
+        RayQueue pending;
     };
     struct ShaderWarp {
         uint32_t sm = 0;
@@ -151,8 +172,8 @@ private:
     };
     void enqueue(uint32_t warp, uint64_t ready_at);
     using TraceFn = std::function<TraceResult(const Ray&, std::vector<StackEntry>*)>;
-    void prepass(Workload& fresh, const TraceFn& trace, const std::vector<uint32_t>& feeds, size_t strata, size_t window,
-                 bool progress);
+    void prepass(const std::function<std::unique_ptr<Workload>()>& make_workload, const TraceFn& trace,
+                 const std::vector<uint32_t>& feeds, size_t strata, size_t window, bool progress, unsigned threads);
     std::vector<std::vector<WarmFetch>> warm_;  // per stratum, until its cluster starts
 
     Workload& workload_;
@@ -167,6 +188,7 @@ private:
     uint32_t capacity_ = 32;
     bool ratio_ = false;
     double critical_nodes_total_ = 0;
+    unsigned prepass_threads_ = 0;
     std::vector<std::vector<uint32_t>> frame_traces_;  // pre-pass: every warp of the frame, in frame order
     double fit_n_ = 0, fit_x_ = 0, fit_y_ = 0, fit_xx_ = 0, fit_xy_ = 0;  // least-squares sums over simulated traces
     uint32_t slots_ = 1;
