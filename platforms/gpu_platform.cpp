@@ -205,6 +205,7 @@ GpuPlatform::GpuPlatform(const HwConfig& cfg, const BvhImage& image, Workload& w
         link(m.l2[s]->out, m.dram->in, "l2_" + id + "_dram");
     }
 
+    m.driver.keep_rays(opt.keep_rays);
     // Sampled run: when a simulated cluster starts, the caches are warmed with the node fetches
     // of the clusters skipped before it (L1 of the SM that made them, then L2 on an L1 miss).
     m.driver.on_warm = [&m, sector = cfg.l1.sector](const std::vector<WarmFetch>& fetches) {
@@ -317,6 +318,7 @@ TimingResult GpuPlatform::run() {
         r.stuck_report = "simulation ran out of events with rays outstanding; oldest trace: " + m.driver.oldest_in_flight();
     }
     r.rays = m.driver.results();
+    r.summary = m.driver.summary();
 
     // Invariants.
     auto fail = [&](const std::string& s) { r.invariant_failures.push_back(s); };

@@ -36,10 +36,14 @@ struct TimingOptions {
     // (docs/sampling.md), one per thread; empty: the plain stratified estimate.
     std::function<std::unique_ptr<Workload>()> sample_workload;
     unsigned sample_threads = 1;
+    // Keep every ray with its hit for TimingResult::rays (hits files, verification); without,
+    // memory holds only the rays in flight.
+    bool keep_rays = true;
 };
 
 struct TimingResult {
-    std::vector<TracedRay> rays;
+    std::vector<TracedRay> rays;    // with TimingOptions::keep_rays
+    WorkloadDriver::RaySummary summary;  // always
     uint64_t cycles = 0;            // the frame's cycles (extrapolated when sampled)
     uint64_t cycles_simulated = 0;  // cycles of what was actually simulated
     bool stuck = false;

@@ -197,17 +197,12 @@ int run(const Args& a) {
         }
         if (to.vcd.size() > 4 && to.vcd.compare(to.vcd.size() - 4, 4, ".vcd") == 0) to.vcd.resize(to.vcd.size() - 4);
         if (!a.trace_warp.empty()) std::tie(to.trace_sm, to.trace_warp) = parse_trace_warp(a.trace_warp, hw);
+        to.keep_rays = !a.hits.empty() || a.verify;  // else memory for the rays in flight only
         GpuPlatform platform(hw, image, *workload, to);
         timing_result = platform.run();
-        rays = timing_result.rays;
-        uint64_t nodes = 0;
-        uint32_t max_nodes = 0;
-        for (const TracedRay& r : rays) {
-            nodes += r.nodes_visited;
-            max_nodes = std::max(max_nodes, r.nodes_visited);
-        }
-        j["nodes_visited"] = nodes;
-        j["max_nodes_per_ray"] = max_nodes;
+        rays = std::move(timing_result.rays);
+        j["nodes_visited"] = timing_result.summary.nodes_visited;
+        j["max_nodes_per_ray"] = timing_result.summary.max_nodes;
         if (reference) {
             for (size_t i = 0; i < rays.size(); ++i) {
                 if (!rays[i].valid) continue;
@@ -223,13 +218,19 @@ int run(const Args& a) {
         }
     }
     const double run_s = seconds_since(t0);
-    uint64_t invalid = 0, hits = 0;
-    for (const TracedRay& r : rays) {
-        invalid += !r.valid;
-        hits += r.hit.hit;
+    uint64_t invalid = 0, hits = 0, n_rays = rays.size();
+    if (timing) {
+        invalid = timing_result.summary.invalid;
+        hits = timing_result.summary.hits;
+        n_rays = timing_result.summary.rays;
+    } else {
+        for (const TracedRay& r : rays) {
+            invalid += !r.valid;
+            hits += r.hit.hit;
+        }
     }
-    const uint64_t valid_rays = rays.size() - invalid;
-    j["rays"] = rays.size();
+    const uint64_t valid_rays = n_rays - invalid;
+    j["rays"] = n_rays;
     j["invalid_rays"] = invalid;
     j["hits"] = hits;
     j["nodes_per_ray"] = valid_rays ? double(j["nodes_visited"].get<uint64_t>()) / double(valid_rays) : 0.0;
@@ -254,7 +255,7 @@ int run(const Args& a) {
     if (timing) {
         j["cycles"] = timing_result.cycles;
         j["timing"] = timing_result.stats;
-        j["simulation_rate"] = {{"rays_per_s", run_s > 0 ? double(rays.size()) / run_s : 0.0},
+        j["simulation_rate"] = {{"rays_per_s", run_s > 0 ? double(n_rays) / run_s : 0.0},
                                 {"cycles_per_s", run_s > 0 ? double(timing_result.cycles) / run_s : 0.0}};
         j["config"] = config.to_json();
     }
@@ -282,7 +283,7 @@ int run(const Args& a) {
     if (!a.stats.empty()) write_file_atomic(a.stats, j.dump(2) + "\n");
 
     if (!a.quiet) {
-        std::cout << "rays " << rays.size() << " (" << invalid << " invalid), hits " << hits << ", nodes/ray "
+        std::cout << "rays " << n_rays << " (" << invalid << " invalid), hits " << hits << ", nodes/ray "
                   << j["nodes_per_ray"].get<double>() << " (max " << j["max_nodes_per_ray"] << "), " << a.traversal << ", "
                   << a.fidelity << ", " << run_s << " s\n";
         if (timing) {

@@ -306,8 +306,15 @@ std::optional<std::vector<WarpRay>> WorkloadDriver::next_trace(uint32_t sm, uint
             rec.r.valid = is_valid_ray(w.ray);
             Ray scaled = w.ray;
             rec.scale = rec.r.valid ? scale_direction(scaled) : 0;
-            const uint64_t key = records_.size();
-            records_.push_back(rec);
+            uint64_t key = records_.size();
+            if (!keep_rays_ && !free_records_.empty()) {  // the slot of a retired ray
+                key = free_records_.back();
+                free_records_.pop_back();
+                records_[key] = rec;
+            } else {
+                records_.push_back(rec);
+            }
+            ++issued_;
             if (!rec.r.valid) {
                 // Invalid rays never reach the RT unit: a miss, counted.
                 ++invalid_;
@@ -332,6 +339,11 @@ void WorkloadDriver::retire(uint32_t sm, const std::vector<RetiredRay>& rays, ui
         if (rec.r.hit.hit) rec.r.hit.t = std::ldexp(rec.r.hit.t, -rec.scale);
         rec.r.nodes_visited = rr.nodes_visited;
         ++retired_;
+        summary_.rays += 1;
+        summary_.invalid += !rec.r.valid;
+        summary_.hits += rec.r.hit.hit;
+        summary_.nodes_visited += rr.nodes_visited;
+        summary_.max_nodes = std::max(summary_.max_nodes, rr.nodes_visited);
         last_progress_ = now;
         follow.clear();
         workload_.complete(rec.work, rec.r.hit, follow);
@@ -365,12 +377,14 @@ void WorkloadDriver::retire(uint32_t sm, const std::vector<RetiredRay>& rays, ui
                 work_saturated_ = work_done_;
             }
         }
+        if (!keep_rays_) free_records_.push_back(rr.key);  // reused by a later ray (next_trace)
     }
     (void)sm;
 }
 
 std::vector<TracedRay> WorkloadDriver::results() const {
     std::vector<TracedRay> out;
+    if (!keep_rays_) return out;
     out.reserve(records_.size());
     for (const Record& r : records_) out.push_back(r.r);
     std::sort(out.begin(), out.end(), [](const TracedRay& a, const TracedRay& b) {

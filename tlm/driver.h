@@ -86,12 +86,21 @@ public:
     bool finished() const { return live_warps_ == 0; }
     // Share of shader warps (pixel groups) whose paths have all ended.
     double fraction_done() const { return warps_.empty() ? 1.0 : 1.0 - double(live_warps_) / double(warps_.size()); }
-    uint64_t rays_issued() const { return records_.size(); }
+    uint64_t rays_issued() const { return issued_; }
     uint64_t rays_retired() const { return retired_; }
     uint64_t last_progress() const { return last_progress_; }
     uint64_t invalid_rays() const { return invalid_; }
-    // Every ray with its hit, in (path, seq) order.
+    // Every ray with its hit, in (path, seq) order; empty unless the driver keeps the rays.
     std::vector<TracedRay> results() const;
+    // Totals over every retired ray (kept or not).
+    struct RaySummary {
+        uint64_t rays = 0, invalid = 0, hits = 0, nodes_visited = 0;
+        uint32_t max_nodes = 0;
+    };
+    const RaySummary& summary() const { return summary_; }
+    // Without kept rays a ray's record is reused once it retires: memory for the rays in flight
+    // only, not for every ray of the frame (about 160 B each). Call before the simulation.
+    void keep_rays(bool keep) { keep_rays_ = keep; }
     // Which SM and shader warp the oldest trace in flight belongs to (for the watchdog).
     std::string oldest_in_flight() const;
 
@@ -182,6 +191,10 @@ private:
     std::vector<uint32_t> path_warp_;  // path -> shader warp
     std::vector<std::set<std::pair<uint64_t, uint32_t>>> ready_;  // per SM: (ready cycle, warp)
     std::vector<Record> records_;
+    std::vector<uint64_t> free_records_;
+    bool keep_rays_ = true;
+    uint64_t issued_ = 0;
+    RaySummary summary_;
     uint64_t live_warps_ = 0, retired_ = 0, last_progress_ = 0, invalid_ = 0;
     uint64_t warps_total_ = 0;
     bool sampled_ = false;
