@@ -42,7 +42,8 @@ def main():
     p("")
     p(f"Generated {datetime.date.today()} by `scripts/speed_error.sh`: path tracing {meta['size']}x{meta['size']}, "
       f"{meta['spp']} spp, DFS, mobile preset, each fidelity with and without TTP, and the sampled AT baseline with "
-      f"{len(EXTRA_SEEDS)} more draws of the sample; {len(d)} runs, two at a time, {wall_sum / 60:.1f} "
+      f"{len(EXTRA_SEEDS)} more draws of the sample; {len(d)} runs, two at a time, each on one core (the sampling "
+      f"pre-pass with `--threads 1`), {wall_sum / 60:.1f} "
       "minutes of simulation summed. Wall time is the simulation alone (scene loading and BVH build excluded; the "
       "sampled runs' functional pre-pass included). Errors "
       "are against AT on the same scene: total cycles (baseline run), TTP speed-up (baseline / TTP cycles) and L1 "
