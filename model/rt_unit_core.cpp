@@ -100,7 +100,7 @@ void RtUnitCore::accept_warp(const std::vector<WarpRay>& rays, uint64_t now) {
     ++stats_.warps;
     stats_.rays += rays.size();
     if (w.live == 0) {  // every ray missed the root box
-        for (const Thread& t : w.threads) retired_.push_back({t.key, t.trav.hit(), t.trav.nodes_visited()});
+        for (const Thread& t : w.threads) retired_.push_back({t.key, t.trav.hit(), t.trav.nodes_visited(), 0, 0});
         w.used = false;
     }
 }
@@ -221,6 +221,8 @@ void RtUnitCore::cycle(uint64_t now) {
             // The whole node is here: decode it and run its tests.
             stats_.streak_l1_misses[t.fetch_class] += t.fetch_l1_miss;
             stats_.streak_dram_misses[t.fetch_class] += t.fetch_dram;
+            t.l1_miss_nodes += t.fetch_l1_miss;
+            t.dram_nodes += t.fetch_dram;
             const StepInfo info = t.trav.step(image_);
             if (info.pushed > 0) {
                 t.streak = 0;
@@ -257,7 +259,7 @@ void RtUnitCore::cycle(uint64_t now) {
             if (--w.live == 0) {
                 for (Thread& x : w.threads) {
                     set_status(x, ThreadStatus::Idle, now);
-                    retired_.push_back({x.key, x.trav.hit(), x.trav.nodes_visited()});
+                    retired_.push_back({x.key, x.trav.hit(), x.trav.nodes_visited(), x.l1_miss_nodes, x.dram_nodes});
                 }
                 w.used = false;
                 w.threads.clear();

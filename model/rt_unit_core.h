@@ -39,6 +39,7 @@ struct RetiredRay {
     uint64_t key;
     Hit hit;  // t in the rescaled units (the driver undoes the scaling)
     uint32_t nodes_visited;
+    uint32_t l1_miss_nodes = 0, dram_nodes = 0;  // of its node fetches: not served by L1 / served by DRAM
 };
 
 // A 32 B read leaving the RT unit.
@@ -122,6 +123,7 @@ private:
         uint32_t chunks_left = 0;
         uint8_t streak = 0;        // consecutive pops so far
         uint8_t fetch_class = 0;   // class of the node being fetched
+        uint32_t l1_miss_nodes = 0, dram_nodes = 0;  // node fetches so far that missed L1 / went to DRAM
         bool fetch_l1_miss = false, fetch_dram = false;
         NodeType fetch_type = NodeType::Empty;
         TtpDfs ttp_dfs;

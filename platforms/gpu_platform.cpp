@@ -393,11 +393,20 @@ TimingResult GpuPlatform::run() {
                          {"cycles_ci95", {c - h, c + h}},
                          {"relative_se", est.relative_se},
                          {"variance_pairs", est.variance_pairs},
+                         {"node_fetch_l1_miss_share", {{"estimate", est.l1_miss_nodes.estimate}, {"ci95", {est.l1_miss_nodes.lo, est.l1_miss_nodes.hi}}}},
+                         {"node_fetch_dram_share", {{"estimate", est.dram_nodes.estimate}, {"ci95", {est.dram_nodes.lo, est.dram_nodes.hi}}}},
                          {"schedule_model_misfit", est.model_misfit(double(r.cycles_simulated))}};
     }
     j["rt_unit"] = {{"warps", rs.warps}, {"rays", rs.rays}, {"node_fetches", rs.node_fetches},
                     {"chunk_requests", rs.chunk_requests}, {"coalesced_fetches", rs.coalesced},
                     {"max_response_fifo", rs.max_response_fifo}, {"max_request_queue", rs.max_request_queue}};
+    {
+        // Of the simulated rays' node fetches (a sampled run's frame estimate is under sampling).
+        const WorkloadDriver::RaySummary& sum = m.driver.summary();
+        const double nodes = double(std::max<uint64_t>(1, sum.nodes_visited));
+        j["rt_unit"]["node_fetch_l1_miss_share"] = double(sum.l1_miss_nodes) / nodes;
+        j["rt_unit"]["node_fetch_dram_share"] = double(sum.dram_nodes) / nodes;
+    }
     const double thread_total = double(rs.thread_cycles[0] + rs.thread_cycles[1] + rs.thread_cycles[2] + rs.thread_cycles[3]);
     auto frac = [&](ThreadStatus s) { return thread_total > 0 ? double(rs.thread_cycles[size_t(s)]) / thread_total : 0.0; };
     j["rt_unit"]["thread_status"] = {{"unit", "share of resident thread-cycles"},

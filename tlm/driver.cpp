@@ -265,6 +265,31 @@ WorkloadDriver::Estimate WorkloadDriver::estimate() const {
     if (ratio) v *= (critical_nodes_total_ / weighted_nodes) * (critical_nodes_total_ / weighted_nodes);
     e.relative_se = sampled_ && e.work_estimate > 0 ? std::sqrt(v) / e.work_estimate : 0.0;
     e.variance_pairs = uint32_t(work.size() / 2);
+    // Shares of node fetches: ratio estimates over the strata, residual variance by collapsed pairs.
+    const double t = boost::math::quantile(boost::math::complement(boost::math::students_t(std::max<uint32_t>(1, e.variance_pairs)), 0.025));
+    auto share = [&](double ShaderWarp::*part) {
+        std::vector<double> num(work.size(), 0.0), den(work.size(), 0.0);
+        for (const ShaderWarp& w : warps_) {
+            num[w.stratum] += w.weight * (w.*part);
+            den[w.stratum] += w.weight * w.nodes;
+        }
+        double sn = 0, sd = 0;
+        for (size_t h = 0; h < num.size(); ++h) sn += num[h], sd += den[h];
+        Estimate::Share s;
+        if (sd <= 0) return s;
+        s.estimate = sn / sd;
+        double vv = 0;
+        for (size_t i = 0; i + 1 < num.size(); i += 2) {
+            const double di = num[i] - s.estimate * den[i], dj = num[i + 1] - s.estimate * den[i + 1];
+            vv += (di - dj) * (di - dj);
+        }
+        const double half = sampled_ ? t * std::sqrt(vv) / sd : 0.0;
+        s.lo = std::max(0.0, s.estimate - half);
+        s.hi = std::min(1.0, s.estimate + half);
+        return s;
+    };
+    e.l1_miss_nodes = share(&ShaderWarp::l1_miss_nodes);
+    e.dram_nodes = share(&ShaderWarp::dram_nodes);
     e.saturated_until = saturated_until_;
     e.work_saturated = work_saturated_;
     return e;
@@ -343,6 +368,11 @@ void WorkloadDriver::retire(uint32_t sm, const std::vector<RetiredRay>& rays, ui
         summary_.invalid += !rec.r.valid;
         summary_.hits += rec.r.hit.hit;
         summary_.nodes_visited += rr.nodes_visited;
+        summary_.l1_miss_nodes += rr.l1_miss_nodes;
+        summary_.dram_nodes += rr.dram_nodes;
+        warps_[rec.warp].nodes += rr.nodes_visited;
+        warps_[rec.warp].l1_miss_nodes += rr.l1_miss_nodes;
+        warps_[rec.warp].dram_nodes += rr.dram_nodes;
         summary_.max_nodes = std::max(summary_.max_nodes, rr.nodes_visited);
         last_progress_ = now;
         follow.clear();

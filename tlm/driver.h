@@ -95,6 +95,7 @@ public:
     // Totals over every retired ray (kept or not).
     struct RaySummary {
         uint64_t rays = 0, invalid = 0, hits = 0, nodes_visited = 0;
+        uint64_t l1_miss_nodes = 0, dram_nodes = 0;  // node fetches not served by L1 / served by DRAM
         uint32_t max_nodes = 0;
     };
     const RaySummary& summary() const { return summary_; }
@@ -125,6 +126,12 @@ public:
         double model_frame = 0, model_sample = 0;      // schedule-model cycles
         double relative_se = 0;  // standard error of work_estimate / work_estimate
         uint32_t variance_pairs = 0;  // collapsed stratum pairs behind relative_se (degrees of freedom)
+        // The frame's share of node fetches that missed L1 / went to DRAM: the stratified ratio
+        // estimate and its 95 % interval (collapsed strata, Student's t).
+        struct Share {
+            double estimate = 0, lo = 0, hi = 0;
+        };
+        Share l1_miss_nodes, dram_nodes;
         // While at least `capacity` shader warps were unfinished the GPU ran full; after that
         // comes the tail. The frame's extra work runs at the full-GPU throughput, the tail
         // stays: cycles = simulated cycles + (work_estimate - work_simulated) / throughput.
@@ -165,6 +172,7 @@ private:
         uint32_t sm = 0;
         double weight = 1.0;  // warps of the frame this one stands for (its stratum's size)
         double work = 0;      // cycles its traces spent in an RT unit so far
+        double nodes = 0, l1_miss_nodes = 0, dram_nodes = 0;  // over its retired rays
         std::vector<uint32_t> trace_nodes;  // pre-pass: per trace, the most nodes one of its rays visits
         double critical_nodes = 0;          // their sum
         uint32_t traces_done = 0;
