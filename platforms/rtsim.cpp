@@ -96,6 +96,7 @@ int run(const Args& a) {
     if (!timing && (!a.vcd.empty() || !a.trace_warp.empty() || !a.sets.empty() || a.quantum || !a.prefetcher.empty() || a.sample != 1.0))
         throw InputError("--vcd, --trace-warp, --set, --quantum, --prefetcher and --sample need --fidelity at or lt");
     if (a.sample_seed && a.sample == 1.0) throw InputError("--sample-seed needs --sample RATE below 1");
+    if (a.threads == 0) throw InputError("--threads 0: the sampling pre-pass needs at least 1 thread");
     if (!(a.sample > 0.0 && a.sample <= 1.0))
         throw InputError("--sample " + std::to_string(a.sample) + ": the share of the frame to simulate must be in (0, 1]");
 

@@ -410,6 +410,7 @@ TEST(RtsimSampling, IntervalCoversTheFullRun) {
         EXPECT_DOUBLE_EQ(rt["node_fetch_dram_share"].get<double>(), dram / fetches);
     }
     EXPECT_EQ(rtsim(dir, "--scene cornell --fidelity at --sample-seed 3").status, 2);  // needs --sample
+    EXPECT_EQ(rtsim(dir, "--scene cornell --fidelity at --sample 0.5 --threads 0").status, 2);
 }
 
 // Modelling only what a scene needs: --flatten builds one single-level BVH when every mesh is
