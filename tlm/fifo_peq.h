@@ -40,8 +40,9 @@ public:
     }
     sc_core::sc_event& get_event() { return *event_; }
 
-    // Of two queues sharing a sequence counter: the payload due by now that one peq_with_get
-    // holding both would hand out next, or nullptr (each queue then waits for its next one).
+    // Of two queues sharing an event and a sequence counter: the payload due by now that one
+    // peq_with_get holding both would hand out next, or nullptr (the shared event is then
+    // notified for the earlier of the two fronts, as that peq_with_get would notify it).
     static T* merge_next(FifoPeq& a, FifoPeq& b) {
         const sc_core::sc_time now = sc_core::sc_time_stamp();
         const bool da = a.due(now), db = b.due(now);
