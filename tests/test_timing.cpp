@@ -9,6 +9,9 @@
 
 #include "platforms/gpu_platform.h"
 #include "test_util.h"
+#include "tlm/fifo_peq.h"
+
+#include <tlm_utils/peq_with_get.h>
 #include "workloads/bvh_builder.h"
 #include "workloads/scenes.h"
 
@@ -221,4 +224,86 @@ TEST(RtUnitCore, ResponseHeldBackPastTheTrackingRing) {
             EXPECT_EQ(got[i].t, f.hit.t) << "ray " << i;
         }
     }
+}
+
+// FifoPeq (tlm/fifo_peq.h) against tlm_utils::peq_with_get, the queue it replaces in the caches
+// and the crossbar: two FIFOs sharing an event and a sequence, each with its own fixed latency
+// (here hits after 30 ns, fills after 10 ns), must hand out the same payloads at the same times,
+// in the same order, as one peq_with_get fed the same schedule. Payloads of the two FIFOs due at
+// the same time leave in the order they were queued. A delivery due before the last one queued
+// in its FIFO is refused.
+namespace {
+struct PeqBench : sc_core::sc_module {
+    sc_core::sc_event shared{"shared"};
+    uint64_t seq = 0;
+    FifoPeq<int> hits{shared, seq}, fills{shared, seq};
+    tlm_utils::peq_with_get<int> ref{"ref"};
+    std::vector<std::pair<double, int>> got, want;
+    int items[11];
+    bool refused = false;
+    SC_HAS_PROCESS(PeqBench);
+    explicit PeqBench(sc_core::sc_module_name n) : sc_module(n) {
+        for (int i = 0; i < 11; ++i) items[i] = i;
+        SC_THREAD(feed);
+        SC_METHOD(drain);
+        sensitive << shared;
+        dont_initialize();
+        SC_METHOD(drain_ref);
+        sensitive << ref.get_event();
+        dont_initialize();
+    }
+    void both(int i, bool hit) {
+        const sc_core::sc_time d(hit ? 30 : 10, sc_core::SC_NS);
+        (hit ? hits : fills).notify(items[i], d);
+        ref.notify(items[i], d);
+    }
+    void feed() {
+        using sc_core::SC_NS;
+        both(0, true);   // due 30
+        both(1, false);  // due 10
+        sc_core::wait(5, SC_NS);
+        both(2, true);   // due 35
+        sc_core::wait(15, SC_NS);
+        both(3, false);  // due 30: ties with item 0, queued after it
+        sc_core::wait(5, SC_NS);
+        both(4, false);  // due 35: ties with item 2
+        sc_core::wait(5, SC_NS);
+        both(5, true);   // due 60
+        both(6, false);  // due 40
+        sc_core::wait(20, SC_NS);
+        both(7, false);  // due 60: ties with item 5
+        sc_core::wait(50, SC_NS);
+        try {
+            hits.notify(items[8], sc_core::sc_time(30, SC_NS));  // due 130
+            hits.notify(items[9], sc_core::sc_time(10, SC_NS));  // due 110, before item 8: refused
+        } catch (const std::logic_error&) {
+            refused = true;
+        }
+    }
+    void drain() {
+        while (int* p = FifoPeq<int>::merge_next(hits, fills)) got.push_back({sc_core::sc_time_stamp().to_seconds() * 1e9, *p});
+    }
+    void drain_ref() {
+        while (int* p = ref.get_next_transaction()) want.push_back({sc_core::sc_time_stamp().to_seconds() * 1e9, *p});
+    }
+};
+}  // namespace
+
+TEST(FifoPeq, SameDeliveriesAsPeqWithGet) {
+    FsResolution resolution;
+    PeqBench bench("bench");
+    sc_core::sc_start(sc_core::sc_time(1, sc_core::SC_US));
+    // The reference, worked by hand: 10: 1; 30: 0, 3; 35: 2, 4; 40: 6; 60: 5, 7.
+    const std::vector<std::pair<double, int>> expected{{10, 1}, {30, 0}, {30, 3}, {35, 2}, {35, 4}, {40, 6}, {60, 5}, {60, 7}};
+    ASSERT_EQ(bench.want.size(), expected.size());
+    for (size_t i = 0; i < expected.size(); ++i) {
+        EXPECT_NEAR(bench.want[i].first, expected[i].first, 1e-6);
+        EXPECT_EQ(bench.want[i].second, expected[i].second);
+    }
+    // The FIFOs also delivered item 8, which the reference never saw.
+    ASSERT_EQ(bench.got.size(), expected.size() + 1);
+    EXPECT_EQ(bench.got.back().second, 8);
+    bench.got.pop_back();
+    EXPECT_EQ(bench.got, bench.want);
+    EXPECT_TRUE(bench.refused);
 }
