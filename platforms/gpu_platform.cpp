@@ -208,11 +208,11 @@ GpuPlatform::GpuPlatform(const HwConfig& cfg, const BvhImage& image, Workload& w
     m.driver.keep_rays(opt.keep_rays);
     // Sampled run: when a simulated cluster starts, the caches are warmed with the node fetches
     // of the clusters skipped before it (L1 of the SM that made them, then L2 on an L1 miss).
-    m.driver.on_warm = [&m, sector = cfg.l1.sector](const std::vector<WarmFetch>& fetches) {
+    m.driver.on_warm = [impl = impl_.get(), sector = cfg.l1.sector](const std::vector<WarmFetch>& fetches) {
         for (const WarmFetch& f : fetches)
             for (uint32_t o = 0; o < f.bytes; o += sector) {
                 const uint64_t a = f.addr + o;
-                if (!m.l1[f.sm]->warm(a)) m.l2[m.xbar->slice_of(a)]->warm(a);
+                if (!impl->l1[f.sm]->warm(a)) impl->l2[impl->xbar->slice_of(a)]->warm(a);
             }
     };
 
