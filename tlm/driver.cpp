@@ -13,6 +13,23 @@
 #include "model/trace_schedule.h"
 
 namespace rtu {
+namespace {
+
+// Variance of a stratified total with one sample per stratum, by collapsing neighbouring strata
+// in pairs: the sum over pairs of (d_a - d_b)^2, d being each stratum's weighted value or its
+// residual from a ratio line (Cochran, Sampling Techniques, 5A.12 and 6.12).
+double collapsed_pairs_variance(const std::vector<double>& d) {
+    double v = 0;
+    for (size_t i = 0; i + 1 < d.size(); i += 2) v += (d[i] - d[i + 1]) * (d[i] - d[i + 1]);
+    return v;
+}
+
+// Student's t for a two-sided 95 % interval; one pair (or none) leaves one degree of freedom at the least.
+double t95(uint32_t pairs) {
+    return boost::math::quantile(boost::math::complement(boost::math::students_t(std::max<uint32_t>(1, pairs)), 0.025));
+}
+
+}  // namespace
 
 WorkloadDriver::WorkloadDriver(Workload& workload, uint32_t sms, uint32_t warp_size, uint32_t shade_latency,
                                const SamplingOptions& sampling)
@@ -94,18 +111,6 @@ void WorkloadDriver::prepass(const std::function<std::unique_ptr<Workload>()>& m
                              const std::vector<uint32_t>& feeds, size_t strata, size_t window, bool progress,
                              unsigned threads) {
     const auto t0 = std::chrono::steady_clock::now();
-    std::vector<WorkRay> first;
-    make_workload()->begin(first);
-    // First rays grouped by path (a counting sort: nothing allocated per path).
-    std::vector<uint32_t> start(path_warp_.size() + 1, 0);
-    for (const WorkRay& w : first) ++start[w.path + 1];
-    for (size_t p = 1; p < start.size(); ++p) start[p] += start[p - 1];
-    std::vector<WorkRay> by_path(first.size());
-    {
-        std::vector<uint32_t> at(start.begin(), start.end() - 1);
-        for (const WorkRay& w : first) by_path[at[w.path]++] = w;
-        std::vector<WorkRay>().swap(first);
-    }
     // Only the last `window` fetches before a simulated cluster warm the caches. Each thread
     // traces its range of warps backwards (warps are independent) and records the fetches of
     // whole warps until it has `window` of them for that stratum; the rest are traced unrecorded.
@@ -120,9 +125,9 @@ void WorkloadDriver::prepass(const std::function<std::unique_ptr<Workload>()>& m
         std::vector<WorkRay> follow;
         {
             std::vector<WorkRay> ignored;
-            fresh->begin(ignored);  // the workload's own set-up; the first rays are taken from `by_path`
+            fresh->begin(ignored);  // the workload's own set-up; the first rays are in the driver's queues
         }
-        std::vector<std::deque<WorkRay>> pending;  // per thread of the warp being traced (reused)
+        std::vector<RayQueue> pending;  // per thread of the warp being traced (reused)
         std::vector<StackEntry> fetched;
         auto last = t0;
         bool printed = false;
@@ -132,11 +137,7 @@ void WorkloadDriver::prepass(const std::function<std::unique_ptr<Workload>()>& m
             const uint32_t h = feeds[wi];
             std::vector<WarmFetch>* rec = h != ~0u && recorded[t][h] < window ? &warp_fetches[wi] : nullptr;
             pending.resize(std::max(pending.size(), sw.threads.size()));
-            for (size_t i = 0; i < sw.threads.size(); ++i) {
-                pending[i].clear();
-                const uint32_t p = sw.threads[i].path;
-                pending[i].insert(pending[i].end(), by_path.begin() + start[p], by_path.begin() + start[p + 1]);
-            }
+            for (size_t i = 0; i < sw.threads.size(); ++i) pending[i] = sw.threads[i].pending;  // its first rays
             for (;;) {
                 uint32_t longest = 0;
                 bool any = false;
@@ -209,7 +210,6 @@ void WorkloadDriver::prepass(const std::function<std::unique_ptr<Workload>()>& m
         }
     for (std::vector<WarmFetch>& w : warm_)
         if (w.size() > window) w.erase(w.begin(), w.end() - long(window));
-    ratio_ = critical_nodes_total_ > 0;
 }
 
 WorkloadDriver::Estimate WorkloadDriver::estimate() const {
@@ -227,7 +227,7 @@ WorkloadDriver::Estimate WorkloadDriver::estimate() const {
         work[w.stratum] += w.weight * w.work;
         nodes[w.stratum] += w.weight * w.critical_nodes;
     }
-    const bool ratio = sampled_ && ratio_ && weighted_nodes > 0;
+    const bool ratio = sampled_ && weighted_nodes > 0;  // the pre-pass ran and the sample visited nodes
     e.critical_nodes_total = critical_nodes_total_;
     e.prepass_threads = prepass_threads_;
     const double r = ratio ? e.work_estimate_stratified / weighted_nodes : 0.0;  // work per critical-path node
@@ -256,17 +256,16 @@ WorkloadDriver::Estimate WorkloadDriver::estimate() const {
         e.model_frame = schedule_cycles(frame, shape);
         e.model_sample = schedule_cycles(sample, shape);
     }
-    // One sample per stratum: the variance comes from collapsing neighbouring strata in pairs,
-    // sum over pairs of (d_a - d_b)^2 with d the stratum's weighted work, or for the ratio
-    // estimate its residual from the ratio line (Cochran, Sampling Techniques, 5A.12 and 6.12).
-    auto d = [&](size_t h) { return work[h] - r * nodes[h]; };
-    double v = 0;
-    for (size_t i = 0; i + 1 < work.size(); i += 2) v += (d(i) - d(i + 1)) * (d(i) - d(i + 1));
+    // The work's variance: of the strata's weighted work, or for the ratio estimate of their
+    // residuals from the ratio line.
+    std::vector<double> residual(work.size());
+    for (size_t h = 0; h < work.size(); ++h) residual[h] = work[h] - r * nodes[h];
+    double v = collapsed_pairs_variance(residual);
     if (ratio) v *= (critical_nodes_total_ / weighted_nodes) * (critical_nodes_total_ / weighted_nodes);
     e.relative_se = sampled_ && e.work_estimate > 0 ? std::sqrt(v) / e.work_estimate : 0.0;
     e.variance_pairs = uint32_t(work.size() / 2);
     // Shares of node fetches: ratio estimates over the strata, residual variance by collapsed pairs.
-    const double t = boost::math::quantile(boost::math::complement(boost::math::students_t(std::max<uint32_t>(1, e.variance_pairs)), 0.025));
+    const double t = t95(e.variance_pairs);
     auto share = [&](double ShaderWarp::*part) {
         std::vector<double> num(work.size(), 0.0), den(work.size(), 0.0);
         for (const ShaderWarp& w : warps_) {
@@ -278,12 +277,9 @@ WorkloadDriver::Estimate WorkloadDriver::estimate() const {
         Estimate::Share s;
         if (sd <= 0) return s;
         s.estimate = sn / sd;
-        double vv = 0;
-        for (size_t i = 0; i + 1 < num.size(); i += 2) {
-            const double di = num[i] - s.estimate * den[i], dj = num[i + 1] - s.estimate * den[i + 1];
-            vv += (di - dj) * (di - dj);
-        }
-        const double half = sampled_ ? t * std::sqrt(vv) / sd : 0.0;
+        std::vector<double> res(num.size());
+        for (size_t h = 0; h < num.size(); ++h) res[h] = num[h] - s.estimate * den[h];
+        const double half = sampled_ ? t * std::sqrt(collapsed_pairs_variance(res)) / sd : 0.0;
         s.lo = std::max(0.0, s.estimate - half);
         s.hi = std::min(1.0, s.estimate + half);
         return s;
@@ -296,8 +292,7 @@ WorkloadDriver::Estimate WorkloadDriver::estimate() const {
 }
 
 double WorkloadDriver::Estimate::relative_half_width(double cycles_simulated) const {
-    // One pair (or none, with a single stratum) leaves one degree of freedom at the least.
-    const double t = boost::math::quantile(boost::math::complement(boost::math::students_t(std::max<uint32_t>(1, variance_pairs)), 0.025));
+    const double t = t95(variance_pairs);
     const double model = 1.96 * std::sqrt(2.0) * model_misfit(cycles_simulated);
     return std::hypot(t * relative_se, model);
 }

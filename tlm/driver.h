@@ -207,7 +207,6 @@ private:
     uint64_t warps_total_ = 0;
     bool sampled_ = false;
     uint32_t capacity_ = 32;
-    bool ratio_ = false;
     double critical_nodes_total_ = 0;
     unsigned prepass_threads_ = 0;
     std::vector<std::vector<uint32_t>> frame_traces_;  // pre-pass: every warp of the frame, in frame order
