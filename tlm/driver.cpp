@@ -336,8 +336,7 @@ std::optional<std::vector<WarpRay>> WorkloadDriver::next_trace(uint32_t sm, uint
             }
             ++issued_;
             if (!rec.r.valid) {
-                // Invalid rays never reach the RT unit: a miss, counted.
-                ++invalid_;
+                // Invalid rays never reach the RT unit: a miss (counted when it retires).
                 invalid.push_back({key, Hit{}, 0});
                 continue;
             }
@@ -358,21 +357,20 @@ void WorkloadDriver::retire(uint32_t sm, const std::vector<RetiredRay>& rays, ui
         rec.r.hit = rr.hit;
         if (rec.r.hit.hit) rec.r.hit.t = std::ldexp(rec.r.hit.t, -rec.scale);
         rec.r.nodes_visited = rr.nodes_visited;
-        ++retired_;
         summary_.rays += 1;
         summary_.invalid += !rec.r.valid;
         summary_.hits += rec.r.hit.hit;
         summary_.nodes_visited += rr.nodes_visited;
         summary_.l1_miss_nodes += rr.l1_miss_nodes;
         summary_.dram_nodes += rr.dram_nodes;
-        warps_[rec.warp].nodes += rr.nodes_visited;
-        warps_[rec.warp].l1_miss_nodes += rr.l1_miss_nodes;
-        warps_[rec.warp].dram_nodes += rr.dram_nodes;
         summary_.max_nodes = std::max(summary_.max_nodes, rr.nodes_visited);
+        ShaderWarp& sw = warps_[rec.warp];
+        sw.nodes += rr.nodes_visited;
+        sw.l1_miss_nodes += rr.l1_miss_nodes;
+        sw.dram_nodes += rr.dram_nodes;
         last_progress_ = now;
         follow.clear();
         workload_.complete(rec.work, rec.r.hit, follow);
-        ShaderWarp& sw = warps_[rec.warp];
         for (const WorkRay& f : follow) {
             auto it = std::find_if(sw.threads.begin(), sw.threads.end(), [&](const Thread& t) { return t.path == f.path; });
             it->pending.push_back(f);

@@ -87,9 +87,8 @@ public:
     // Share of shader warps (pixel groups) whose paths have all ended.
     double fraction_done() const { return warps_.empty() ? 1.0 : 1.0 - double(live_warps_) / double(warps_.size()); }
     uint64_t rays_issued() const { return issued_; }
-    uint64_t rays_retired() const { return retired_; }
+    uint64_t rays_retired() const { return summary_.rays; }
     uint64_t last_progress() const { return last_progress_; }
-    uint64_t invalid_rays() const { return invalid_; }
     // Every ray with its hit, in (path, seq) order; empty unless the driver keeps the rays.
     std::vector<TracedRay> results() const;
     // Totals over every retired ray (kept or not).
@@ -203,7 +202,7 @@ private:
     bool keep_rays_ = true;
     uint64_t issued_ = 0;
     RaySummary summary_;
-    uint64_t live_warps_ = 0, retired_ = 0, last_progress_ = 0, invalid_ = 0;
+    uint64_t live_warps_ = 0, last_progress_ = 0;
     uint64_t warps_total_ = 0;
     bool sampled_ = false;
     uint32_t capacity_ = 32;

@@ -9,22 +9,22 @@ import sys
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "sweep"))
 from scenes import arguments, write_manifest  # noqa: E402
 
+# Runs go two at a time on two cores: the sampling pre-pass gets one thread, like everything else,
+# so that every speed-up is one core's against one core's.
+ONE_CORE = "--threads 1"
 FIDELITIES = {  # id -> rtsim arguments
     "at": "--fidelity at",
     "lt_q100": "--fidelity lt --quantum 100",
     "lt_q1000": "--fidelity lt --quantum 1000",
     "lt_q10000": "--fidelity lt --quantum 10000",
-    "at_s50": "--fidelity at --sample 0.5 --threads 1",
-    "at_s25": "--fidelity at --sample 0.25 --threads 1",
-    "at_s10": "--fidelity at --sample 0.1 --threads 1",
-    "lt_s50": "--fidelity lt --sample 0.5 --threads 1",
-    "lt_s25": "--fidelity lt --sample 0.25 --threads 1",
-    "lt_s10": "--fidelity lt --sample 0.1 --threads 1",
+    "at_s50": f"--fidelity at --sample 0.5 {ONE_CORE}",
+    "at_s25": f"--fidelity at --sample 0.25 {ONE_CORE}",
+    "at_s10": f"--fidelity at --sample 0.1 {ONE_CORE}",
+    "lt_s50": f"--fidelity lt --sample 0.5 {ONE_CORE}",
+    "lt_s25": f"--fidelity lt --sample 0.25 {ONE_CORE}",
+    "lt_s10": f"--fidelity lt --sample 0.1 {ONE_CORE}",
 }
 SAMPLE_RATES = {"s50": "0.5", "s25": "0.25", "s10": "0.1"}
-# Runs go two at a time on two cores: the sampling pre-pass gets one thread (--threads 1 above
-# too), like everything else, so that every speed-up is one core's against one core's.
-ONE_CORE = "--threads 1"
 EXTRA_SEEDS = range(2, 7)  # seed 1 is the rtsim default (--seed 1), run above as at_sNN_base
 
 
