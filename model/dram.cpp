@@ -74,4 +74,32 @@ bool DramChannel::schedule(uint64_t now, DramRequest* out, uint64_t* done) {
     return true;
 }
 
+DramBookings::DramBookings(const DramConfig& c, uint32_t line_bytes)
+    : cfg_(c), map_(c, line_bytes), banks_(c.channels, std::vector<Bank>(c.banks)), bus_(c.channels), stats_(c.channels) {}
+
+uint64_t DramBookings::access(uint64_t addr, uint32_t bytes, uint64_t now, uint64_t horizon) {
+    const DramCoord at = map_.map(addr);
+    Bank& b = banks_[at.channel][at.bank];
+    DramStats& st = stats_[at.channel];
+    uint64_t access;  // cycles from bank start to data
+    if (b.open && b.row == at.row) {
+        ++st.row_hits;
+        access = cfg_.tCL;
+    } else {
+        (b.open ? st.row_conflicts : st.row_misses)++;
+        access = (b.open ? cfg_.tRP : 0) + cfg_.tRCD + cfg_.tCL;
+    }
+    b.open = true;
+    b.row = at.row;
+    const uint64_t xfer = dram_transfer_cycles(cfg_, bytes);
+    const uint64_t bank_start = b.busy.book(now, std::max<uint64_t>(access - cfg_.tCL + cfg_.tCCD, 1), horizon);
+    const uint64_t bus_start = bus_[at.channel].book(bank_start + access, xfer, horizon);
+    ++st.reads;
+    st.bytes += bytes;
+    st.data_cycles += xfer;
+    st.queue_wait += bank_start - now;
+    return bus_start + xfer;
+}
+
 }  // namespace rtu
+

@@ -7,6 +7,7 @@
 #include <deque>
 #include <vector>
 
+#include "calendar.h"
 #include "config.h"
 
 namespace rtu {
@@ -26,6 +27,9 @@ public:
 private:
     uint32_t channels_, banks_, line_, lines_per_row_;
 };
+
+// Data-bus cycles (memory clock) of one transfer of `bytes`: bus_bytes x 2 per cycle (double data rate).
+inline uint64_t dram_transfer_cycles(const DramConfig& c, uint32_t bytes) { return (bytes + 2 * c.bus_bytes - 1) / (2 * c.bus_bytes); }
 
 struct DramRequest {
     uint64_t addr = 0;
@@ -60,7 +64,7 @@ public:
     const DramStats& stats() const { return stats_; }
 
     // Data cycles of one transfer of `bytes`.
-    uint64_t transfer_cycles(uint32_t bytes) const { return (bytes + 2 * cfg_.bus_bytes - 1) / (2 * cfg_.bus_bytes); }
+    uint64_t transfer_cycles(uint32_t bytes) const { return dram_transfer_cycles(cfg_, bytes); }
 
 private:
     struct Bank {
@@ -76,6 +80,30 @@ private:
     uint64_t next_col_ = 0, bus_free_ = 0, last_act_ = 0;
     bool any_act_ = false;
     DramStats stats_;
+};
+
+// DRAM of the fast fidelities (LT, interval): a read's timestamp books its bank and its channel's
+// data bus in calendars, so the order of calls does not matter; open rows follow call order
+// (the approximation). No request queue, no FR-FCFS reordering.
+class DramBookings {
+public:
+    DramBookings(const DramConfig& c, uint32_t line_bytes);
+    // A transfer of `bytes` arriving at memory cycle `now`; returns the memory cycle its data
+    // transfer ends. No later call may be timestamped before `horizon` (memory cycles).
+    uint64_t access(uint64_t addr, uint32_t bytes, uint64_t now, uint64_t horizon);
+    const DramStats& stats(uint32_t channel) const { return stats_[channel]; }
+
+private:
+    struct Bank {
+        bool open = false;
+        uint64_t row = 0;
+        Calendar busy;
+    };
+    DramConfig cfg_;
+    DramAddressMap map_;
+    std::vector<std::vector<Bank>> banks_;  // per channel
+    std::vector<Calendar> bus_;
+    std::vector<DramStats> stats_;
 };
 
 }  // namespace rtu

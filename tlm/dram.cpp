@@ -8,8 +8,7 @@ using namespace sc_core;
 
 Dram::Dram(sc_module_name name, const DramConfig& cfg, uint32_t line, const ClockDomain& clock, Fidelity fidelity)
     : sc_module(name), in("from_l2"), cfg_(cfg), map_(cfg, line), clock_(clock), blocked_(cfg.channels),
-      resp_peq_("resp_peq"), lt_banks_(cfg.channels, std::vector<LtBank>(cfg.banks)),
-      lt_bank_busy_(cfg.channels, std::vector<Calendar>(cfg.banks)), lt_bus_(cfg.channels), lt_stats_(cfg.channels) {
+      resp_peq_("resp_peq"), lt_(cfg, line) {
     for (uint32_t c = 0; c < cfg.channels; ++c) channels_.emplace_back(cfg);
     if (fidelity == Fidelity::AT) {
         in.register_nb_transport_fw(this, &Dram::nb_transport_fw);
@@ -27,7 +26,7 @@ Dram::Dram(sc_module_name name, const DramConfig& cfg, uint32_t line, const Cloc
 DramStats Dram::stats() const {
     DramStats s;
     for (uint32_t c = 0; c < channels_.size(); ++c)
-        for (const DramStats* x : {&channels_[c].stats(), &lt_stats_[c]}) {
+        for (const DramStats* x : {&channels_[c].stats(), &lt_.stats(c)}) {
             s.reads += x->reads;
             s.writes += x->writes;
             s.row_hits += x->row_hits;
@@ -111,30 +110,8 @@ void Dram::respond() {
 
 void Dram::b_transport(int id, tlm::tlm_generic_payload& t, sc_time& d) {
     const uint64_t now = clock_.cycle_at_or_after(sc_time_stamp() + d);
-    const DramCoord at = map_.map(t.get_address());
-    LtBank& b = lt_banks_[at.channel][at.bank];
-    DramStats& st = lt_stats_[at.channel];
-    // Row state follows call order (the LT approximation); bank and data-bus occupancy are
-    // booked at the request's own timestamp.
-    uint64_t access;  // cycles from bank start to data
-    if (b.open && b.row == at.row) {
-        ++st.row_hits;
-        access = cfg_.tCL;
-    } else {
-        (b.open ? st.row_conflicts : st.row_misses)++;
-        access = (b.open ? cfg_.tRP : 0) + cfg_.tRCD + cfg_.tCL;
-    }
-    b.open = true;
-    b.row = at.row;
-    const uint64_t xfer = channels_[at.channel].transfer_cycles(t.get_data_length());
     const uint64_t horizon = clock_.cycle_at_or_before(sc_time_stamp());
-    const uint64_t bank_start = lt_bank_busy_[at.channel][at.bank].book(now, std::max<uint64_t>(access - cfg_.tCL + cfg_.tCCD, 1), horizon);
-    const uint64_t bus_start = lt_bus_[at.channel].book(bank_start + access, xfer, horizon);
-    const uint64_t done = bus_start + xfer;
-    ++st.reads;
-    st.bytes += t.get_data_length();
-    st.data_cycles += xfer;
-    st.queue_wait += bank_start - now;
+    const uint64_t done = lt_.access(t.get_address(), t.get_data_length(), now, horizon);
     ext(t).dram = true;
     ext(t).source = uint32_t(id);
     t.set_response_status(tlm::TLM_OK_RESPONSE);

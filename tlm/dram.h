@@ -12,7 +12,6 @@
 #include <tlm_utils/peq_with_get.h>
 
 #include "clock.h"
-#include "model/calendar.h"
 #include "model/dram.h"
 #include "payload.h"
 #include "rt_unit.h"
@@ -43,15 +42,7 @@ private:
     std::vector<std::deque<tlm::tlm_generic_payload*>> blocked_;  // per channel: END_REQ withheld
     tlm_utils::peq_with_get<tlm::tlm_generic_payload> resp_peq_;
     sc_core::sc_event wake_;
-    // LT
-    struct LtBank {
-        bool open = false;
-        uint64_t row = 0;
-    };
-    std::vector<std::vector<LtBank>> lt_banks_;
-    std::vector<std::vector<Calendar>> lt_bank_busy_;
-    std::vector<Calendar> lt_bus_;
-    std::vector<DramStats> lt_stats_;
+    DramBookings lt_;  // LT
 };
 
 }  // namespace rtu
