@@ -105,17 +105,19 @@ void RtUnitCore::accept_warp(const std::vector<WarpRay>& rays, uint64_t now) {
     }
 }
 
-uint32_t RtUnitCore::math_latency(const StepInfo& s) const {
+uint32_t rt_math_latency(const RtLatency& lat, const StepInfo& s) {
     uint32_t l = 0;
     switch (s.type) {
-        case NodeType::Internal: l = cfg_.lat.header + cfg_.lat.ray_box; break;
-        case NodeType::Triangle: l = cfg_.lat.leaf_descriptor + cfg_.lat.ray_triangle + (s.hit ? cfg_.lat.triangle_hit : 0); break;
-        case NodeType::Procedural: l = cfg_.lat.leaf_descriptor + cfg_.lat.procedural; break;
-        case NodeType::Instance: l = cfg_.lat.leaf_descriptor + cfg_.lat.transform; break;
+        case NodeType::Internal: l = lat.header + lat.ray_box; break;
+        case NodeType::Triangle: l = lat.leaf_descriptor + lat.ray_triangle + (s.hit ? lat.triangle_hit : 0); break;
+        case NodeType::Procedural: l = lat.leaf_descriptor + lat.procedural; break;
+        case NodeType::Instance: l = lat.leaf_descriptor + lat.transform; break;
         case NodeType::Empty: break;
     }
     return std::max<uint32_t>(l, 1);
 }
+
+uint32_t RtUnitCore::math_latency(const StepInfo& s) const { return rt_math_latency(cfg_.lat, s); }
 
 bool RtUnitCore::has_request(uint64_t now) {
     if (!selected_) {

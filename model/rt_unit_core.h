@@ -53,6 +53,9 @@ struct ChunkRequest {
     uint64_t deadline = ~0ull;  // prefetch not sent by this cycle is dropped (Park: end of the leaf test)
 };
 
+// Cycles of a node's tests in the RT unit's math pipelines (at least 1).
+uint32_t rt_math_latency(const RtLatency& lat, const StepInfo& s);
+
 enum class ThreadStatus : uint8_t { Idle, WaitSchedule, WaitMemory, InMath, Count };
 
 struct RtUnitStats {

@@ -6,6 +6,7 @@
 #include <systemc>
 
 #include "model/treelet.h"
+#include "timing_stats.h"
 
 namespace rtu {
 
@@ -67,52 +68,6 @@ private:
     std::function<void(uint64_t)> sample_;
     std::chrono::steady_clock::time_point start_, last_print_;
 };
-
-nlohmann::ordered_json cache_json(const CacheStats& s) {
-    const uint64_t misses = s.sector_misses + s.line_misses;
-    return {{"accesses", s.accesses},
-            {"hits", s.hits},
-            {"mshr_hits", s.mshr_hits},
-            {"sector_misses", s.sector_misses},
-            {"line_misses", s.line_misses},
-            {"reservation_fails", s.reservation_fails},
-            {"miss_rate", s.accesses ? double(misses + s.mshr_hits) / double(s.accesses - s.reservation_fails + (s.accesses == s.reservation_fails)) : 0.0},
-            {"evictions", s.evictions},
-            {"prefetch_fills", s.prefetch_fills},
-            {"useful_prefetches", s.useful_prefetches},
-            {"late_prefetches", s.late_prefetches},
-            {"unused_prefetch_evictions", s.unused_evictions}};
-}
-
-// Prefetch figures of one cache level (paper section 6): accuracy = prefetched sectors later
-// used by a demand read / sectors prefetched; efficiency = prefetches that missed both the
-// cache and its MSHRs with an MSHR free / all prefetches; the full response breakdown.
-nlohmann::ordered_json prefetch_json(const CacheStats& demand, const CacheStats& pf) {
-    const uint64_t missed = pf.sector_misses + pf.line_misses;
-    return {{"issued", pf.accesses},
-            {"response", {{"hit", pf.hits}, {"mshr_hit", pf.mshr_hits}, {"mshr_miss_free_entry", missed},
-                          {"reservation_fail", pf.reservation_fails}}},
-            {"accuracy", pf.prefetch_fills ? double(demand.useful_prefetches) / double(pf.prefetch_fills) : 0.0},
-            {"efficiency", pf.accesses ? double(missed) / double(pf.accesses) : 0.0},
-            {"useful", demand.useful_prefetches},
-            {"late", demand.late_prefetches},
-            {"unused_evictions", pf.unused_evictions}};
-}
-
-void add(CacheStats& a, const CacheStats& b) {
-    a.accesses += b.accesses;
-    a.hits += b.hits;
-    a.mshr_hits += b.mshr_hits;
-    a.sector_misses += b.sector_misses;
-    a.line_misses += b.line_misses;
-    a.reservation_fails += b.reservation_fails;
-    a.fills += b.fills;
-    a.evictions += b.evictions;
-    a.prefetch_fills += b.prefetch_fills;
-    a.useful_prefetches += b.useful_prefetches;
-    a.late_prefetches += b.late_prefetches;
-    a.unused_evictions += b.unused_evictions;
-}
 
 }  // namespace
 
@@ -337,27 +292,7 @@ TimingResult GpuPlatform::run() {
     RtUnitStats rs;
     for (const auto& u : m.rt) {
         u->core().account(r.cycles_simulated);
-        const RtUnitStats& s = u->core().stats();
-        rs.warps += s.warps;
-        rs.rays += s.rays;
-        rs.node_fetches += s.node_fetches;
-        rs.chunk_requests += s.chunk_requests;
-        rs.coalesced += s.coalesced;
-        rs.responses += s.responses;
-        for (size_t i = 0; i < rs.thread_cycles.size(); ++i) rs.thread_cycles[i] += s.thread_cycles[i];
-        for (size_t i = 0; i < 5; ++i) {
-            rs.streak_fetches[i] += s.streak_fetches[i];
-            rs.streak_l1_misses[i] += s.streak_l1_misses[i];
-            rs.streak_dram_misses[i] += s.streak_dram_misses[i];
-        }
-        rs.max_response_fifo = std::max(rs.max_response_fifo, s.max_response_fifo);
-        rs.max_request_queue = std::max(rs.max_request_queue, s.max_request_queue);
-        rs.prefetches_generated += s.prefetches_generated;
-        rs.prefetch_duplicates += s.prefetch_duplicates;
-        rs.prefetches_sent += s.prefetches_sent;
-        rs.prefetch_responses += s.prefetch_responses;
-        rs.perfect_hits += s.perfect_hits;
-        rs.prefetches_expired += s.prefetches_expired;
+        add(rs, u->core().stats());
     }
     for (const auto& c : m.checkers) {
         r.protocol_transactions += c->transactions();
@@ -397,71 +332,8 @@ TimingResult GpuPlatform::run() {
                          {"node_fetch_dram_share", {{"estimate", est.dram_nodes.estimate}, {"ci95", {est.dram_nodes.lo, est.dram_nodes.hi}}}},
                          {"schedule_model_misfit", est.model_misfit(double(r.cycles_simulated))}};
     }
-    j["rt_unit"] = {{"warps", rs.warps}, {"rays", rs.rays}, {"node_fetches", rs.node_fetches},
-                    {"chunk_requests", rs.chunk_requests}, {"coalesced_fetches", rs.coalesced},
-                    {"max_response_fifo", rs.max_response_fifo}, {"max_request_queue", rs.max_request_queue}};
-    {
-        // Of the simulated rays' node fetches (a sampled run's frame estimate is under sampling).
-        const WorkloadDriver::RaySummary& sum = m.driver.summary();
-        const double nodes = double(std::max<uint64_t>(1, sum.nodes_visited));
-        j["rt_unit"]["node_fetch_l1_miss_share"] = double(sum.l1_miss_nodes) / nodes;
-        j["rt_unit"]["node_fetch_dram_share"] = double(sum.dram_nodes) / nodes;
-    }
-    const double thread_total = double(rs.thread_cycles[0] + rs.thread_cycles[1] + rs.thread_cycles[2] + rs.thread_cycles[3]);
-    auto frac = [&](ThreadStatus s) { return thread_total > 0 ? double(rs.thread_cycles[size_t(s)]) / thread_total : 0.0; };
-    j["rt_unit"]["thread_status"] = {{"unit", "share of resident thread-cycles"},
-                                     {"waiting_to_be_scheduled", frac(ThreadStatus::WaitSchedule)},
-                                     {"waiting_on_memory", frac(ThreadStatus::WaitMemory)},
-                                     {"in_math", frac(ThreadStatus::InMath)},
-                                     {"done_waiting_for_warp", frac(ThreadStatus::Idle)}};
-    nlohmann::ordered_json streak = nlohmann::ordered_json::array();
-    const char* names[5] = {"not_a_pop", "pop_1", "pop_2", "pop_3", "pop_4_or_more"};
-    for (int i = 0; i < 5; ++i)
-        streak.push_back({{"class", names[i]}, {"node_fetches", rs.streak_fetches[i]}, {"l1_misses", rs.streak_l1_misses[i]},
-                          {"dram_misses", rs.streak_dram_misses[i]}});
-    j["pop_streak"] = streak;
-    j["l1"] = {{"demand", cache_json(l1[0])}, {"prefetch", cache_json(l1[1])}};
-    j["l2"] = {{"demand", cache_json(l2[0])}, {"prefetch", cache_json(l2[1])}};
-    // RT-read misses per kilo node fetch: the paper's MPKI with node fetches for instructions.
-    auto mpkf = [&](const CacheStats& d) {
-        return rs.node_fetches ? 1000.0 * double(d.sector_misses + d.line_misses + d.mshr_hits) / double(rs.node_fetches) : 0.0;
-    };
-    j["l1"]["rt_misses_per_kilo_node_fetch"] = mpkf(l1[0]);
-    j["l2"]["rt_misses_per_kilo_node_fetch"] = mpkf(l2[0]);
-    j["prefetch"] = {{"prefetcher", prefetcher_name(m.cfg.prefetch.kind)},
-                     {"generated", rs.prefetches_generated},
-                     {"duplicates_dropped", rs.prefetch_duplicates},
-                     {"sent", rs.prefetches_sent},
-                     {"expired_unsent", rs.prefetches_expired},
-                     {"perfect_hits", rs.perfect_hits},
-                     {"l1", prefetch_json(l1[0], l1[1])},
-                     {"l2", prefetch_json(l2[0], l2[1])}};
-    j["dram"] = {{"reads", ds.reads}, {"writes", ds.writes}, {"bytes", ds.bytes}, {"row_hits", ds.row_hits},
-                 {"row_misses", ds.row_misses}, {"row_conflicts", ds.row_conflicts},
-                 {"bandwidth_utilisation", mem_cycles > 0 ? double(ds.data_cycles) / (mem_cycles * m.cfg.dram.channels) : 0.0},
-                 {"avg_queue_wait_mem_cycles", ds.reads + ds.writes ? double(ds.queue_wait) / double(ds.reads + ds.writes) : 0.0}};
-    // Energy from per-event energies: every L1 and L2 access (demand and prefetch, retries
-    // included), DRAM bursts and activations, and static power over the frame's time.
-    {
-        const EnergyTable& e = m.cfg.energy;
-        // Of the simulated part; a sampled run's frame energy is total_j x the work scale.
-        const double seconds = double(r.cycles_simulated) * double(m.core.period_fs()) * 1e-15;
-        const uint64_t l1_acc = l1[0].accesses + l1[1].accesses, l2_acc = l2[0].accesses + l2[1].accesses;
-        const uint64_t activates = ds.row_misses + ds.row_conflicts;
-        const double dyn_pj = double(l1_acc) * e.l1_access_pj + double(l2_acc) * e.l2_access_pj +
-                              double(ds.reads) * e.dram_read_pj + double(ds.writes) * e.dram_write_pj +
-                              double(activates) * e.dram_activate_pj;
-        const double static_j = e.static_w * seconds;
-        const double total_j = dyn_pj * 1e-12 + static_j;
-        j["energy"] = {{"l1_j", double(l1_acc) * e.l1_access_pj * 1e-12},
-                       {"l2_j", double(l2_acc) * e.l2_access_pj * 1e-12},
-                       {"dram_j", (double(ds.reads) * e.dram_read_pj + double(ds.writes) * e.dram_write_pj + double(activates) * e.dram_activate_pj) * 1e-12},
-                       {"static_j", static_j},
-                       {"total_j", total_j},
-                       {"seconds", seconds},
-                       {"average_power_w", seconds > 0 ? total_j / seconds : 0.0},
-                       {"frame_total_j_estimate", total_j * est.scale()}};
-    }
+    HierarchyCounts h{rs, {l1[0], l1[1]}, {l2[0], l2[1]}, ds, r.cycles_simulated, double(m.core.period_fs()), mem_cycles};
+    hierarchy_json(j, m.cfg, h, m.driver.summary(), est.scale());
     j["payloads_allocated"] = m.pool.allocated();
     r.stats = j;
     return r;

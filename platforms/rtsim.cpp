@@ -17,6 +17,7 @@
 
 #include "functional_run.h"
 #include "gpu_platform.h"
+#include "interval_run.h"
 #include "model/traversal.h"
 #include "model/treelet.h"
 #include "output.h"
@@ -83,9 +84,10 @@ std::pair<int, int> parse_trace_warp(const std::string& s, const HwConfig& hw) {
 }
 
 int run(const Args& a) {
-    const bool timing = a.fidelity == "at" || a.fidelity == "lt";
+    const bool interval = a.fidelity == "interval";
+    const bool timing = a.fidelity == "at" || a.fidelity == "lt" || interval;
     if (!timing && a.fidelity != "functional")
-        throw InputError("--fidelity '" + a.fidelity + "': allowed are functional, at, lt");
+        throw InputError("--fidelity '" + a.fidelity + "': allowed are functional, at, lt, interval");
     TraversalOrder order;
     if (a.traversal == "dfs") order = TraversalOrder::DFS;
     else if (a.traversal == "bfs") order = TraversalOrder::BFS;
@@ -94,7 +96,10 @@ int run(const Args& a) {
     const WorkloadKind kind = a.rays.empty() ? parse_workload(a.workload) : WorkloadKind::RayFile;
     if (!a.rays.empty() && !a.image.empty()) throw InputError("--image needs a scene workload, not --rays");
     if (!timing && (!a.vcd.empty() || !a.trace_warp.empty() || !a.sets.empty() || a.quantum || !a.prefetcher.empty() || a.sample != 1.0))
-        throw InputError("--vcd, --trace-warp, --set, --quantum, --prefetcher and --sample need --fidelity at or lt");
+        throw InputError("--vcd, --trace-warp, --set, --quantum, --prefetcher and --sample need --fidelity at, lt or interval");
+    if (interval && (!a.vcd.empty() || !a.trace_warp.empty() || a.quantum || a.sample != 1.0))
+        throw InputError("--vcd, --trace-warp, --quantum and --sample need --fidelity at or lt (the interval fidelity has no "
+                         "SystemC signals, quantum or sampling)");
     if (a.sample_seed && a.sample == 1.0) throw InputError("--sample-seed needs --sample RATE below 1");
     if (a.threads == 0) throw InputError("--threads 0: the sampling pre-pass needs at least 1 thread");
     if (!(a.sample > 0.0 && a.sample <= 1.0))
@@ -199,8 +204,16 @@ int run(const Args& a) {
         if (to.vcd.size() > 4 && to.vcd.compare(to.vcd.size() - 4, 4, ".vcd") == 0) to.vcd.resize(to.vcd.size() - 4);
         if (!a.trace_warp.empty()) std::tie(to.trace_sm, to.trace_warp) = parse_trace_warp(a.trace_warp, hw);
         to.keep_rays = !a.hits.empty() || a.verify;  // else memory for the rays in flight only
-        GpuPlatform platform(hw, image, *workload, to);
-        timing_result = platform.run();
+        if (interval) {
+            try {
+                timing_result = run_interval(hw, image, *workload, to);
+            } catch (const std::invalid_argument& e) {
+                throw InputError(e.what());
+            }
+        } else {
+            GpuPlatform platform(hw, image, *workload, to);
+            timing_result = platform.run();
+        }
         rays = std::move(timing_result.rays);
         j["nodes_visited"] = timing_result.summary.nodes_visited;
         j["max_nodes_per_ray"] = timing_result.summary.max_nodes;
@@ -330,7 +343,7 @@ int sc_main(int argc, char** argv) {
         "rtsim: ray-tracing unit model\n"
         "usage: rtsim --scene NAME|PATH [--assets DIR] [--workload primary|pt|ao|sh] [--rays FILE] [--hits FILE]\n"
         "             [--width W --height H --spp N --bounces B --seed S] [--traversal dfs|bfs|treelet]\n"
-        "             [--fidelity functional|at|lt] [--config NAME|FILE] [--set KEY=VALUE]... [--quantum CYCLES]\n"
+        "             [--fidelity functional|at|lt|interval] [--config NAME|FILE] [--set KEY=VALUE]... [--quantum CYCLES]\n"
         "             [--prefetcher none|ttp|park|treelet|perfect-up|perfect-down] [--sample RATE [--sample-seed S]]\n"
         "             [--stats FILE.json] [--image FILE.png] [--vcd FILE] [--trace-warp SM:WARP] [--verify] [--quiet]\n"
         "exit status: 0 ok, 1 a check failed (--verify mismatches), 2 bad input, 3 internal error\noptions");
@@ -347,7 +360,7 @@ int sc_main(int argc, char** argv) {
         ("bounces", po::value(&a.bounces)->default_value(a.bounces), "path tracing: at most this many rays per path")
         ("seed", po::value(&a.seed)->default_value(a.seed), "random seed")
         ("traversal", po::value(&a.traversal)->default_value(a.traversal), "dfs, bfs or treelet")
-        ("fidelity", po::value(&a.fidelity)->default_value(a.fidelity), "functional, at (reference timing) or lt (fast timing)")
+        ("fidelity", po::value(&a.fidelity)->default_value(a.fidelity), "functional, at (reference timing), lt (loosely timed) or interval (fastest timing, whole traces at a time)")
         ("config", po::value(&a.config)->default_value(a.config), "hardware preset (mobile, desktop) or JSON file")
         ("set", po::value(&a.sets)->composing(), "override one configuration key, e.g. --set l1.size_kb=64 (repeatable)")
         ("quantum", po::value(&a.quantum), "LT quantum in core cycles (same as --set sim.quantum=N)")

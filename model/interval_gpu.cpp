@@ -1,0 +1,245 @@
+#include "interval_gpu.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "node_format.h"
+
+namespace rtu {
+
+IntervalGpu::IntervalGpu(const HwConfig& cfg, const BvhImage& image, TraversalOrder order)
+    : cfg_(cfg),
+      image_(image),
+      order_(order),
+      core_fs_(uint64_t(std::llround(1e9 / cfg.core_mhz))),
+      memory_fs_(uint64_t(std::llround(1e9 / cfg.memory_mhz))),
+      issue_(cfg.sms),
+      drain_(cfg.sms),
+      l2_port_(cfg.l2_slices),
+      l1_ready_(cfg.sms),
+      l2_ready_(cfg.l2_slices),
+      dram_(cfg.dram, cfg.l2.line) {
+    if (order == TraversalOrder::Treelet)
+        throw std::invalid_argument("the interval fidelity models DFS and BFS traversal, not treelet traversal (use --fidelity at or lt)");
+    if (cfg.prefetch.kind != PrefetcherKind::None && cfg.prefetch.kind != PrefetcherKind::Ttp)
+        throw std::invalid_argument(std::string("the interval fidelity models the prefetchers none and ttp, not '") +
+                                    prefetcher_name(cfg.prefetch.kind) + "' (use --fidelity at or lt)");
+    for (uint32_t s = 0; s < cfg.sms; ++s) l1_.emplace_back(cfg.l1);
+    for (uint32_t s = 0; s < cfg.l2_slices; ++s) l2_.emplace_back(cfg.l2);
+}
+
+uint64_t IntervalGpu::memory_cycle(uint64_t c) const { return (c * core_fs_ + memory_fs_ - 1) / memory_fs_; }
+uint64_t IntervalGpu::core_cycle(uint64_t m) const { return (m * memory_fs_ + core_fs_ - 1) / core_fs_; }
+
+DramStats IntervalGpu::dram_stats() const {
+    DramStats s;
+    for (uint32_t c = 0; c < cfg_.dram.channels; ++c) {
+        const DramStats& x = dram_.stats(c);
+        s.reads += x.reads;
+        s.writes += x.writes;
+        s.row_hits += x.row_hits;
+        s.row_misses += x.row_misses;
+        s.row_conflicts += x.row_conflicts;
+        s.bytes += x.bytes;
+        s.data_cycles += x.data_cycles;
+        s.queue_wait += x.queue_wait;
+    }
+    return s;
+}
+
+// Sectors whose data arrived by the floor are plain hits for every later read: they are
+// forgotten when the map has grown to twice its size after the last pruning (at least 4 entries
+// per cache line), so that pruning costs O(1) per read.
+void IntervalGpu::remember(ReadyMap& m, uint64_t sector, Ready r, size_t lines) {
+    m.at[sector] = r;
+    if (m.at.size() <= std::max(m.prune_above, 4 * lines)) return;
+    for (auto it = m.at.begin(); it != m.at.end();) {
+        if (it->second.at <= floor_)
+            m.at.erase(it++);
+        else
+            ++it;
+    }
+    m.prune_above = 2 * m.at.size();
+}
+void IntervalGpu::advance(uint64_t floor) {
+    if (floor <= floor_) return;
+    floor_ = floor;
+    for (PortCalendar& p : issue_) p.advance(floor);
+    for (PortCalendar& p : drain_) p.advance(floor);
+    for (PortCalendar& p : l2_port_) p.advance(floor);
+}
+
+uint64_t IntervalGpu::mshr_slot(ReadyMap& m, SectorCache& tags, uint32_t mshrs, uint64_t c, ReqKind kind) {
+    while (!m.mshr_free.empty() && m.mshr_free.top() <= c) m.mshr_free.pop();
+    if (m.mshr_free.size() < mshrs) return c;
+    tags.count_reservation_fail(kind);
+    const uint64_t t = m.mshr_free.top();
+    m.mshr_free.pop();
+    return t;
+}
+
+uint64_t IntervalGpu::arrival(ReadyMap& m, uint64_t sector, uint64_t cycle, bool* dram) {
+    auto f = m.at.find(sector);
+    if (f == m.at.end() || f->second.at <= cycle) return ~0ull;
+    Ready& r = f->second;
+    if (cycle < r.sent) {
+        r.at = cycle + (r.at - r.sent);
+        r.sent = cycle;
+    }
+    *dram = r.dram;
+    return r.at;
+}
+
+IntervalGpu::Ready IntervalGpu::read_l2(uint64_t addr, uint64_t cycle, ReqKind kind) {
+    const uint32_t s = uint32_t((addr / cfg_.l2.line) % cfg_.l2_slices);
+    SectorCache& tags = l2_[s];
+    ReadyMap& ready = l2_ready_[s];
+    const uint64_t c = l2_port_[s].book(cycle);  // one lookup per cycle
+    const uint64_t sector = tags.sector_of(addr);
+    const CacheOutcome o = tags.read(addr, ++token_, kind);
+    if (o == CacheOutcome::Hit) {
+        bool dram = false;
+        const uint64_t at = arrival(ready, sector, c, &dram);
+        if (at != ~0ull && at > c + cfg_.l2.latency) {  // still on its way from DRAM
+            tags.count_as_mshr_hit(kind);
+            return {c, at, true};
+        }
+        return {c, c + cfg_.l2.latency, false};
+    }
+    // A miss (the tags never hold a pending sector here, so never a reservation fail): DRAM
+    // after the lookup; the sector is filled at once, marked with the cycle its data arrives.
+    const uint64_t m = mshr_slot(ready, tags, cfg_.l2.mshrs, c, kind);
+    const uint64_t mem = memory_cycle(m + cfg_.l2.latency);
+    const uint64_t done = core_cycle(dram_.access(sector, cfg_.l2.sector, mem, memory_cycle(floor_)));
+    ready.mshr_free.push(done);
+    tags.fill(sector);
+    remember(ready, sector, {c, done, true}, tags.lines());
+    return {c, done, true};
+}
+
+IntervalGpu::Served IntervalGpu::read(uint32_t sm, uint64_t addr, uint64_t cycle, ReqKind kind) {
+    SectorCache& tags = l1_[sm];
+    ReadyMap& ready = l1_ready_[sm];
+    const uint64_t sector = tags.sector_of(addr);
+    const CacheOutcome o = tags.read(addr, ++token_, kind);
+    if (o == CacheOutcome::Hit) {
+        bool dram = false;
+        const uint64_t at = arrival(ready, sector, cycle, &dram);
+        if (at != ~0ull && at > cycle + cfg_.l1_hit_latency) {  // still on its way
+            tags.count_as_mshr_hit(kind);
+            return {at, true, dram};
+        }
+        return {cycle + cfg_.l1_hit_latency, false, false};
+    }
+    const uint64_t xbar = cfg_.xbar_latency;
+    const uint64_t m = mshr_slot(ready, tags, cfg_.l1.mshrs, cycle, kind);
+    const Ready r = read_l2(sector, m + cfg_.l1_hit_latency + xbar, kind);
+    const uint64_t done = r.at + xbar;
+    ready.mshr_free.push(done);
+    tags.fill(sector);
+    remember(ready, sector, {cycle, done, r.dram}, tags.lines());
+    return {done, true, r.dram};
+}
+
+uint64_t IntervalGpu::trace(uint32_t sm, const std::vector<WarpRay>& rays, uint64_t start, std::vector<RetiredRay>& retired) {
+    advance(start);
+    PortCalendar& issue = issue_[sm];
+    PortCalendar& drain = drain_[sm];
+    threads_.resize(rays.size());
+    live_.clear();
+    fetches_.clear();
+    for (uint32_t i = 0; i < rays.size(); ++i) {
+        Thread& t = threads_[i];
+        t.trav.start(rays[i].ray, image_.header(), order_);
+        t.ready = start;
+        t.streak = 0;
+        t.l1_miss_nodes = t.dram_nodes = 0;
+        t.ttp_dfs = TtpDfs{};
+        t.ttp_bfs = TtpBfs{};
+        if (!t.trav.done()) live_.push_back(i);
+    }
+    ++rt_.warps;
+    rt_.rays += rays.size();
+    uint64_t end = start;
+    // Round by round: every live thread fetches and tests its next node, so that the caches see
+    // the trace's fetches roughly in time order.
+    while (!live_.empty()) {
+        next_live_.clear();
+        for (uint32_t i : live_) {
+            Thread& t = threads_[i];
+            const StackEntry e = t.trav.peek();
+            uint8_t fetch_class = 0;
+            if (t.trav.next_is_pop()) {
+                t.streak = uint8_t(std::min(t.streak + 1, 4));
+                fetch_class = t.streak;
+            }
+            ++rt_.node_fetches;
+            ++rt_.streak_fetches[fetch_class];
+            Fetch f;
+            auto same = fetches_.find(e.addr);
+            if (same != fetches_.end() && same->second.scheduled == t.ready) {
+                f = same->second;  // coalesced with a thread scheduled in the same cycle
+                ++rt_.coalesced;
+            } else {
+                f = {t.ready, t.ready, false, false};
+                const uint32_t chunks = node_bytes(e.type) / kChunkBytes;
+                for (uint32_t c = 0; c < chunks; ++c) {
+                    const uint64_t sent = issue.book(t.ready + 1);
+                    const Served s = read(sm, e.addr + uint64_t(c) * kChunkBytes, sent, ReqKind::Demand);
+                    f.done = std::max(f.done, drain.book(s.at + 1));
+                    f.l1_miss |= s.l1_miss;
+                    f.dram |= s.dram;
+                }
+                rt_.chunk_requests += chunks;
+                rt_.responses += chunks;
+                fetches_[e.addr] = f;
+            }
+            // TTP: on a pop, entries below the popped one leave as prefetches in cycles without a
+            // demand: in the request port's first free cycles, which stay free for demands.
+            if (fetch_class > 0 && cfg_.prefetch.kind == PrefetcherKind::Ttp) {
+                const auto& st = t.trav.stack();
+                picks_.clear();
+                if (order_ == TraversalOrder::DFS)
+                    t.ttp_dfs.on_pop(st.size() - 1, cfg_.prefetch.depth, picks_);
+                else
+                    t.ttp_bfs.on_pop(st.size() - 1, cfg_.prefetch.bfs_n, picks_);
+                for (size_t k : picks_) {
+                    const StackEntry& p = order_ == TraversalOrder::DFS ? st[k] : st[k + 1];
+                    for (uint32_t c = 0; c < node_bytes(p.type) / kChunkBytes; ++c) {
+                        read(sm, p.addr + uint64_t(c) * kChunkBytes, issue.first_free(t.ready + 1 + c), ReqKind::Prefetch);
+                        ++rt_.prefetches_generated;
+                        ++rt_.prefetches_sent;
+                        ++rt_.prefetch_responses;
+                    }
+                }
+            }
+            rt_.streak_l1_misses[fetch_class] += f.l1_miss;
+            rt_.streak_dram_misses[fetch_class] += f.dram;
+            t.l1_miss_nodes += f.l1_miss;
+            t.dram_nodes += f.dram;
+            const StepInfo info = t.trav.step(image_);
+            if (info.pushed > 0) {
+                t.streak = 0;
+                t.ttp_dfs.on_push(t.trav.stack().size());
+            }
+            const uint32_t math = rt_math_latency(cfg_.lat, info);
+            rt_.thread_cycles[size_t(ThreadStatus::WaitMemory)] += f.done - t.ready;
+            rt_.thread_cycles[size_t(ThreadStatus::InMath)] += math;
+            t.ready = f.done + math;
+            if (t.trav.done())
+                end = std::max(end, t.ready);
+            else
+                next_live_.push_back(i);
+        }
+        live_.swap(next_live_);
+    }
+    for (uint32_t i = 0; i < rays.size(); ++i) {
+        const Thread& t = threads_[i];
+        rt_.thread_cycles[size_t(ThreadStatus::Idle)] += end - (t.trav.nodes_visited() ? t.ready : start);
+        retired.push_back({rays[i].key, t.trav.hit(), t.trav.nodes_visited(), t.l1_miss_nodes, t.dram_nodes});
+    }
+    return end;
+}
+
+}  // namespace rtu

@@ -1,0 +1,77 @@
+#include "interval_run.h"
+
+#include <chrono>
+#include <cmath>
+#include <iostream>
+#include <queue>
+
+#include "model/interval_gpu.h"
+#include "timing_stats.h"
+
+namespace rtu {
+
+TimingResult run_interval(const HwConfig& cfg, const BvhImage& image, Workload& workload, const TimingOptions& opt) {
+    IntervalGpu gpu(cfg, image, opt.order);
+    WorkloadDriver driver(workload, cfg.sms, cfg.warp_size, cfg.shade_latency);
+    driver.keep_rays(opt.keep_rays);
+
+    // Warp-buffer slots by the cycle they are free (then by SM: deterministic order).
+    using Slot = std::pair<uint64_t, uint32_t>;
+    std::priority_queue<Slot, std::vector<Slot>, std::greater<Slot>> free_slots;
+    for (uint32_t sm = 0; sm < cfg.sms; ++sm)
+        for (uint32_t w = 0; w < cfg.warp_buffer; ++w) free_slots.push({0, sm});
+    std::vector<RetiredRay> retired;
+    uint64_t end = 0;
+    const auto t0 = std::chrono::steady_clock::now();
+    auto last_print = t0;
+    bool printed = false;
+    while (!free_slots.empty()) {
+        const auto [now, sm] = free_slots.top();
+        free_slots.pop();
+        auto trace = driver.next_trace(sm, now);
+        if (!trace) {
+            // None of this SM's warps is ready yet: the slot waits for the earliest. Every trace
+            // in flight was timed when it started, so its warp's next trace is already known;
+            // nothing waiting means every warp of this SM is done.
+            const uint64_t r = driver.earliest_ready(sm);
+            if (r != ~0ull) free_slots.push({std::max(r, now + 1), sm});
+            continue;
+        }
+        retired.clear();
+        const uint64_t done = gpu.trace(sm, *trace, now, retired);
+        driver.retire(sm, retired, done);
+        end = std::max(end, done);
+        free_slots.push({done + 1, sm});  // the slot takes its next trace in the following cycle
+        if (opt.progress) {
+            const auto t = std::chrono::steady_clock::now();
+            if (std::chrono::duration<double>(t - last_print).count() > 2.0) {
+                last_print = t;
+                const double wall = std::chrono::duration<double>(t - t0).count(), f = driver.fraction_done();
+                std::cerr << "\r  cycle " << now << ", rays retired " << driver.rays_retired() << " (" << int(100 * f)
+                          << " % of pixel warps done), " << uint64_t(double(driver.rays_retired()) / std::max(wall, 1e-9)) << " rays/s";
+                if (f > 0.02) std::cerr << ", ETA " << int(wall * (1.0 - f) / f) << " s";
+                std::cerr << "   " << std::flush;
+                printed = true;
+            }
+        }
+    }
+    if (printed) std::cerr << "\n";
+
+    TimingResult r;
+    r.cycles = r.cycles_simulated = end;  // the frame ends when its last ray retires
+    r.rays = driver.results();
+    r.summary = driver.summary();
+    if (!driver.finished() || driver.rays_retired() != driver.rays_issued()) r.invariant_failures.push_back("not every ray retired");
+    HierarchyCounts h{gpu.rt_stats(), {}, {}, gpu.dram_stats(), end, double(std::llround(1e9 / cfg.core_mhz)), double(gpu.memory_cycle(end))};
+    for (int k = 0; k < kReqKinds; ++k) {
+        for (const SectorCache& c : gpu.l1()) add(h.l1[k], c.stats(ReqKind(k)));
+        for (const SectorCache& c : gpu.l2()) add(h.l2[k], c.stats(ReqKind(k)));
+    }
+    nlohmann::ordered_json j;
+    j["cycles"] = end;
+    hierarchy_json(j, cfg, h, driver.summary(), 1.0);
+    r.stats = j;
+    return r;
+}
+
+}  // namespace rtu

@@ -1,0 +1,14 @@
+// The interval fidelity (docs/interval.md): the GPU of the timing model with each trace timed as
+// a whole (model/interval_gpu.h) instead of cycle by cycle, driven by the same workload driver
+// as AT and LT: warp-buffer slots take traces in the order they come free, and a trace's rays
+// retire when its slowest thread is done. No SystemC kernel: a heap of slot-free events.
+#pragma once
+#include "gpu_platform.h"
+
+namespace rtu {
+
+// Uses `fidelity`-independent options only: order, progress, keep_rays. Throws
+// std::invalid_argument for what the interval fidelity does not model (IntervalGpu).
+TimingResult run_interval(const HwConfig& cfg, const BvhImage& image, Workload& workload, const TimingOptions& opt);
+
+}  // namespace rtu

@@ -1,0 +1,31 @@
+// The statistics every timing fidelity reports (RT unit, pop streaks, L1, L2, prefetch, DRAM,
+// energy), from counters summed over the hierarchy's modules.
+#pragma once
+#include <nlohmann/json.hpp>
+
+#include "model/config.h"
+#include "model/dram.h"
+#include "model/rt_unit_core.h"
+#include "model/sector_cache.h"
+#include "tlm/driver.h"
+
+namespace rtu {
+
+void add(CacheStats& a, const CacheStats& b);
+void add(RtUnitStats& a, const RtUnitStats& b);
+
+struct HierarchyCounts {
+    RtUnitStats rt;
+    CacheStats l1[kReqKinds], l2[kReqKinds];  // summed over the SMs' L1s / the L2 slices
+    DramStats dram;
+    uint64_t cycles_simulated;
+    double core_period_fs;
+    double memory_cycles;  // of the simulated time
+};
+
+// Adds rt_unit, pop_streak, l1, l2, prefetch, dram and energy to `j`. `energy_scale`: the frame's
+// work over the simulated work (1 unless sampled).
+void hierarchy_json(nlohmann::ordered_json& j, const HwConfig& cfg, const HierarchyCounts& h,
+                    const WorkloadDriver::RaySummary& sum, double energy_scale);
+
+}  // namespace rtu
