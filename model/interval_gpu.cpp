@@ -187,7 +187,9 @@ uint64_t IntervalGpu::trace(uint32_t sm, const std::vector<WarpRay>& rays, uint6
                 for (uint32_t c = 0; c < chunks; ++c) {
                     const uint64_t sent = issue.book(t.ready + 1);
                     const Served s = read(sm, e.addr + uint64_t(c) * kChunkBytes, sent, ReqKind::Demand);
-                    f.done = std::max(f.done, drain.book(s.at + 1));
+                    // Drained from the response FIFO one per cycle, at the earliest in the cycle
+                    // after the request left (an L1 hit's answer comes in that same cycle).
+                    f.done = std::max(f.done, drain.book(std::max(s.at, sent + 1)));
                     f.l1_miss |= s.l1_miss;
                     f.dram |= s.dram;
                 }
