@@ -8,6 +8,8 @@
 #include <map>
 
 #include "platforms/gpu_platform.h"
+#include "platforms/interval_run.h"
+#include "model/interval_gpu.h"
 #include "test_util.h"
 #include "tlm/fifo_peq.h"
 
@@ -28,9 +30,11 @@ Scene scene_named(const std::string& name) {
     return load_scene(name, rtu::test::shared_dir() + "/scenes/" + name);
 }
 
+enum class Model { AT, LT, Interval };
+
 // Runs the functional model and the timing model on the same workload and checks that every ray
 // (keyed by path and order within its path) got exactly the same hit.
-void timing_equals_functional(const std::string& name, Fidelity fidelity, WorkloadKind kind) {
+void timing_equals_functional(const std::string& name, Model model, WorkloadKind kind) {
     FsResolution resolution;
     const Scene scene = scene_named(name);
     const BvhImage image = build_bvh_image(scene);
@@ -44,11 +48,16 @@ void timing_equals_functional(const std::string& name, Fidelity fidelity, Worklo
 
     auto tw = make_scene_workload(kind, scene, p);
     TimingOptions opt;
-    opt.fidelity = fidelity;
+    opt.fidelity = model == Model::LT ? Fidelity::LT : Fidelity::AT;
     opt.check_protocol = true;
     HwConfig hw = Config::load("mobile").resolve();
-    GpuPlatform platform(hw, image, *tw, opt);
-    const TimingResult r = platform.run();
+    TimingResult r;
+    if (model == Model::Interval) {
+        r = run_interval(hw, image, *tw, opt);
+    } else {
+        GpuPlatform platform(hw, image, *tw, opt);
+        r = platform.run();
+    }
     ASSERT_FALSE(r.stuck) << r.stuck_report;
     EXPECT_TRUE(r.invariant_failures.empty()) << r.invariant_failures.front();
     ASSERT_EQ(r.rays.size(), f.rays.size());
@@ -61,7 +70,7 @@ void timing_equals_functional(const std::string& name, Fidelity fidelity, Worklo
         EXPECT_EQ(t.hit.prim, it->second.prim);
     }
     EXPECT_GT(r.cycles, 0u);
-    if (fidelity == Fidelity::AT) {
+    if (model == Model::AT) {
         EXPECT_GT(r.protocol_transactions, r.rays.size());
         EXPECT_TRUE(r.protocol_violations.empty()) << r.protocol_violations.front();
     }
@@ -72,11 +81,33 @@ void timing_equals_functional(const std::string& name, Fidelity fidelity, Worklo
 
 }  // namespace
 
-TEST(TimingAT, BunnyPathTracingHitsEqualFunctional) { timing_equals_functional("bunny", Fidelity::AT, WorkloadKind::PathTrace); }
-TEST(TimingAT, WkndAmbientOcclusionHitsEqualFunctional) { timing_equals_functional("wknd", Fidelity::AT, WorkloadKind::AmbientOcclusion); }
-TEST(TimingAT, ShipShadowHitsEqualFunctional) { timing_equals_functional("ship", Fidelity::AT, WorkloadKind::Shadow); }
-TEST(TimingLT, BunnyPathTracingHitsEqualFunctional) { timing_equals_functional("bunny", Fidelity::LT, WorkloadKind::PathTrace); }
-TEST(TimingLT, CornellPrimaryHitsEqualFunctional) { timing_equals_functional("cornell", Fidelity::LT, WorkloadKind::Primary); }
+TEST(TimingAT, BunnyPathTracingHitsEqualFunctional) { timing_equals_functional("bunny", Model::AT, WorkloadKind::PathTrace); }
+TEST(TimingAT, WkndAmbientOcclusionHitsEqualFunctional) { timing_equals_functional("wknd", Model::AT, WorkloadKind::AmbientOcclusion); }
+TEST(TimingAT, ShipShadowHitsEqualFunctional) { timing_equals_functional("ship", Model::AT, WorkloadKind::Shadow); }
+TEST(TimingLT, BunnyPathTracingHitsEqualFunctional) { timing_equals_functional("bunny", Model::LT, WorkloadKind::PathTrace); }
+TEST(TimingLT, CornellPrimaryHitsEqualFunctional) { timing_equals_functional("cornell", Model::LT, WorkloadKind::Primary); }
+TEST(TimingInterval, BunnyPathTracingHitsEqualFunctional) { timing_equals_functional("bunny", Model::Interval, WorkloadKind::PathTrace); }
+TEST(TimingInterval, ShipShadowHitsEqualFunctional) { timing_equals_functional("ship", Model::Interval, WorkloadKind::Shadow); }
+
+namespace {
+// One triangle at z = 0 under an identity instance: header [0,64), root internal node [64,128),
+// triangle leaf [128,192).
+BvhImage one_triangle_image() {
+    Scene s;
+    s.name = "one-triangle";
+    s.materials.push_back(Material{});
+    Mesh m;
+    m.vertices = {{-1, -1, 0}, {1, -1, 0}, {0, 1, 0}};
+    m.triangles = {{0, 1, 2}};
+    m.material = {0};
+    s.meshes.push_back(m);
+    add_identity_instances(s);
+    BvhImage image = build_bvh_image(s);
+    EXPECT_EQ(image.header().root, 64u);
+    EXPECT_EQ(image.size(), 192u);
+    return image;
+}
+}  // namespace
 
 // One ray, one triangle, cold caches, memory clock = core clock (so no rounding between clock
 // domains). The image is: header [0,64), root internal node [64,128), triangle leaf [128,192).
@@ -93,18 +124,7 @@ TEST(TimingLT, CornellPrimaryHitsEqualFunctional) { timing_equals_functional("co
 //   446        leaf complete: descriptor 4 + ray-triangle 8 + hit 8 = 20 -> ray retires at 466
 TEST(TimingAT, SingleRayLatencyIsTheHandWorkedSum) {
     FsResolution resolution;
-    Scene s;
-    s.name = "one-triangle";
-    s.materials.push_back(Material{});
-    Mesh m;
-    m.vertices = {{-1, -1, 0}, {1, -1, 0}, {0, 1, 0}};
-    m.triangles = {{0, 1, 2}};
-    m.material = {0};
-    s.meshes.push_back(m);
-    add_identity_instances(s);
-    const BvhImage image = build_bvh_image(s);
-    ASSERT_EQ(image.header().root, 64u);
-    ASSERT_EQ(image.size(), 192u);
+    const BvhImage image = one_triangle_image();
     std::vector<RayFileEntry> rays(1);
     rays[0].ray.org = {0, 0, -5};
     rays[0].ray.dir = {0, 0, 1};
@@ -139,6 +159,46 @@ TEST(TimingAT, SingleRayLatencyIsTheHandWorkedSum) {
 }
 
 // The checker itself catches broken sequences (a checker that never fires proves nothing).
+// The interval fidelity on the same ray (model/interval_gpu.h). Cold, it takes AT's hand-worked
+// 466 cycles above: the same request port, drain, L2 and DRAM timing. The same ray again on the
+// same SM finds every chunk in its L1: per node, the chunks leave one per cycle from the cycle
+// after the thread was scheduled, each drains in the cycle after it left, then the math runs:
+// (2 + 1 + 12) + (2 + 1 + 20). On another SM (cold L1, warm L2) each node's second chunk is back
+// 2 + L2 latency after scheduling. Two threads with the same ray share each fetch (coalescing).
+TEST(TimingInterval, SingleRayLatenciesAreTheHandWorkedSums) {
+    const BvhImage image = one_triangle_image();
+    Config c = Config::load("mobile");
+    c.set("gpu.memory_clock_mhz=1365");
+    const HwConfig hw = c.resolve();
+    IntervalGpu gpu(hw, image, TraversalOrder::DFS);
+    WarpRay r;
+    r.ray.org = {0, 0, -5};
+    r.ray.dir = {0, 0, 1};
+    r.scale = scale_direction(r.ray);
+    const uint64_t internal = hw.lat.header + hw.lat.ray_box, leaf = hw.lat.leaf_descriptor + hw.lat.ray_triangle + hw.lat.triangle_hit;
+    std::vector<RetiredRay> out;
+    EXPECT_EQ(gpu.trace(0, {r}, 0, out), 466u);
+    ASSERT_EQ(out.size(), 1u);
+    EXPECT_TRUE(out[0].hit.hit);
+    EXPECT_EQ(out[0].nodes_visited, 2u);
+    EXPECT_EQ(out[0].dram_nodes, 2u);
+    const DramStats d = gpu.dram_stats();
+    EXPECT_EQ(d.reads, 4u);
+    EXPECT_EQ(d.row_misses, 2u);
+    EXPECT_EQ(d.row_hits, 2u);
+    EXPECT_EQ(gpu.l1()[0].stats(ReqKind::Demand).line_misses, 2u);
+    EXPECT_EQ(gpu.l1()[0].stats(ReqKind::Demand).sector_misses, 2u);
+
+    EXPECT_EQ(gpu.trace(0, {r}, 1000, out), 1000 + (2 + 1 + internal) + (2 + 1 + leaf));  // 1038
+    EXPECT_EQ(gpu.l1()[0].stats(ReqKind::Demand).hits, 4u);
+    EXPECT_EQ(gpu.trace(1, {r}, 2000, out), 2000 + (2 + hw.l2.latency + internal) + (2 + hw.l2.latency + leaf));  // 2356
+    EXPECT_EQ(gpu.l2()[0].stats(ReqKind::Demand).hits + gpu.l2()[1].stats(ReqKind::Demand).hits, 4u);
+    EXPECT_EQ(gpu.trace(0, {r, r}, 3000, out), 3038u);
+    EXPECT_EQ(gpu.rt_stats().coalesced, 2u);
+    EXPECT_EQ(gpu.dram_stats().reads, 4u);
+    EXPECT_EQ(out.size(), 5u);
+}
+
 TEST(ProtocolChecker, DetectsViolations) {
     FsResolution resolution;
     ProtocolChecker chk("chk");
