@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Speed against error: every fidelity on every scene, baseline and TTP, as a sweep manifest; and
+"""Speed against error: every fidelity (AT, LT, interval, sampled AT and LT) on every scene, baseline and TTP, as a sweep manifest; and
 the sampled AT baseline with five more draws of the sample (sample seeds 2-6) for the accuracy
 and interval-coverage study.
 Usage: experiments.py MANIFEST [--size N] [--spp N] [--scenes a,b,...]"""
@@ -17,6 +17,7 @@ FIDELITIES = {  # id -> rtsim arguments
     "lt_q100": "--fidelity lt --quantum 100",
     "lt_q1000": "--fidelity lt --quantum 1000",
     "lt_q10000": "--fidelity lt --quantum 10000",
+    "interval": "--fidelity interval",
     "at_s50": f"--fidelity at --sample 0.5 {ONE_CORE}",
     "at_s25": f"--fidelity at --sample 0.25 {ONE_CORE}",
     "at_s10": f"--fidelity at --sample 0.1 {ONE_CORE}",
