@@ -75,29 +75,39 @@ bool DramChannel::schedule(uint64_t now, DramRequest* out, uint64_t* done) {
 }
 
 DramBookings::DramBookings(const DramConfig& c, uint32_t line_bytes)
-    : cfg_(c), map_(c, line_bytes), banks_(c.channels, std::vector<Bank>(c.banks)), bus_(c.channels), stats_(c.channels) {}
+    : cfg_(c), map_(c, line_bytes), banks_(c.channels, std::vector<Bank>(c.banks)), bus_(c.channels), commands_(c.channels), stats_(c.channels) {}
 
 uint64_t DramBookings::access(uint64_t addr, uint32_t bytes, uint64_t now, uint64_t horizon) {
     const DramCoord at = map_.map(addr);
     Bank& b = banks_[at.channel][at.bank];
     DramStats& st = stats_[at.channel];
-    uint64_t access;  // cycles from bank start to data
-    if (b.open && b.row == at.row) {
+    const bool hit = b.open && b.row == at.row;
+    const uint64_t pre = !hit && b.open ? cfg_.tRP : 0;  // precharge before the activation
+    if (hit)
         ++st.row_hits;
-        access = cfg_.tCL;
-    } else {
+    else
         (b.open ? st.row_conflicts : st.row_misses)++;
-        access = (b.open ? cfg_.tRP : 0) + cfg_.tRCD + cfg_.tCL;
-    }
     b.open = true;
     b.row = at.row;
     const uint64_t xfer = dram_transfer_cycles(cfg_, bytes);
-    const uint64_t bank_start = b.busy.book(now, std::max<uint64_t>(access - cfg_.tCL + cfg_.tCCD, 1), horizon);
-    const uint64_t bus_start = bus_[at.channel].book(bank_start + access, xfer, horizon);
+    const uint64_t slot = std::max<uint64_t>(cfg_.tCCD, xfer);  // column-to-column
+    // The bank: a row hit holds it for one column command, an activation from its precharge
+    // to its first column command.
+    const uint64_t hold = hit ? cfg_.tCCD : pre + cfg_.tRCD + cfg_.tCCD;
+    const uint64_t bank_start = b.busy.book(now, std::max<uint64_t>(hold, 1), horizon);
+    // The channel's command sequence, as AT's scheduler issues it: one request at a time, a
+    // row miss's ACT overlapping the transfer ahead of it, a conflict's precharge not.
+    uint64_t column;
+    if (hit) {
+        column = commands_[at.channel].book(bank_start, slot, horizon);
+    } else {
+        column = commands_[at.channel].book(bank_start + cfg_.tRCD, pre + slot, horizon) + pre;
+    }
+    const uint64_t bus_start = bus_[at.channel].book(column + cfg_.tCL, xfer, horizon);
     ++st.reads;
     st.bytes += bytes;
     st.data_cycles += xfer;
-    st.queue_wait += bank_start - now;
+    st.queue_wait += column - (bank_start + (hit ? 0 : pre + cfg_.tRCD)) + (bank_start - now);
     return bus_start + xfer;
 }
 

@@ -220,3 +220,33 @@ TEST(PortCalendar, BooksTheEarliestFreeCycleInAnyOrder) {
     p.advance(11);
     EXPECT_EQ(p.book(0), 13u);  // 11 and 12 are still taken
 }
+
+// The fast fidelities' DRAM (DramBookings), hand-worked with the mobile preset's timing (memory
+// cycles: tRCD = tCL = tRP = 20, a 32 B transfer 8 cycles on a 2 B DDR bus, column slot
+// max(tCCD, 8) = 8). Five reads all timestamped 0, in this call order:
+//   A ch0 bank0 row0, closed: bank [0,24); column at tRCD = 20 (slot [20,28)); data 40..48
+//   B same row (hit): bank after A's activation, 24; slot after A's: 28; data 48..56
+//   C ch0 bank0 row1 (conflict): bank free at 28; the precharge needs the command sequence for
+//     tRP + a slot from 28 + tRCD = 48: [48,76), column 68; data 88..96
+//   D ch1 (its own channel): as A, 48
+//   E ch0 bank1, closed: its ACT overlaps; first slot free from 20 is [36,44): column 36; data
+//     would start at 56, after B's transfer: 56..64
+TEST(DramBookings, HandWorkedCommandSequence) {
+    const DramConfig c = Config::load("mobile").resolve().dram;
+    ASSERT_EQ(c.tRCD, 20u);
+    ASSERT_EQ(c.tCL, 20u);
+    ASSERT_EQ(c.tRP, 20u);
+    ASSERT_EQ(dram_transfer_cycles(c, 32), 8u);
+    DramBookings d(c, 128);
+    EXPECT_EQ(d.access(0, 32, 0, 0), 48u);       // A
+    EXPECT_EQ(d.access(32, 32, 0, 0), 56u);      // B
+    EXPECT_EQ(d.access(131072, 32, 0, 0), 96u);  // C
+    EXPECT_EQ(d.access(128, 32, 0, 0), 48u);     // D
+    EXPECT_EQ(d.access(8192, 32, 0, 0), 64u);    // E
+    const DramStats& s0 = d.stats(0);
+    EXPECT_EQ(s0.reads, 4u);
+    EXPECT_EQ(s0.row_hits, 1u);
+    EXPECT_EQ(s0.row_misses, 2u);
+    EXPECT_EQ(s0.row_conflicts, 1u);
+    EXPECT_EQ(d.stats(1).reads, 1u);
+}

@@ -448,9 +448,9 @@ TEST(RtsimFlatten, SameAnswersAndNoChangeWhereTransformsAreNeeded) {
     EXPECT_EQ(s1, s2);
 }
 
-// LT at the smallest quantum against AT. Stated bound: within 8 % in total cycles and one point
-// of L1 miss rate (measured: -3.8 % and < 0.5 points on bunny 32x32). The remaining gap is
-// structural (no FR-FCFS queue in LT's DRAM, tag and row state in call order), not temporal.
+// LT at the smallest quantum against AT. Stated bound: within 3 % in total cycles and one point
+// of L1 miss rate (measured: -0.5 % and < 0.1 points on bunny 32x32). The remaining gap is
+// structural (no FR-FCFS reordering in LT's DRAM, tag and row state in call order), not temporal.
 TEST(RtsimTiming, LtAtTheSmallestQuantumIsWithinTheStatedBoundOfAt) {
     TempDir dir;
     const std::string base = "--scene bunny --assets " + rtu::test::shared_dir() + "/scenes/bunny --width 32 --height 32 --stats ";
@@ -459,14 +459,14 @@ TEST(RtsimTiming, LtAtTheSmallestQuantumIsWithinTheStatedBoundOfAt) {
     const auto at = nlohmann::json::parse(read_text(dir.file("at.json")));
     const auto lt = nlohmann::json::parse(read_text(dir.file("lt.json")));
     const double ca = at["cycles"].get<double>(), cl = lt["cycles"].get<double>();
-    EXPECT_LE(std::fabs(cl - ca) / ca, 0.08) << "AT " << ca << " LT " << cl;
+    EXPECT_LE(std::fabs(cl - ca) / ca, 0.03) << "AT " << ca << " LT " << cl;
     EXPECT_LE(std::fabs(lt["timing"]["l1"]["demand"]["miss_rate"].get<double>() - at["timing"]["l1"]["demand"]["miss_rate"].get<double>()), 0.01);
 }
 
 // The interval fidelity against AT (docs/interval.md). Stated bound on these 32x32 frames:
-// within 10 % in total cycles and 5 % in TTP's speed-up over the baseline, with TTP a speed-up
-// in both (measured: bunny -3.4 % and 1.144x against 1.130x, ship -3.8 % and 1.374x against
-// 1.343x; on the seven report scenes at 128x128 the cycle error is -16 % to +9 %). Same inputs,
+// within 10 % in total cycles and 8 % in TTP's speed-up over the baseline, with TTP a speed-up
+// in both (measured: bunny -0.5 % and 1.181x against 1.130x, ship -3.8 % and 1.405x against
+// 1.343x; on the seven report scenes at 128x128 the cycle error is -9 % to +9 %). Same inputs,
 // same statistics.
 TEST(RtsimTiming, IntervalIsWithinTheStatedBoundOfAt) {
     TempDir dir;
@@ -485,7 +485,7 @@ TEST(RtsimTiming, IntervalIsWithinTheStatedBoundOfAt) {
         EXPECT_LE(std::fabs(ci - ca) / ca, 0.10) << scene << ": AT " << ca << " interval " << ci;
         const double sa = ca / at_ttp["cycles"].get<double>(), si = ci / iv_ttp["cycles"].get<double>();
         EXPECT_GT(si, 1.0) << scene;
-        EXPECT_LE(std::fabs(si / sa - 1.0), 0.05) << scene << ": TTP speed-up AT " << sa << " interval " << si;
+        EXPECT_LE(std::fabs(si / sa - 1.0), 0.08) << scene << ": TTP speed-up AT " << sa << " interval " << si;
         EXPECT_EQ(iv["nodes_visited"], at["nodes_visited"]);
         EXPECT_EQ(iv["hits"], at["hits"]);
         EXPECT_EQ(iv_ttp["timing"]["prefetch"]["sent"].get<uint64_t>(), iv_ttp["timing"]["prefetch"]["generated"].get<uint64_t>());

@@ -1,7 +1,8 @@
 // The DRAM: channels of banks (model/dram.h) behind one target socket per L2 slice. AT: each
 // channel's FR-FCFS scheduler runs in an SC_METHOD that sleeps until its next decision; a full
-// channel queue holds END_REQ. LT: the request's timestamp books its bank and the channel's data
-// bus in calendars, so that the order of calls does not matter.
+// channel queue holds END_REQ. LT: the request's timestamp books its bank, the channel's command
+// sequence and its data bus in calendars (model/dram.h, DramBookings), so that the order of calls
+// does not matter.
 #pragma once
 #include <deque>
 #include <vector>
