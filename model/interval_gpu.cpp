@@ -16,9 +16,11 @@ IntervalGpu::IntervalGpu(const HwConfig& cfg, const BvhImage& image, TraversalOr
       memory_fs_(uint64_t(std::llround(1e9 / cfg.memory_mhz))),
       issue_(cfg.sms),
       drain_(cfg.sms),
+      prefetch_(cfg.sms),
       l2_port_(cfg.l2_slices),
       l1_ready_(cfg.sms),
       l2_ready_(cfg.l2_slices),
+      prefetch_queue_(cfg.sms),
       dram_(cfg.dram, cfg.l2.line) {
     if (order == TraversalOrder::Treelet)
         throw std::invalid_argument("the interval fidelity models DFS and BFS traversal, not treelet traversal (use --fidelity at or lt)");
@@ -67,6 +69,7 @@ void IntervalGpu::advance(uint64_t floor) {
     floor_ = floor;
     for (PortCalendar& p : issue_) p.advance(floor);
     for (PortCalendar& p : drain_) p.advance(floor);
+    for (PortCalendar& p : prefetch_) p.advance(floor);
     for (PortCalendar& p : l2_port_) p.advance(floor);
 }
 
@@ -177,8 +180,8 @@ uint64_t IntervalGpu::trace(uint32_t sm, const std::vector<WarpRay>& rays, uint6
             ++rt_.node_fetches;
             ++rt_.streak_fetches[fetch_class];
             Fetch f;
-            auto same = fetches_.find(e.addr);
-            if (same != fetches_.end() && same->second.scheduled == t.ready) {
+            auto same = fetches_.find({e.addr, t.ready});
+            if (same != fetches_.end()) {
                 f = same->second;  // coalesced with a thread scheduled in the same cycle
                 ++rt_.coalesced;
             } else {
@@ -195,10 +198,12 @@ uint64_t IntervalGpu::trace(uint32_t sm, const std::vector<WarpRay>& rays, uint6
                 }
                 rt_.chunk_requests += chunks;
                 rt_.responses += chunks;
-                fetches_[e.addr] = f;
+                fetches_[{e.addr, t.ready}] = f;
             }
-            // TTP: on a pop, entries below the popped one leave as prefetches in cycles without a
-            // demand: in the request port's first free cycles, which stay free for demands.
+            // TTP: on a pop, entries below the popped one leave as prefetches, one per cycle among
+            // themselves (their own queue), each in a cycle the request port has no demand for.
+            // Those cycles stay free for demands timed later (AT sends a prefetch only when no
+            // demand waits).
             if (fetch_class > 0 && cfg_.prefetch.kind == PrefetcherKind::Ttp) {
                 const auto& st = t.trav.stack();
                 picks_.clear();
@@ -209,8 +214,16 @@ uint64_t IntervalGpu::trace(uint32_t sm, const std::vector<WarpRay>& rays, uint6
                 for (size_t k : picks_) {
                     const StackEntry& p = order_ == TraversalOrder::DFS ? st[k] : st[k + 1];
                     for (uint32_t c = 0; c < node_bytes(p.type) / kChunkBytes; ++c) {
-                        read(sm, p.addr + uint64_t(c) * kChunkBytes, issue.first_free(t.ready + 1 + c), ReqKind::Prefetch);
+                        const uint64_t chunk = p.addr + uint64_t(c) * kChunkBytes;
                         ++rt_.prefetches_generated;
+                        auto queued = prefetch_queue_[sm].at.find(chunk);
+                        if (queued != prefetch_queue_[sm].at.end() && queued->second.sent > t.ready) {
+                            ++rt_.prefetch_duplicates;  // still waiting in the queue: dropped, as in AT
+                            continue;
+                        }
+                        const uint64_t sent = issue.first_free(prefetch_[sm].book(t.ready + 1));
+                        read(sm, chunk, sent, ReqKind::Prefetch);
+                        remember(prefetch_queue_[sm], chunk, {sent, sent, false}, l1_[sm].lines());
                         ++rt_.prefetches_sent;
                         ++rt_.prefetch_responses;
                     }

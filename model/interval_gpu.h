@@ -17,6 +17,7 @@
 #include <cstdint>
 #include <memory>
 #include <queue>
+#include <utility>
 #include <vector>
 
 #include <absl/container/flat_hash_map.h>
@@ -83,9 +84,11 @@ private:
     TraversalOrder order_;
     uint64_t core_fs_, memory_fs_;  // clock periods in femtoseconds, as the SystemC clocks
     std::vector<PortCalendar> issue_, drain_;  // per SM: request port, response FIFO
+    std::vector<PortCalendar> prefetch_;       // per SM: the prefetch queue's one chunk per cycle
     std::vector<PortCalendar> l2_port_;        // per L2 slice: one lookup per cycle
     std::vector<SectorCache> l1_, l2_;
     std::vector<ReadyMap> l1_ready_, l2_ready_;
+    std::vector<ReadyMap> prefetch_queue_;     // per SM: prefetch chunks by the cycle they leave
     DramBookings dram_;
     uint64_t floor_ = 0, token_ = 0;
     RtUnitStats rt_;
@@ -103,9 +106,10 @@ private:
         uint64_t scheduled, done;
         bool l1_miss, dram;
     };
+    // The current trace's node fetches by (node address, cycle scheduled).
     std::vector<Thread> threads_;
     std::vector<uint32_t> live_, next_live_;
-    absl::flat_hash_map<uint64_t, Fetch> fetches_;
+    absl::flat_hash_map<std::pair<uint64_t, uint64_t>, Fetch> fetches_;
     std::vector<size_t> picks_;
 };
 

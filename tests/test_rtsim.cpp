@@ -464,9 +464,9 @@ TEST(RtsimTiming, LtAtTheSmallestQuantumIsWithinTheStatedBoundOfAt) {
 }
 
 // The interval fidelity against AT (docs/interval.md). Stated bound on these 32x32 frames:
-// within 10 % in total cycles and 8 % in TTP's speed-up over the baseline, with TTP a speed-up
-// in both (measured: bunny -0.5 % and 1.181x against 1.130x, ship -3.8 % and 1.405x against
-// 1.343x; on the seven report scenes at 128x128 the cycle error is -9 % to +9 %). Same inputs,
+// within 10 % in total cycles and 5 % in TTP's speed-up over the baseline, with TTP a speed-up
+// in both (measured: bunny -3.3 % and 1.134x against 1.130x, ship -3.2 % and 1.320x against
+// 1.343x; on the seven report scenes at 128x128 the cycle error is within 10 %). Same inputs,
 // same statistics.
 TEST(RtsimTiming, IntervalIsWithinTheStatedBoundOfAt) {
     TempDir dir;
@@ -485,10 +485,13 @@ TEST(RtsimTiming, IntervalIsWithinTheStatedBoundOfAt) {
         EXPECT_LE(std::fabs(ci - ca) / ca, 0.10) << scene << ": AT " << ca << " interval " << ci;
         const double sa = ca / at_ttp["cycles"].get<double>(), si = ci / iv_ttp["cycles"].get<double>();
         EXPECT_GT(si, 1.0) << scene;
-        EXPECT_LE(std::fabs(si / sa - 1.0), 0.08) << scene << ": TTP speed-up AT " << sa << " interval " << si;
+        EXPECT_LE(std::fabs(si / sa - 1.0), 0.05) << scene << ": TTP speed-up AT " << sa << " interval " << si;
         EXPECT_EQ(iv["nodes_visited"], at["nodes_visited"]);
         EXPECT_EQ(iv["hits"], at["hits"]);
-        EXPECT_EQ(iv_ttp["timing"]["prefetch"]["sent"].get<uint64_t>(), iv_ttp["timing"]["prefetch"]["generated"].get<uint64_t>());
+        // Every prefetch chunk generated is sent or dropped as a duplicate; every one sent reads L1.
+        const auto& pf = iv_ttp["timing"]["prefetch"];
+        EXPECT_EQ(pf["sent"].get<uint64_t>() + pf["duplicates_dropped"].get<uint64_t>(), pf["generated"].get<uint64_t>());
+        EXPECT_EQ(pf["l1"]["issued"].get<uint64_t>(), pf["sent"].get<uint64_t>());
         EXPECT_GT(iv_ttp["timing"]["prefetch"]["l1"]["useful"].get<uint64_t>(), 0u) << scene;
         EXPECT_EQ(run("iv2.json", "--fidelity interval"), iv) << scene;
     }
