@@ -5,7 +5,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <iterator>
-#include <map>
+#include <utility>
 #include <vector>
 
 namespace rtu {
@@ -16,48 +16,56 @@ public:
     // `horizon` are forgotten first: no request can be timestamped before it (in LT no
     // requester is behind simulated time).
     uint64_t book(uint64_t start, uint64_t len, uint64_t horizon = 0) {
-        while (!busy_.empty() && busy_.begin()->second <= horizon) busy_.erase(busy_.begin());
+        while (head_ < busy_.size() && busy_[head_].second <= horizon) ++head_;
+        if (head_ > 64 && head_ * 2 > busy_.size()) compact();
         if (len == 0) return start;
         uint64_t s = std::max(start, floor_);
-        auto it = busy_.upper_bound(s);
-        if (it != busy_.begin()) {
-            auto prev = std::prev(it);
-            if (prev->second > s) s = prev->second;
+        // The first booking that starts after s; the one before it may cover s.
+        size_t i = size_t(std::upper_bound(busy_.begin() + long(head_), busy_.end(), s,
+                                           [](uint64_t v, const Interval& x) { return v < x.first; }) -
+                          busy_.begin());
+        if (i > head_ && busy_[i - 1].second > s) s = busy_[i - 1].second;
+        while (i < busy_.size() && busy_[i].first < s + len) {
+            s = std::max(s, busy_[i].second);
+            ++i;
         }
-        while (it != busy_.end() && it->first < s + len) {
-            s = std::max(s, it->second);
-            ++it;
+        // [s, s + len) is free; bookings before i end by s, those from i start at s + len or later.
+        // Merge with neighbours that touch it.
+        const uint64_t e = s + len;
+        const bool left = i > head_ && busy_[i - 1].second == s;
+        const bool right = i < busy_.size() && busy_[i].first == e;
+        if (left && right) {
+            busy_[i - 1].second = busy_[i].second;
+            busy_.erase(busy_.begin() + long(i));
+        } else if (left) {
+            busy_[i - 1].second = e;
+        } else if (right) {
+            busy_[i].first = s;
+        } else {
+            busy_.insert(busy_.begin() + long(i), Interval{s, e});
         }
-        // Merge with neighbours that touch the new interval.
-        uint64_t b = s, e = s + len;
-        auto right = busy_.find(e);
-        if (right != busy_.end()) {
-            e = right->second;
-            busy_.erase(right);
-        }
-        auto after = busy_.upper_bound(b);
-        if (after != busy_.begin()) {
-            auto left = std::prev(after);
-            if (left->second == b) {
-                b = left->first;
-                busy_.erase(left);
-            }
-        }
-        busy_[b] = e;
-        if (busy_.size() > 4096) prune();
+        if (intervals() > 4096) prune();
         return s;
     }
-    size_t intervals() const { return busy_.size(); }
+    size_t intervals() const { return busy_.size() - head_; }
 
 private:
+    using Interval = std::pair<uint64_t, uint64_t>;  // [start, end)
+    void compact() {
+        busy_.erase(busy_.begin(), busy_.begin() + long(head_));
+        head_ = 0;
+    }
     void prune() {
         // Keep the newest half: requests are at most a quantum behind the newest bookings.
-        auto it = busy_.begin();
-        std::advance(it, long(busy_.size() / 2));
-        floor_ = std::max(floor_, it->first);
-        busy_.erase(busy_.begin(), it);
+        const size_t keep_from = head_ + intervals() / 2;
+        floor_ = std::max(floor_, busy_[keep_from].first);
+        head_ = keep_from;
+        compact();
     }
-    std::map<uint64_t, uint64_t> busy_;  // start -> end
+    // Disjoint bookings sorted by start; those before head_ are forgotten. A sorted vector: no
+    // allocation per booking, and few bookings are live at once.
+    std::vector<Interval> busy_;
+    size_t head_ = 0;
     uint64_t floor_ = 0;
 };
 

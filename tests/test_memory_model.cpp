@@ -250,3 +250,30 @@ TEST(DramBookings, HandWorkedCommandSequence) {
     EXPECT_EQ(s0.row_conflicts, 1u);
     EXPECT_EQ(d.stats(1).reads, 1u);
 }
+
+// Calendar against a plain set of busy cycles: each booking gets the earliest run of `len` free
+// cycles at or after its timestamp, in any order of timestamps, with horizons that only forget
+// bookings no later request can reach.
+TEST(Calendar, BooksTheEarliestFreeGapInAnyOrder) {
+    Calendar cal;
+    std::set<uint64_t> busy;
+    std::mt19937_64 rng(11);
+    uint64_t horizon = 0;
+    for (int i = 0; i < 3000; ++i) {
+        if (i % 200 == 199) horizon += rng() % 300;
+        const uint64_t t = horizon + rng() % 2000, len = rng() % 12;
+        uint64_t expect = t;
+        for (bool clash = len > 0; clash;) {
+            clash = false;
+            for (uint64_t c = expect; c < expect + len; ++c)
+                if (busy.count(c)) {
+                    expect = c + 1;
+                    clash = true;
+                    break;
+                }
+        }
+        ASSERT_EQ(cal.book(t, len, horizon), expect) << "booking " << i;
+        for (uint64_t c = expect; c < expect + len; ++c) busy.insert(c);
+    }
+    EXPECT_LT(cal.intervals(), 4096u);  // the pruning that keeps the newest half never ran
+}
