@@ -46,6 +46,9 @@ struct DramStats {
     uint64_t queue_wait = 0;              // sum of (issue - arrival), memory cycles
 };
 
+// a += b, counter by counter.
+void add(DramStats& a, const DramStats& b);
+
 class DramChannel {
 public:
     explicit DramChannel(const DramConfig& c);
@@ -96,6 +99,7 @@ public:
     // transfer ends. No later call may be timestamped before `horizon` (memory cycles).
     uint64_t access(uint64_t addr, uint32_t bytes, uint64_t now, uint64_t horizon);
     const DramStats& stats(uint32_t channel) const { return stats_[channel]; }
+    DramStats total() const;  // over the channels
 
 private:
     struct Bank {

@@ -34,22 +34,6 @@ IntervalGpu::IntervalGpu(const HwConfig& cfg, const BvhImage& image, TraversalOr
 uint64_t IntervalGpu::memory_cycle(uint64_t c) const { return (c * core_fs_ + memory_fs_ - 1) / memory_fs_; }
 uint64_t IntervalGpu::core_cycle(uint64_t m) const { return (m * memory_fs_ + core_fs_ - 1) / core_fs_; }
 
-DramStats IntervalGpu::dram_stats() const {
-    DramStats s;
-    for (uint32_t c = 0; c < cfg_.dram.channels; ++c) {
-        const DramStats& x = dram_.stats(c);
-        s.reads += x.reads;
-        s.writes += x.writes;
-        s.row_hits += x.row_hits;
-        s.row_misses += x.row_misses;
-        s.row_conflicts += x.row_conflicts;
-        s.bytes += x.bytes;
-        s.data_cycles += x.data_cycles;
-        s.queue_wait += x.queue_wait;
-    }
-    return s;
-}
-
 // Sectors whose data arrived by the floor are plain hits for every later read: they are
 // forgotten when the map has grown to twice its size after the last pruning (at least 4 entries
 // per cache line), so that pruning costs O(1) per read.
@@ -229,15 +213,7 @@ uint64_t IntervalGpu::trace(uint32_t sm, const std::vector<WarpRay>& rays, uint6
                     }
                 }
             }
-            rt_.streak_l1_misses[fetch_class] += f.l1_miss;
-            rt_.streak_dram_misses[fetch_class] += f.dram;
-            t.l1_miss_nodes += f.l1_miss;
-            t.dram_nodes += f.dram;
-            const StepInfo info = t.trav.step(image_);
-            if (info.pushed > 0) {
-                t.streak = 0;
-                t.ttp_dfs.on_push(t.trav.stack().size());
-            }
+            const StepInfo info = complete_fetch(t, rt_, fetch_class, f.l1_miss, f.dram, image_);
             const uint32_t math = rt_math_latency(cfg_.lat, info);
             rt_.thread_cycles[size_t(ThreadStatus::WaitMemory)] += f.done - t.ready;
             rt_.thread_cycles[size_t(ThreadStatus::InMath)] += math;

@@ -48,7 +48,7 @@ public:
     const RtUnitStats& rt_stats() const { return rt_; }
     const std::vector<SectorCache>& l1() const { return l1_; }
     const std::vector<SectorCache>& l2() const { return l2_; }
-    DramStats dram_stats() const;
+    DramStats dram_stats() const { return dram_.total(); }
     uint64_t memory_cycle(uint64_t core_cycle) const;  // the memory-clock cycle at or after a core cycle
 
 private:

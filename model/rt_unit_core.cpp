@@ -221,15 +221,7 @@ void RtUnitCore::cycle(uint64_t now) {
             t.fetch_dram |= flags.second;
             if (--t.chunks_left > 0) continue;
             // The whole node is here: decode it and run its tests.
-            stats_.streak_l1_misses[t.fetch_class] += t.fetch_l1_miss;
-            stats_.streak_dram_misses[t.fetch_class] += t.fetch_dram;
-            t.l1_miss_nodes += t.fetch_l1_miss;
-            t.dram_nodes += t.fetch_dram;
-            const StepInfo info = t.trav.step(image_);
-            if (info.pushed > 0) {
-                t.streak = 0;
-                t.ttp_dfs.on_push(t.trav.stack().size());
-            }
+            const StepInfo info = complete_fetch(t, stats_, t.fetch_class, t.fetch_l1_miss, t.fetch_dram, image_);
             // Park et al. (as the TTP paper models them): while a leaf test runs, prefetch as many
             // stack entries as can leave during it (one 32 B chunk per cycle), next pop first;
             // what has not left when the test ends is dropped.

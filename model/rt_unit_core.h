@@ -69,6 +69,24 @@ struct RtUnitStats {
     uint64_t perfect_hits = 0;  // chunk fetches answered as L1 hits by a perfect-up/down limit study
 };
 
+// A thread's node has arrived whole: counts where its bytes came from (under the fetch's
+// pop-streak class), runs the node's tests, and after a push restarts the thread's pop streak and
+// TTP pointer. Shared by the RT unit (AT, LT) and the interval fidelity (model/interval_gpu.h),
+// whose threads have these fields.
+template <class Thread>
+StepInfo complete_fetch(Thread& t, RtUnitStats& st, uint8_t fetch_class, bool l1_miss, bool dram, const BvhImage& image) {
+    st.streak_l1_misses[fetch_class] += l1_miss;
+    st.streak_dram_misses[fetch_class] += dram;
+    t.l1_miss_nodes += l1_miss;
+    t.dram_nodes += dram;
+    const StepInfo info = t.trav.step(image);
+    if (info.pushed > 0) {
+        t.streak = 0;
+        t.ttp_dfs.on_push(t.trav.stack().size());
+    }
+    return info;
+}
+
 class RtUnitCore {
 public:
     // `treelets` is needed for treelet traversal and the Treelet prefetcher (else may be null).

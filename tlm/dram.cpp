@@ -24,18 +24,8 @@ Dram::Dram(sc_module_name name, const DramConfig& cfg, uint32_t line, const Cloc
 }
 
 DramStats Dram::stats() const {
-    DramStats s;
-    for (uint32_t c = 0; c < channels_.size(); ++c)
-        for (const DramStats* x : {&channels_[c].stats(), &lt_.stats(c)}) {
-            s.reads += x->reads;
-            s.writes += x->writes;
-            s.row_hits += x->row_hits;
-            s.row_misses += x->row_misses;
-            s.row_conflicts += x->row_conflicts;
-            s.bytes += x->bytes;
-            s.data_cycles += x->data_cycles;
-            s.queue_wait += x->queue_wait;
-        }
+    DramStats s = lt_.total();
+    for (const DramChannel& c : channels_) add(s, c.stats());
     return s;
 }
 
