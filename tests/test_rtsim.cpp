@@ -300,6 +300,31 @@ TEST(RtsimPrefetch, HitsIdenticalUnderEveryPrefetcherAndNoneIsTheBaseline) {
 }
 
 // The Treelet prefetcher needs treelet traversal; with it, answers are still the DFS answers.
+// The interval fidelity under DFS and BFS, with and without TTP: the same hits as AT's (BFS: the
+// same hit/miss and t), and TTP with every depth 0 is the baseline, cycle for cycle.
+TEST(RtsimPrefetch, IntervalHitsIdenticalAndZeroDepthTtpIsTheBaseline) {
+    TempDir dir;
+    const std::string base = "--scene bunny --assets " + rtu::test::shared_dir() + "/scenes/bunny --width 16 --height 16 ";
+    for (const std::string traversal : {"dfs", "bfs"}) {
+        const std::string ref = dir.file("at" + traversal + ".csv");
+        ASSERT_EQ(rtsim(dir, base + "--fidelity at --traversal " + traversal + " --hits " + ref).status, 0);
+        for (const std::string pf : {"none", "ttp"}) {
+            const std::string hits = dir.file(pf + traversal + ".csv");
+            const Result r = rtsim(dir, base + "--fidelity interval --traversal " + traversal + " --prefetcher " + pf + " --hits " + hits);
+            ASSERT_EQ(r.status, 0) << pf << " " << traversal << ": " << r.err;
+            EXPECT_EQ(read_text(hits), read_text(ref)) << pf << " " << traversal;
+        }
+    }
+    ASSERT_EQ(rtsim(dir, base + "--fidelity interval --stats " + dir.file("none.json")).status, 0);
+    ASSERT_EQ(rtsim(dir, base + "--fidelity interval --prefetcher ttp --set prefetch.ttp_depth_s1=0 --set prefetch.ttp_depth_s2=0 "
+                                "--set prefetch.ttp_depth_s3=0 --stats " + dir.file("zero.json")).status, 0);
+    const auto jn = nlohmann::json::parse(read_text(dir.file("none.json")));
+    const auto jz = nlohmann::json::parse(read_text(dir.file("zero.json")));
+    EXPECT_EQ(jz["cycles"], jn["cycles"]);
+    EXPECT_EQ(jz["timing"]["prefetch"]["generated"], 0);
+    EXPECT_EQ(jz["timing"]["l1"]["demand"], jn["timing"]["l1"]["demand"]);
+}
+
 TEST(RtsimPrefetch, TreeletTraversalAndPrefetcher) {
     TempDir dir;
     // Primary rays: each independent of the others (with path tracing a tie at one bounce,
