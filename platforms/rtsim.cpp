@@ -364,13 +364,13 @@ int sc_main(int argc, char** argv) {
         ("config", po::value(&a.config)->default_value(a.config), "hardware preset (mobile, desktop) or JSON file")
         ("set", po::value(&a.sets)->composing(), "override one configuration key, e.g. --set l1.size_kb=64 (repeatable)")
         ("quantum", po::value(&a.quantum), "LT quantum in core cycles (same as --set sim.quantum=N)")
-        ("prefetcher", po::value(&a.prefetcher), "none, ttp, park, treelet, perfect-up, perfect-down (same as --set prefetch.kind=...)")
-        ("sample", po::value(&a.sample), "simulate this share (0..1] of the frame's warps, stratified, and extrapolate (timing only)")
+        ("prefetcher", po::value(&a.prefetcher), "none, ttp, park, treelet, perfect-up, perfect-down (same as --set prefetch.kind=...; interval: none, ttp)")
+        ("sample", po::value(&a.sample), "simulate this share (0..1] of the frame's warps, stratified, and extrapolate (at, lt)")
         ("sample-seed", po::value<uint64_t>()->notifier([&a](uint64_t v) { a.sample_seed = v; }),
          "which clusters --sample draws (default: --seed, which also seeds the rays)")
         ("threads", po::value(&a.threads)->default_value(a.threads),
          "threads for --sample's functional pre-pass (the simulation itself runs on one; results do not depend on it)")
-        ("vcd", po::value(&a.vcd), "write waveforms to this VCD file")
+        ("vcd", po::value(&a.vcd), "write waveforms to this VCD file (at, lt)")
         ("trace-warp", po::value(&a.trace_warp), "with --vcd: trace each thread's stack depth of warp-buffer slot WARP of SM")
         ("stats", po::value(&a.stats), "write statistics JSON")
         ("image", po::value(&a.image), "write the rendered frame as PNG")
