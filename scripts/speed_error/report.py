@@ -11,6 +11,7 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+import matplotlib.ticker  # noqa: E402
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 from experiments import EXTRA_SEEDS, FIDELITIES, SAMPLE_RATES  # noqa: E402
@@ -89,6 +90,8 @@ def main():
         ax.scatter(gm, me, s=30)
         ax.annotate(LABEL[fid], (gm, me), fontsize=7, xytext=(4, 3 if i % 2 else -9), textcoords="offset points")
     ax.set_xscale("log")
+    ax.xaxis.set_major_formatter(matplotlib.ticker.FormatStrFormatter("%gx"))
+    ax.xaxis.set_minor_formatter(matplotlib.ticker.FormatStrFormatter("%gx"))
     ax.set_xlabel("speed-up over AT (geomean over scenes)")
     ax.set_ylabel("mean |error| in total cycles (%)")
     ax.set_title("Speed against error")
