@@ -48,6 +48,7 @@ void IntervalGpu::remember(ReadyMap& m, uint64_t sector, Ready r, size_t lines) 
     }
     m.prune_above = 2 * m.at.size();
 }
+
 void IntervalGpu::advance(uint64_t floor) {
     if (floor <= floor_) return;
     floor_ = floor;
@@ -169,7 +170,7 @@ uint64_t IntervalGpu::trace(uint32_t sm, const std::vector<WarpRay>& rays, uint6
                 f = same->second;  // coalesced with a thread scheduled in the same cycle
                 ++rt_.coalesced;
             } else {
-                f = {t.ready, t.ready, false, false};
+                f = {t.ready, false, false};
                 const uint32_t chunks = node_bytes(e.type) / kChunkBytes;
                 for (uint32_t c = 0; c < chunks; ++c) {
                     const uint64_t sent = issue.book(t.ready + 1);

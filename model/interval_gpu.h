@@ -10,12 +10,12 @@
 // Shared resources are booked by timestamp (PortCalendar, DramBookings), so traces may be timed
 // in the order they start rather than in global time order; cache tags change in that order and
 // each sector remembers the cycle its data arrives (a later read before then waits for it, as an
-// MSHR merge would). Not modelled, against AT: the warp scheduler's one-warp-per-cycle choice,
-// MSHR and merge limits, reservation fails, the DRAM's request queue and FR-FCFS reordering.
+// MSHR merge would). MSHR counts are kept (a miss waits for a free one, as in LT). Not modelled,
+// against AT: the warp scheduler's one-warp-per-cycle choice, MSHR merge limits, the DRAM's
+// request queue and FR-FCFS reordering.
 // Plain C++ (no SystemC).
 #pragma once
 #include <cstdint>
-#include <memory>
 #include <queue>
 #include <utility>
 #include <vector>
@@ -103,12 +103,12 @@ private:
         TtpBfs ttp_bfs;
     };
     struct Fetch {  // a node fetch of the current trace, for coalescing
-        uint64_t scheduled, done;
+        uint64_t done;  // cycle its last chunk drained
         bool l1_miss, dram;
     };
-    // The current trace's node fetches by (node address, cycle scheduled).
     std::vector<Thread> threads_;
     std::vector<uint32_t> live_, next_live_;
+    // The current trace's node fetches by (node address, cycle scheduled).
     absl::flat_hash_map<std::pair<uint64_t, uint64_t>, Fetch> fetches_;
     std::vector<size_t> picks_;
 };
