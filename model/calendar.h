@@ -1,4 +1,4 @@
-// Booking of a shared resource by request timestamp (LT fidelity): a request asks for `len`
+// Booking of a shared resource by request timestamp (LT and interval fidelities): a request asks for `len`
 // cycles starting at its own timestamp and gets the earliest free gap at or after it, whatever
 // order the requests arrive in. Bookings behind simulated time are dropped as it advances.
 #pragma once
@@ -72,7 +72,8 @@ private:
 // A port that takes one request per cycle (the RT unit's request port, its response FIFO's
 // drain, an L2 slice's lookup), booked by timestamp in any order as long as no request is
 // timestamped before the floor (advance()). One bit per cycle in a ring of words that grows when
-// a booking runs past it: O(1) for the usual booking near the floor, unlike Calendar's tree.
+// a booking runs past it: O(1) for the usual booking near the floor, where Calendar searches its
+// bookings.
 class PortCalendar {
 public:
     // The earliest free cycle at or after `t` (and the floor), now taken.
