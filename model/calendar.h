@@ -90,6 +90,10 @@ public:
         while (bits == ~uint64_t(0)) bits = word(++w);
         return (w << 6) | unsigned(__builtin_ctzll(~bits));
     }
+    // Takes every cycle of [from, to] (a port held by a request that waits for END_REQ).
+    void hold(uint64_t from, uint64_t to) {
+        for (uint64_t c = std::max(from, floor_); c <= to; ++c) word(c >> 6) |= uint64_t(1) << (c & 63);
+    }
     // No booking will be timestamped before `floor` again: the ring's words behind it are reused.
     void advance(uint64_t floor) {
         if (floor <= floor_) return;

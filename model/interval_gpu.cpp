@@ -52,6 +52,10 @@ void IntervalGpu::remember(ReadyMap& m, uint64_t sector, Ready r, size_t lines) 
 void IntervalGpu::advance(uint64_t floor) {
     if (floor <= floor_) return;
     floor_ = floor;
+    // The ports' rings are recycled every 1,024 cycles: bookings come at or after the floor
+    // anyway, since fetches run in time order.
+    if (floor < ports_floor_ + 1024) return;
+    ports_floor_ = floor;
     for (PortCalendar& p : issue_) p.advance(floor);
     for (PortCalendar& p : drain_) p.advance(floor);
     for (PortCalendar& p : prefetch_) p.advance(floor);
@@ -67,10 +71,11 @@ uint64_t IntervalGpu::mshr_slot(ReadyMap& m, SectorCache& tags, uint32_t mshrs, 
     return t;
 }
 
-uint64_t IntervalGpu::arrival(ReadyMap& m, uint64_t sector, uint64_t cycle, bool* dram) {
+uint64_t IntervalGpu::arrival(ReadyMap& m, uint64_t sector, uint64_t cycle, bool* dram, uint32_t* merged) {
     auto f = m.at.find(sector);
     if (f == m.at.end() || f->second.at <= cycle) return ~0ull;
     Ready& r = f->second;
+    *merged = r.merged;
     if (cycle < r.sent) {
         r.at = cycle + (r.at - r.sent);
         r.sent = cycle;
@@ -88,8 +93,10 @@ IntervalGpu::Ready IntervalGpu::read_l2(uint64_t addr, uint64_t cycle, ReqKind k
     const CacheOutcome o = tags.read(addr, ++token_, kind);
     if (o == CacheOutcome::Hit) {
         bool dram = false;
-        const uint64_t at = arrival(ready, sector, c, &dram);
+        uint32_t merged = 0;
+        const uint64_t at = arrival(ready, sector, c, &dram, &merged);
         if (at != ~0ull && at > c + cfg_.l2.latency) {  // still on its way from DRAM
+            ++ready.at[sector].merged;
             tags.count_as_mshr_hit(kind);
             return {c, at, true};
         }
@@ -113,8 +120,17 @@ IntervalGpu::Served IntervalGpu::read(uint32_t sm, uint64_t addr, uint64_t cycle
     const CacheOutcome o = tags.read(addr, ++token_, kind);
     if (o == CacheOutcome::Hit) {
         bool dram = false;
-        const uint64_t at = arrival(ready, sector, cycle, &dram);
+        uint32_t merged = 0;
+        const uint64_t at = arrival(ready, sector, cycle, &dram, &merged);
         if (at != ~0ull && at > cycle + cfg_.l1_hit_latency) {  // still on its way
+            if (merged + 1 >= cfg_.l1.mshr_merge) {
+                // The MSHR holds its limit of requests: a reservation fail. The read retries when
+                // the sector arrives (then a hit), and the request port waits for it.
+                tags.count_reservation_fail(kind);
+                issue_[sm].hold(cycle + 1, at);
+                return {at + cfg_.l1_hit_latency, false, false};
+            }
+            ++ready.at[sector].merged;
             tags.count_as_mshr_hit(kind);
             return {at, true, dram};
         }
@@ -130,108 +146,135 @@ IntervalGpu::Served IntervalGpu::read(uint32_t sm, uint64_t addr, uint64_t cycle
     return {done, true, r.dram};
 }
 
-uint64_t IntervalGpu::trace(uint32_t sm, const std::vector<WarpRay>& rays, uint64_t start, std::vector<RetiredRay>& retired) {
-    advance(start);
-    PortCalendar& issue = issue_[sm];
-    PortCalendar& drain = drain_[sm];
-    threads_.resize(rays.size());
-    live_.clear();
-    fetches_.clear();
+void IntervalGpu::start_trace(uint32_t sm, const std::vector<WarpRay>& rays, uint64_t start, std::vector<Finished>& finished) {
+    uint32_t id;
+    if (!free_traces_.empty()) {
+        id = free_traces_.back();
+        free_traces_.pop_back();
+    } else {
+        id = uint32_t(traces_.size());
+        traces_.emplace_back();
+    }
+    Trace& tr = traces_[id];
+    tr.sm = sm;
+    tr.start = tr.end = start;
+    tr.live = 0;
+    tr.rays = rays;
+    tr.threads.resize(rays.size());
     for (uint32_t i = 0; i < rays.size(); ++i) {
-        Thread& t = threads_[i];
+        Thread& t = tr.threads[i];
         t.trav.start(rays[i].ray, image_.header(), order_);
         t.ready = start;
         t.streak = 0;
         t.l1_miss_nodes = t.dram_nodes = 0;
         t.ttp_dfs = TtpDfs{};
         t.ttp_bfs = TtpBfs{};
-        if (!t.trav.done()) live_.push_back(i);
+        if (!t.trav.done()) {
+            ++tr.live;
+            events_.push({start, next_seq_++, id, i});
+        }
     }
     ++rt_.warps;
     rt_.rays += rays.size();
-    uint64_t end = start;
-    // Round by round: every live thread fetches and tests its next node, so that the caches see
-    // the trace's fetches roughly in time order.
-    while (!live_.empty()) {
-        next_live_.clear();
-        for (uint32_t i : live_) {
-            Thread& t = threads_[i];
-            const StackEntry e = t.trav.peek();
-            uint8_t fetch_class = 0;
-            if (t.trav.next_is_pop()) {
-                t.streak = uint8_t(std::min(t.streak + 1, 4));
-                fetch_class = t.streak;
-            }
-            ++rt_.node_fetches;
-            ++rt_.streak_fetches[fetch_class];
-            Fetch f;
-            auto same = fetches_.find({e.addr, t.ready});
-            if (same != fetches_.end()) {
-                f = same->second;  // coalesced with a thread scheduled in the same cycle
-                ++rt_.coalesced;
-            } else {
-                f = {t.ready, false, false};
-                const uint32_t chunks = node_bytes(e.type) / kChunkBytes;
-                for (uint32_t c = 0; c < chunks; ++c) {
-                    const uint64_t sent = issue.book(t.ready + 1);
-                    const Served s = read(sm, e.addr + uint64_t(c) * kChunkBytes, sent, ReqKind::Demand);
-                    // Drained from the response FIFO one per cycle, at the earliest in the cycle
-                    // after the request left (an L1 hit's answer comes in that same cycle).
-                    f.done = std::max(f.done, drain.book(std::max(s.at, sent + 1)));
-                    f.l1_miss |= s.l1_miss;
-                    f.dram |= s.dram;
-                }
-                rt_.chunk_requests += chunks;
-                rt_.responses += chunks;
-                fetches_[{e.addr, t.ready}] = f;
-            }
-            // TTP: on a pop, entries below the popped one leave as prefetches, one per cycle among
-            // themselves (their own queue), each in a cycle the request port has no demand for.
-            // Those cycles stay free for demands timed later (AT sends a prefetch only when no
-            // demand waits).
-            if (fetch_class > 0 && cfg_.prefetch.kind == PrefetcherKind::Ttp) {
-                const auto& st = t.trav.stack();
-                picks_.clear();
-                if (order_ == TraversalOrder::DFS)
-                    t.ttp_dfs.on_pop(st.size() - 1, cfg_.prefetch.depth, picks_);
-                else
-                    t.ttp_bfs.on_pop(st.size() - 1, cfg_.prefetch.bfs_n, picks_);
-                for (size_t k : picks_) {
-                    const StackEntry& p = order_ == TraversalOrder::DFS ? st[k] : st[k + 1];
-                    for (uint32_t c = 0; c < node_bytes(p.type) / kChunkBytes; ++c) {
-                        const uint64_t chunk = p.addr + uint64_t(c) * kChunkBytes;
-                        ++rt_.prefetches_generated;
-                        auto queued = prefetch_queue_[sm].at.find(chunk);
-                        if (queued != prefetch_queue_[sm].at.end() && queued->second.sent > t.ready) {
-                            ++rt_.prefetch_duplicates;  // still waiting in the queue: dropped, as in AT
-                            continue;
-                        }
-                        const uint64_t sent = issue.first_free(prefetch_[sm].book(t.ready + 1));
-                        read(sm, chunk, sent, ReqKind::Prefetch);
-                        remember(prefetch_queue_[sm], chunk, {sent, sent, false}, l1_[sm].lines());
-                        ++rt_.prefetches_sent;
-                        ++rt_.prefetch_responses;
-                    }
-                }
-            }
-            const StepInfo info = complete_fetch(t, rt_, fetch_class, f.l1_miss, f.dram, image_);
-            const uint32_t math = rt_math_latency(cfg_.lat, info);
-            rt_.thread_cycles[size_t(ThreadStatus::WaitMemory)] += f.done - t.ready;
-            rt_.thread_cycles[size_t(ThreadStatus::InMath)] += math;
-            t.ready = f.done + math;
-            if (t.trav.done())
-                end = std::max(end, t.ready);
-            else
-                next_live_.push_back(i);
+    if (tr.live == 0) finish(id, finished);  // every ray missed the root box
+}
+
+void IntervalGpu::finish(uint32_t id, std::vector<Finished>& finished) {
+    Trace& tr = traces_[id];
+    Finished f{tr.sm, tr.end, {}};
+    for (uint32_t i = 0; i < tr.rays.size(); ++i) {
+        const Thread& t = tr.threads[i];
+        rt_.thread_cycles[size_t(ThreadStatus::Idle)] += tr.end - (t.trav.nodes_visited() ? t.ready : tr.start);
+        f.rays.push_back({tr.rays[i].key, t.trav.hit(), t.trav.nodes_visited(), t.l1_miss_nodes, t.dram_nodes});
+    }
+    finished.push_back(std::move(f));
+    free_traces_.push_back(id);
+}
+
+uint64_t IntervalGpu::next_event() const { return events_.empty() ? ~0ull : events_.top().at; }
+
+void IntervalGpu::run_next(std::vector<Finished>& finished) {
+    const Event ev = events_.top();
+    events_.pop();
+    advance(ev.at);  // every later fetch is scheduled at or after this one
+    if (ev.at != coalesce_at_) {
+        coalescing_.clear();
+        coalesce_at_ = ev.at;
+    }
+    Trace& tr = traces_[ev.trace];
+    Thread& t = tr.threads[ev.thread];
+    const uint32_t sm = tr.sm;
+    PortCalendar& issue = issue_[sm];
+    PortCalendar& drain = drain_[sm];
+    const StackEntry e = t.trav.peek();
+    uint8_t fetch_class = 0;
+    if (t.trav.next_is_pop()) {
+        t.streak = uint8_t(std::min(t.streak + 1, 4));
+        fetch_class = t.streak;
+    }
+    ++rt_.node_fetches;
+    ++rt_.streak_fetches[fetch_class];
+    // Threads of one trace that fetch the same node scheduled in the same cycle share one fetch.
+    auto same = std::find_if(coalescing_.begin(), coalescing_.end(),
+                             [&](const Fetch& x) { return x.trace == ev.trace && x.addr == e.addr; });
+    Fetch f{ev.trace, e.addr, t.ready, false, false};
+    if (same != coalescing_.end()) {
+        f = *same;
+        ++rt_.coalesced;
+    } else {
+        const uint32_t chunks = node_bytes(e.type) / kChunkBytes;
+        for (uint32_t c = 0; c < chunks; ++c) {
+            const uint64_t sent = issue.book(t.ready + 1);
+            const Served s = read(sm, e.addr + uint64_t(c) * kChunkBytes, sent, ReqKind::Demand);
+            // Drained from the response FIFO one per cycle, at the earliest in the cycle after
+            // the request left (an L1 hit's answer comes in that same cycle).
+            f.done = std::max(f.done, drain.book(std::max(s.at, sent + 1)));
+            f.l1_miss |= s.l1_miss;
+            f.dram |= s.dram;
         }
-        live_.swap(next_live_);
+        rt_.chunk_requests += chunks;
+        rt_.responses += chunks;
+        coalescing_.push_back(f);
     }
-    for (uint32_t i = 0; i < rays.size(); ++i) {
-        const Thread& t = threads_[i];
-        rt_.thread_cycles[size_t(ThreadStatus::Idle)] += end - (t.trav.nodes_visited() ? t.ready : start);
-        retired.push_back({rays[i].key, t.trav.hit(), t.trav.nodes_visited(), t.l1_miss_nodes, t.dram_nodes});
+    // TTP: on a pop, entries below the popped one leave as prefetches, one per cycle among
+    // themselves (their own queue), each in a cycle the request port has no demand for. Those
+    // cycles stay free for demands timed later (AT sends a prefetch only when no demand waits).
+    if (fetch_class > 0 && cfg_.prefetch.kind == PrefetcherKind::Ttp) {
+        const auto& st = t.trav.stack();
+        picks_.clear();
+        if (order_ == TraversalOrder::DFS)
+            t.ttp_dfs.on_pop(st.size() - 1, cfg_.prefetch.depth, picks_);
+        else
+            t.ttp_bfs.on_pop(st.size() - 1, cfg_.prefetch.bfs_n, picks_);
+        for (size_t k : picks_) {
+            const StackEntry& p = order_ == TraversalOrder::DFS ? st[k] : st[k + 1];
+            for (uint32_t c = 0; c < node_bytes(p.type) / kChunkBytes; ++c) {
+                const uint64_t chunk = p.addr + uint64_t(c) * kChunkBytes;
+                ++rt_.prefetches_generated;
+                auto queued = prefetch_queue_[sm].at.find(chunk);
+                if (queued != prefetch_queue_[sm].at.end() && queued->second.sent > t.ready) {
+                    ++rt_.prefetch_duplicates;  // still waiting in the queue: dropped, as in AT
+                    continue;
+                }
+                const uint64_t sent = issue.first_free(prefetch_[sm].book(t.ready + 1));
+                read(sm, chunk, sent, ReqKind::Prefetch);
+                remember(prefetch_queue_[sm], chunk, {sent, sent, false}, l1_[sm].lines());
+                ++rt_.prefetches_sent;
+                ++rt_.prefetch_responses;
+            }
+        }
     }
-    return end;
+    const StepInfo info = complete_fetch(t, rt_, fetch_class, f.l1_miss, f.dram, image_);
+    const uint32_t math = rt_math_latency(cfg_.lat, info);
+    rt_.thread_cycles[size_t(ThreadStatus::WaitMemory)] += f.done - t.ready;
+    rt_.thread_cycles[size_t(ThreadStatus::InMath)] += math;
+    t.ready = f.done + math;
+    if (!t.trav.done()) {
+        events_.push({t.ready, next_seq_++, ev.trace, ev.thread});
+        return;
+    }
+    tr.end = std::max(tr.end, t.ready);
+    if (--tr.live == 0) finish(ev.trace, finished);
 }
 
 }  // namespace rtu

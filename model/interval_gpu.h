@@ -1,23 +1,26 @@
-// The interval fidelity's GPU (docs/interval.md): the RT units' timing computed one whole trace
-// at a time instead of cycle by cycle. Each thread of the trace walks its ray through the BVH
-// image (the same execution-driven traversal as AT and LT); every node fetch books the RT unit's
-// request port (one 32 B chunk per cycle), reads the L1, and on a miss the L2 slice and the DRAM;
-// the response FIFO drains one chunk per cycle; the node's tests take their math latency. The
-// thread's next fetch is scheduled when they end, and the trace leaves when its slowest thread is
-// done. Threads of a trace that fetch the same node in the same cycle share one fetch (intra-warp
-// coalescing). TTP (DFS and BFS) prefetches on pops, as in AT.
+// The interval fidelity's GPU (docs/interval.md): the RT units' timing with one event per node
+// fetch instead of cycle stepping. Each thread walks its ray through the BVH image (the same
+// execution-driven traversal as AT and LT). Its node fetch, taken at the cycle it is scheduled,
+// books the RT unit's request port (one 32 B chunk per cycle), reads the L1, and on a miss the
+// L2 slice and the DRAM; the response FIFO drains one chunk per cycle; the node's tests take
+// their math latency, and the thread's next fetch is scheduled when they end. All of that is
+// worked out at once, so the time between two fetches of a thread costs nothing to simulate.
+// A trace leaves its warp-buffer slot when its slowest thread is done. Threads of a trace that
+// fetch the same node in the same cycle share one fetch (intra-warp coalescing). TTP (DFS and
+// BFS) prefetches on pops, as in AT.
 //
-// Shared resources are booked by timestamp (PortCalendar, DramBookings), so traces may be timed
-// in the order they start rather than in global time order; cache tags change in that order and
-// each sector remembers the cycle its data arrives (a later read before then waits for it, as an
-// MSHR merge would). MSHR counts are kept (a miss waits for a free one, as in LT). Not modelled,
-// against AT: the warp scheduler's one-warp-per-cycle choice, MSHR merge limits, the DRAM's
-// request queue and FR-FCFS reordering.
+// Fetches run in the order they are scheduled, across all traces. Shared resources are booked
+// by timestamp (PortCalendar, DramBookings), since a fetch books cycles after its own; each
+// sector remembers the cycle its data arrives (a later read before then waits for it, as an
+// MSHR merge would), and MSHR counts are kept (a miss waits for a free one, as in LT). An L1 read
+// past the MSHR's merge limit is a reservation fail: it retries when the sector arrives, and the
+// RT unit's request port is held until then (END_REQ withheld, as in AT). Not modelled, against
+// AT: the warp scheduler's one-warp-per-cycle choice, the L2's merge limit, the DRAM's request
+// queue and FR-FCFS reordering.
 // Plain C++ (no SystemC).
 #pragma once
 #include <cstdint>
 #include <queue>
-#include <utility>
 #include <vector>
 
 #include <absl/container/flat_hash_map.h>
@@ -38,10 +41,19 @@ public:
     // prefetchers other than none and TTP.
     IntervalGpu(const HwConfig& cfg, const BvhImage& image, TraversalOrder order);
 
-    // Times one trace (at most warp_size rays) of SM `sm` that enters a warp-buffer slot at cycle
-    // `start`; appends its rays to `retired` and returns the cycle its last thread finishes.
-    // Calls must come in non-decreasing `start` order (see advance()).
-    uint64_t trace(uint32_t sm, const std::vector<WarpRay>& rays, uint64_t start, std::vector<RetiredRay>& retired);
+    // A trace (at most warp_size rays) of SM `sm` enters a warp-buffer slot at cycle `start`;
+    // its threads' first fetches are scheduled then. Not before next_event() (time order).
+    struct Finished {
+        uint32_t sm;
+        uint64_t end;  // the cycle its last thread's last test ends
+        std::vector<RetiredRay> rays;
+    };
+    void start_trace(uint32_t sm, const std::vector<WarpRay>& rays, uint64_t start, std::vector<Finished>& finished);
+    // The cycle of the earliest scheduled node fetch (~0: none).
+    uint64_t next_event() const;
+    // Runs that fetch: its chunks, the node's tests, and the thread's next fetch. A trace whose
+    // last thread is done is appended to `finished`.
+    void run_next(std::vector<Finished>& finished);
 
     // RT-unit statistics summed over the SMs (thread_cycles: WaitMemory from a fetch's
     // scheduling to its data, InMath, and Idle for finished threads waiting for their trace).
@@ -59,6 +71,7 @@ private:
     struct Ready {  // a sector's miss left at `sent` and its data arrives at `at`; `dram`: from DRAM
         uint64_t sent, at;
         bool dram;
+        uint32_t merged = 0;  // reads merged into the miss while in flight
     };
     struct ReadyMap {
         absl::flat_hash_map<uint64_t, Ready> at;
@@ -77,7 +90,8 @@ private:
     // A read at `cycle` of a sector the tags hold: its data arrives at the returned cycle, or
     // ~0 when it was there already. A read timestamped before the sector's miss left takes the
     // miss over (it would have been the one to miss, and the later read the one to merge).
-    static uint64_t arrival(ReadyMap& m, uint64_t sector, uint64_t cycle, bool* dram);
+    // `merged` receives how many reads merged into the miss before this one.
+    static uint64_t arrival(ReadyMap& m, uint64_t sector, uint64_t cycle, bool* dram, uint32_t* merged);
 
     HwConfig cfg_;
     const BvhImage& image_;
@@ -90,10 +104,9 @@ private:
     std::vector<ReadyMap> l1_ready_, l2_ready_;
     std::vector<ReadyMap> prefetch_queue_;     // per SM: prefetch chunks by the cycle they leave
     DramBookings dram_;
-    uint64_t floor_ = 0, token_ = 0;
+    uint64_t floor_ = 0, ports_floor_ = 0, token_ = 0;
     RtUnitStats rt_;
 
-    // Per trace, reused.
     struct Thread {
         TraversalThread trav;
         uint64_t ready = 0;  // cycle its next fetch is scheduled
@@ -102,14 +115,30 @@ private:
         TtpDfs ttp_dfs;
         TtpBfs ttp_bfs;
     };
-    struct Fetch {  // a node fetch of the current trace, for coalescing
-        uint64_t done;  // cycle its last chunk drained
+    struct Trace {  // in a warp-buffer slot; reused
+        uint32_t sm = 0, live = 0;  // live: threads not done
+        uint64_t start = 0, end = 0;
+        std::vector<WarpRay> rays;
+        std::vector<Thread> threads;
+    };
+    struct Event {  // a thread's next node fetch, scheduled at `at`
+        uint64_t at, seq;  // seq: scheduling order, for ties
+        uint32_t trace, thread;
+        bool operator>(const Event& o) const { return at != o.at ? at > o.at : seq > o.seq; }
+    };
+    struct Fetch {  // a node fetch scheduled in the current cycle, for coalescing
+        uint32_t trace;
+        uint64_t addr, done;  // done: the cycle its last chunk drained
         bool l1_miss, dram;
     };
-    std::vector<Thread> threads_;
-    std::vector<uint32_t> live_, next_live_;
-    // The current trace's node fetches by (node address, cycle scheduled).
-    absl::flat_hash_map<std::pair<uint64_t, uint64_t>, Fetch> fetches_;
+    void finish(uint32_t trace, std::vector<Finished>& finished);
+
+    std::vector<Trace> traces_;
+    std::vector<uint32_t> free_traces_;
+    std::priority_queue<Event, std::vector<Event>, std::greater<Event>> events_;
+    uint64_t next_seq_ = 0;
+    std::vector<Fetch> coalescing_;  // fetches scheduled at coalesce_at_
+    uint64_t coalesce_at_ = ~0ull;
     std::vector<size_t> picks_;
 };
 

@@ -15,39 +15,52 @@ TimingResult run_interval(const HwConfig& cfg, const BvhImage& image, Workload& 
     WorkloadDriver driver(workload, cfg.sms, cfg.warp_size, cfg.shade_latency);
     driver.keep_rays(opt.keep_rays);
 
-    // Warp-buffer slots by the cycle they are free (then by SM: deterministic order).
+    // Warp-buffer slots by the cycle they are free (then by SM: deterministic order). A slot whose
+    // SM has no trace ready and none coming yet idles until one of the SM's traces retires.
     using Slot = std::pair<uint64_t, uint32_t>;
     std::priority_queue<Slot, std::vector<Slot>, std::greater<Slot>> free_slots;
     for (uint32_t sm = 0; sm < cfg.sms; ++sm)
         for (uint32_t w = 0; w < cfg.warp_buffer; ++w) free_slots.push({0, sm});
-    std::vector<RetiredRay> retired;
+    std::vector<uint32_t> idle(cfg.sms, 0);
+    std::vector<IntervalGpu::Finished> finished;
     uint64_t end = 0;
     const auto t0 = std::chrono::steady_clock::now();
     auto last_print = t0;
     bool printed = false;
-    while (!free_slots.empty()) {
-        const auto [now, sm] = free_slots.top();
-        free_slots.pop();
-        auto trace = driver.next_trace(sm, now);
-        if (!trace) {
-            // None of this SM's warps is ready yet: the slot waits for the earliest. Every trace
-            // in flight was timed when it started, so its warp's next trace is already known;
-            // nothing waiting means every warp of this SM is done.
-            const uint64_t r = driver.earliest_ready(sm);
-            if (r != ~0ull) free_slots.push({std::max(r, now + 1), sm});
-            continue;
+    for (;;) {
+        const uint64_t slot_at = free_slots.empty() ? ~0ull : free_slots.top().first, fetch_at = gpu.next_event();
+        if (slot_at == ~0ull && fetch_at == ~0ull) break;
+        finished.clear();
+        if (slot_at <= fetch_at) {  // a slot frees: it takes its SM's next ready trace
+            const auto [now, sm] = free_slots.top();
+            free_slots.pop();
+            auto trace = driver.next_trace(sm, now);
+            if (trace) {
+                gpu.start_trace(sm, *trace, now, finished);
+            } else {
+                const uint64_t r = driver.earliest_ready(sm);
+                if (r != ~0ull)
+                    free_slots.push({std::max(r, now + 1), sm});
+                else
+                    ++idle[sm];
+            }
+        } else {
+            gpu.run_next(finished);
         }
-        retired.clear();
-        const uint64_t done = gpu.trace(sm, *trace, now, retired);
-        driver.retire(sm, retired, done);
-        end = std::max(end, done);
-        free_slots.push({done + 1, sm});  // the slot takes its next trace in the following cycle
-        if (opt.progress) {
+        for (IntervalGpu::Finished& f : finished) {
+            driver.retire(f.sm, f.rays, f.end);
+            end = std::max(end, f.end);
+            free_slots.push({f.end + 1, f.sm});  // the slot takes its next trace in the following cycle
+            // The warp's next trace is known now: idle slots of the SM look again.
+            const uint64_t r = driver.earliest_ready(f.sm);
+            for (; idle[f.sm] > 0 && r != ~0ull; --idle[f.sm]) free_slots.push({std::max(r, f.end + 1), f.sm});
+        }
+        if (opt.progress && !finished.empty()) {
             const auto t = std::chrono::steady_clock::now();
             if (std::chrono::duration<double>(t - last_print).count() > 2.0) {
                 last_print = t;
                 const double wall = std::chrono::duration<double>(t - t0).count(), f = driver.fraction_done();
-                std::cerr << "\r  cycle " << now << ", rays retired " << driver.rays_retired() << " (" << int(100 * f)
+                std::cerr << "\r  cycle " << end << ", rays retired " << driver.rays_retired() << " (" << int(100 * f)
                           << " % of pixel warps done), " << uint64_t(double(driver.rays_retired()) / std::max(wall, 1e-9)) << " rays/s";
                 if (f > 0.02) std::cerr << ", ETA " << int(wall * (1.0 - f) / f) << " s";
                 std::cerr << "   " << std::flush;

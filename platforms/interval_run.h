@@ -1,7 +1,8 @@
-// The interval fidelity (docs/interval.md): the GPU of the timing model with each trace timed as
-// a whole (model/interval_gpu.h) instead of cycle by cycle, driven by the same workload driver
-// as AT and LT: warp-buffer slots take traces in the order they come free, and a trace's rays
-// retire when its slowest thread is done. No SystemC kernel: a heap of slot-free events.
+// The interval fidelity (docs/interval.md): the GPU of the timing model with one event per node
+// fetch (model/interval_gpu.h) instead of cycle stepping, driven by the same workload driver as
+// AT and LT: warp-buffer slots take traces in the order they come free, and a trace's rays
+// retire when its slowest thread is done. No SystemC kernel: slot-free events and the GPU's
+// fetch events, merged in time order.
 #pragma once
 #include "gpu_platform.h"
 

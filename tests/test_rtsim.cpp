@@ -489,10 +489,10 @@ TEST(RtsimTiming, LtAtTheSmallestQuantumIsWithinTheStatedBoundOfAt) {
 }
 
 // The interval fidelity against AT (docs/interval.md). Stated bound on these 32x32 frames:
-// within 10 % in total cycles and 5 % in TTP's speed-up over the baseline, with TTP a speed-up
-// in both (measured: bunny -3.3 % and 1.134x against 1.130x, ship -3.2 % and 1.320x against
-// 1.343x; on the seven report scenes at 128x128 the cycle error is within 10 %). Same inputs,
-// same statistics.
+// within 5 % in total cycles and 8 % in TTP's speed-up over the baseline, with TTP a speed-up
+// in both (measured: bunny -0.9 % and 1.141x against 1.130x, ship -2.9 % and 1.405x against
+// 1.343x; on the seven report scenes at 128x128 the cycle error is within 1.2 %, TTP's speed-up
+// within 4.5 %). Same inputs, same statistics.
 TEST(RtsimTiming, IntervalIsWithinTheStatedBoundOfAt) {
     TempDir dir;
     for (const std::string scene : {"bunny", "ship"}) {
@@ -507,16 +507,18 @@ TEST(RtsimTiming, IntervalIsWithinTheStatedBoundOfAt) {
         const auto at = run("at.json", "--fidelity at"), at_ttp = run("at_ttp.json", "--fidelity at --prefetcher ttp");
         const auto iv = run("iv.json", "--fidelity interval"), iv_ttp = run("iv_ttp.json", "--fidelity interval --prefetcher ttp");
         const double ca = at["cycles"].get<double>(), ci = iv["cycles"].get<double>();
-        EXPECT_LE(std::fabs(ci - ca) / ca, 0.10) << scene << ": AT " << ca << " interval " << ci;
+        EXPECT_LE(std::fabs(ci - ca) / ca, 0.05) << scene << ": AT " << ca << " interval " << ci;
         const double sa = ca / at_ttp["cycles"].get<double>(), si = ci / iv_ttp["cycles"].get<double>();
         EXPECT_GT(si, 1.0) << scene;
-        EXPECT_LE(std::fabs(si / sa - 1.0), 0.05) << scene << ": TTP speed-up AT " << sa << " interval " << si;
+        EXPECT_LE(std::fabs(si / sa - 1.0), 0.08) << scene << ": TTP speed-up AT " << sa << " interval " << si;
         EXPECT_EQ(iv["nodes_visited"], at["nodes_visited"]);
         EXPECT_EQ(iv["hits"], at["hits"]);
-        // Every prefetch chunk generated is sent or dropped as a duplicate; every one sent reads L1.
+        // Every prefetch chunk generated is sent or dropped as a duplicate; every one sent reads L1
+        // once, and once more after a reservation fail.
         const auto& pf = iv_ttp["timing"]["prefetch"];
         EXPECT_EQ(pf["sent"].get<uint64_t>() + pf["duplicates_dropped"].get<uint64_t>(), pf["generated"].get<uint64_t>());
-        EXPECT_EQ(pf["l1"]["issued"].get<uint64_t>(), pf["sent"].get<uint64_t>());
+        EXPECT_EQ(pf["l1"]["issued"].get<uint64_t>(),
+                  pf["sent"].get<uint64_t>() + pf["l1"]["response"]["reservation_fail"].get<uint64_t>());
         EXPECT_GT(iv_ttp["timing"]["prefetch"]["l1"]["useful"].get<uint64_t>(), 0u) << scene;
         EXPECT_EQ(run("iv2.json", "--fidelity interval"), iv) << scene;
     }

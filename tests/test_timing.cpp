@@ -171,13 +171,24 @@ TEST(TimingInterval, SingleRayLatenciesAreTheHandWorkedSums) {
     c.set("gpu.memory_clock_mhz=1365");
     const HwConfig hw = c.resolve();
     IntervalGpu gpu(hw, image, TraversalOrder::DFS);
+    std::vector<RetiredRay> out;
+    // One trace alone, run to its end: the cycle it finishes.
+    auto time_trace = [&](uint32_t sm, const std::vector<WarpRay>& rays, uint64_t start) {
+        std::vector<IntervalGpu::Finished> done;
+        gpu.start_trace(sm, rays, start, done);
+        while (done.empty() && gpu.next_event() != ~0ull) gpu.run_next(done);
+        EXPECT_EQ(done.size(), 1u);
+        EXPECT_EQ(gpu.next_event(), ~0ull);
+        if (done.empty()) return uint64_t(0);
+        out.insert(out.end(), done[0].rays.begin(), done[0].rays.end());
+        return done[0].end;
+    };
     WarpRay r;
     r.ray.org = {0, 0, -5};
     r.ray.dir = {0, 0, 1};
     r.scale = scale_direction(r.ray);
     const uint64_t internal = hw.lat.header + hw.lat.ray_box, leaf = hw.lat.leaf_descriptor + hw.lat.ray_triangle + hw.lat.triangle_hit;
-    std::vector<RetiredRay> out;
-    EXPECT_EQ(gpu.trace(0, {r}, 0, out), 466u);
+    EXPECT_EQ(time_trace(0, {r}, 0), 466u);
     ASSERT_EQ(out.size(), 1u);
     EXPECT_TRUE(out[0].hit.hit);
     EXPECT_EQ(out[0].nodes_visited, 2u);
@@ -189,11 +200,11 @@ TEST(TimingInterval, SingleRayLatenciesAreTheHandWorkedSums) {
     EXPECT_EQ(gpu.l1()[0].stats(ReqKind::Demand).line_misses, 2u);
     EXPECT_EQ(gpu.l1()[0].stats(ReqKind::Demand).sector_misses, 2u);
 
-    EXPECT_EQ(gpu.trace(0, {r}, 1000, out), 1000 + (2 + 1 + internal) + (2 + 1 + leaf));  // 1038
+    EXPECT_EQ(time_trace(0, {r}, 1000), 1000 + (2 + 1 + internal) + (2 + 1 + leaf));  // 1038
     EXPECT_EQ(gpu.l1()[0].stats(ReqKind::Demand).hits, 4u);
-    EXPECT_EQ(gpu.trace(1, {r}, 2000, out), 2000 + (2 + hw.l2.latency + internal) + (2 + hw.l2.latency + leaf));  // 2356
+    EXPECT_EQ(time_trace(1, {r}, 2000), 2000 + (2 + hw.l2.latency + internal) + (2 + hw.l2.latency + leaf));  // 2356
     EXPECT_EQ(gpu.l2()[0].stats(ReqKind::Demand).hits + gpu.l2()[1].stats(ReqKind::Demand).hits, 4u);
-    EXPECT_EQ(gpu.trace(0, {r, r}, 3000, out), 3038u);
+    EXPECT_EQ(time_trace(0, {r, r}, 3000), 3038u);
     EXPECT_EQ(gpu.rt_stats().coalesced, 2u);
     EXPECT_EQ(gpu.dram_stats().reads, 4u);
     EXPECT_EQ(out.size(), 5u);
