@@ -170,11 +170,11 @@ def main():
           f"(worst {lt10[2]:.1f} %) with no gain in speed: do not use it.")
     iv = row("interval")
     if iv:
-        p(f"- **Interval** (docs/interval.md): {iv[0]:.1f}x faster than AT, cycles within {iv[1]:.1f} % on average "
-          f"(worst {iv[2]:.1f} %), TTP speed-up within {iv[3]:.1f} %. Each trace is timed as a whole, with no SystemC "
-          "kernel: the fastest timing. Use it to sweep many configurations or large frames for ratios (TTP against "
-          "the baseline, cache sizes) and to find the points worth an AT run; it has no DRAM queue, reservation fails "
-          "or waveforms, and no prefetcher other than TTP.")
+        p(f"- **Interval** (docs/interval.md): {iv[0]:.1f}x faster than AT, cycles within {iv[1]:.2f} % on average "
+          f"(worst {iv[2]:.1f} %), TTP speed-up within {iv[3]:.1f} %. One event per node fetch: no SystemC kernel, no "
+          "cycle stepping. Use it for sweeps of configurations and for large frames; where it is both faster and "
+          "closer to AT than LT, prefer it to LT. Keep AT for final figures, waveforms, the DRAM's queueing (it has "
+          "no FR-FCFS queue) and prefetchers other than TTP.")
     s50, s25, s10 = row("at_s50"), row("at_s25"), row("at_s10")
     if s50 and s25 and s10:
         def study_line(rid):
