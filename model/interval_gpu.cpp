@@ -71,17 +71,15 @@ uint64_t IntervalGpu::mshr_slot(ReadyMap& m, SectorCache& tags, uint32_t mshrs, 
     return t;
 }
 
-uint64_t IntervalGpu::arrival(ReadyMap& m, uint64_t sector, uint64_t cycle, bool* dram, uint32_t* merged) {
+IntervalGpu::Ready* IntervalGpu::in_flight(ReadyMap& m, uint64_t sector, uint64_t cycle) {
     auto f = m.at.find(sector);
-    if (f == m.at.end() || f->second.at <= cycle) return ~0ull;
+    if (f == m.at.end() || f->second.at <= cycle) return nullptr;
     Ready& r = f->second;
-    *merged = r.merged;
     if (cycle < r.sent) {
         r.at = cycle + (r.at - r.sent);
         r.sent = cycle;
     }
-    *dram = r.dram;
-    return r.at;
+    return &r;
 }
 
 IntervalGpu::Ready IntervalGpu::read_l2(uint64_t addr, uint64_t cycle, ReqKind kind) {
@@ -92,13 +90,10 @@ IntervalGpu::Ready IntervalGpu::read_l2(uint64_t addr, uint64_t cycle, ReqKind k
     const uint64_t sector = tags.sector_of(addr);
     const CacheOutcome o = tags.read(addr, ++token_, kind);
     if (o == CacheOutcome::Hit) {
-        bool dram = false;
-        uint32_t merged = 0;
-        const uint64_t at = arrival(ready, sector, c, &dram, &merged);
-        if (at != ~0ull && at > c + cfg_.l2.latency) {  // still on its way from DRAM
-            ++ready.at[sector].merged;
+        const Ready* r = in_flight(ready, sector, c);
+        if (r && r->at > c + cfg_.l2.latency) {  // still on its way from DRAM
             tags.count_as_mshr_hit(kind);
-            return {c, at, true};
+            return {c, r->at, true};
         }
         return {c, c + cfg_.l2.latency, false};
     }
@@ -119,20 +114,18 @@ IntervalGpu::Served IntervalGpu::read(uint32_t sm, uint64_t addr, uint64_t cycle
     const uint64_t sector = tags.sector_of(addr);
     const CacheOutcome o = tags.read(addr, ++token_, kind);
     if (o == CacheOutcome::Hit) {
-        bool dram = false;
-        uint32_t merged = 0;
-        const uint64_t at = arrival(ready, sector, cycle, &dram, &merged);
-        if (at != ~0ull && at > cycle + cfg_.l1_hit_latency) {  // still on its way
-            if (merged + 1 >= cfg_.l1.mshr_merge) {
+        Ready* r = in_flight(ready, sector, cycle);
+        if (r && r->at > cycle + cfg_.l1_hit_latency) {  // still on its way
+            if (r->merged + 1 >= cfg_.l1.mshr_merge) {
                 // The MSHR holds its limit of requests: a reservation fail. The read retries when
                 // the sector arrives (then a hit), and the request port waits for it.
                 tags.count_reservation_fail(kind);
-                issue_[sm].hold(cycle + 1, at);
-                return {at + cfg_.l1_hit_latency, false, false};
+                issue_[sm].hold(cycle + 1, r->at);
+                return {r->at + cfg_.l1_hit_latency, false, false};
             }
-            ++ready.at[sector].merged;
+            ++r->merged;
             tags.count_as_mshr_hit(kind);
-            return {at, true, dram};
+            return {r->at, true, r->dram};
         }
         return {cycle + cfg_.l1_hit_latency, false, false};
     }

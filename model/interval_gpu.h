@@ -71,7 +71,7 @@ private:
     struct Ready {  // a sector's miss left at `sent` and its data arrives at `at`; `dram`: from DRAM
         uint64_t sent, at;
         bool dram;
-        uint32_t merged = 0;  // reads merged into the miss while in flight
+        uint32_t merged = 0;  // L1: reads merged into the miss while in flight
     };
     struct ReadyMap {
         absl::flat_hash_map<uint64_t, Ready> at;
@@ -87,11 +87,10 @@ private:
     void advance(uint64_t floor);
     uint64_t core_cycle(uint64_t memory_cycle) const;  // the core cycle at or after a memory cycle
     void remember(ReadyMap& m, uint64_t sector, Ready r, size_t lines);
-    // A read at `cycle` of a sector the tags hold: its data arrives at the returned cycle, or
-    // ~0 when it was there already. A read timestamped before the sector's miss left takes the
-    // miss over (it would have been the one to miss, and the later read the one to merge).
-    // `merged` receives how many reads merged into the miss before this one.
-    static uint64_t arrival(ReadyMap& m, uint64_t sector, uint64_t cycle, bool* dram, uint32_t* merged);
+    // The miss of `sector` still in flight at `cycle`, or null when its data is there. A read
+    // timestamped before the miss left takes the miss over (it would have been the one to miss,
+    // and the later read the one to merge).
+    static Ready* in_flight(ReadyMap& m, uint64_t sector, uint64_t cycle);
 
     HwConfig cfg_;
     const BvhImage& image_;
