@@ -360,7 +360,7 @@ int sc_main(int argc, char** argv) {
         ("bounces", po::value(&a.bounces)->default_value(a.bounces), "path tracing: at most this many rays per path")
         ("seed", po::value(&a.seed)->default_value(a.seed), "random seed")
         ("traversal", po::value(&a.traversal)->default_value(a.traversal), "dfs, bfs or treelet")
-        ("fidelity", po::value(&a.fidelity)->default_value(a.fidelity), "functional, at (reference timing), lt (loosely timed) or interval (fastest timing, whole traces at a time)")
+        ("fidelity", po::value(&a.fidelity)->default_value(a.fidelity), "functional, at (reference timing), lt (loosely timed) or interval (fastest timing, one event per node fetch)")
         ("config", po::value(&a.config)->default_value(a.config), "hardware preset (mobile, desktop) or JSON file")
         ("set", po::value(&a.sets)->composing(), "override one configuration key, e.g. --set l1.size_kb=64 (repeatable)")
         ("quantum", po::value(&a.quantum), "LT quantum in core cycles (same as --set sim.quantum=N)")
