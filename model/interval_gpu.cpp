@@ -16,7 +16,6 @@ IntervalGpu::IntervalGpu(const HwConfig& cfg, const BvhImage& image, TraversalOr
       memory_fs_(uint64_t(std::llround(1e9 / cfg.memory_mhz))),
       issue_(cfg.sms),
       drain_(cfg.sms),
-      prefetch_(cfg.sms),
       l2_port_(cfg.l2_slices),
       l1_ready_(cfg.sms),
       l2_ready_(cfg.l2_slices),
@@ -27,6 +26,10 @@ IntervalGpu::IntervalGpu(const HwConfig& cfg, const BvhImage& image, TraversalOr
     if (cfg.prefetch.kind != PrefetcherKind::None && cfg.prefetch.kind != PrefetcherKind::Ttp)
         throw std::invalid_argument(std::string("the interval fidelity models the prefetchers none and ttp, not '") +
                                     prefetcher_name(cfg.prefetch.kind) + "' (use --fidelity at or lt)");
+    if (cfg.prefetch.kind == PrefetcherKind::Ttp && cfg.prefetch.priority_after != 0)
+        throw std::invalid_argument("the interval fidelity sends prefetches only in cycles without a demand "
+                                    "(prefetch.priority_after 0), not after " + std::to_string(cfg.prefetch.priority_after) +
+                                    " cycles (use --fidelity at or lt)");
     for (uint32_t s = 0; s < cfg.sms; ++s) l1_.emplace_back(cfg.l1);
     for (uint32_t s = 0; s < cfg.l2_slices; ++s) l2_.emplace_back(cfg.l2);
 }
@@ -58,7 +61,6 @@ void IntervalGpu::advance(uint64_t floor) {
     ports_floor_ = floor;
     for (PortCalendar& p : issue_) p.advance(floor);
     for (PortCalendar& p : drain_) p.advance(floor);
-    for (PortCalendar& p : prefetch_) p.advance(floor);
     for (PortCalendar& p : l2_port_) p.advance(floor);
 }
 
@@ -125,6 +127,10 @@ IntervalGpu::Served IntervalGpu::read(uint32_t sm, uint64_t addr, uint64_t cycle
             }
             ++r->merged;
             tags.count_as_mshr_hit(kind);
+            if (kind == ReqKind::Demand && r->prefetch) {
+                tags.count_late_prefetch();  // the demand found the prefetch still on its way
+                r->prefetch = false;
+            }
             return {r->at, true, r->dram};
         }
         return {cycle + cfg_.l1_hit_latency, false, false};
@@ -135,7 +141,7 @@ IntervalGpu::Served IntervalGpu::read(uint32_t sm, uint64_t addr, uint64_t cycle
     const uint64_t done = r.at + xbar;
     ready.mshr_free.push(done);
     tags.fill(sector);
-    remember(ready, sector, {cycle, done, r.dram}, tags.lines());
+    remember(ready, sector, {cycle, done, r.dram, 0, kind == ReqKind::Prefetch}, tags.lines());
     return {done, true, r.dram};
 }
 
@@ -184,12 +190,36 @@ void IntervalGpu::finish(uint32_t id, std::vector<Finished>& finished) {
     free_traces_.push_back(id);
 }
 
+// Fetches run in time order and book their chunks from the cycle after they are scheduled, so
+// when cycle `cycle` comes every demand for it has booked: a free request port then means no
+// demand waits, and the oldest prefetch chunk leaves.
+void IntervalGpu::send_prefetch(uint32_t sm, uint64_t cycle) {
+    PrefetchQueue& q = prefetch_queue_[sm];
+    PortCalendar& issue = issue_[sm];
+    const uint64_t sent = issue.first_free(cycle);
+    if (sent == cycle) {
+        issue.book(cycle);
+        const uint64_t chunk = q.chunks.front();
+        q.chunks.pop_front();
+        q.waiting.erase(chunk);
+        read(sm, chunk, cycle, ReqKind::Prefetch);
+        ++rt_.prefetches_sent;
+        ++rt_.prefetch_responses;
+    }
+    if (q.chunks.empty()) {
+        q.scheduled = false;
+        return;
+    }
+    events_.push({sent == cycle ? cycle + 1 : sent, next_seq_++, sm, kPrefetch});
+}
+
 uint64_t IntervalGpu::next_event() const { return events_.empty() ? ~0ull : events_.top().at; }
 
 void IntervalGpu::run_next(std::vector<Finished>& finished) {
     const Event ev = events_.top();
     events_.pop();
     advance(ev.at);  // every later fetch is scheduled at or after this one
+    if (ev.thread == kPrefetch) return send_prefetch(ev.trace, ev.at);
     if (ev.at != coalesce_at_) {
         coalescing_.clear();
         coalesce_at_ = ev.at;
@@ -229,9 +259,9 @@ void IntervalGpu::run_next(std::vector<Finished>& finished) {
         rt_.responses += chunks;
         coalescing_.push_back(f);
     }
-    // TTP: on a pop, entries below the popped one leave as prefetches, one per cycle among
-    // themselves (their own queue), each in a cycle the request port has no demand for. Those
-    // cycles stay free for demands timed later (AT sends a prefetch only when no demand waits).
+    // TTP: on a pop, the entries below the popped one that the state machine picks join the SM's
+    // prefetch queue, which sends one chunk in each cycle the request port has no demand for
+    // (send_prefetch).
     if (fetch_class > 0 && cfg_.prefetch.kind == PrefetcherKind::Ttp) {
         const auto& st = t.trav.stack();
         picks_.clear();
@@ -244,17 +274,18 @@ void IntervalGpu::run_next(std::vector<Finished>& finished) {
             for (uint32_t c = 0; c < node_bytes(p.type) / kChunkBytes; ++c) {
                 const uint64_t chunk = p.addr + uint64_t(c) * kChunkBytes;
                 ++rt_.prefetches_generated;
-                auto queued = prefetch_queue_[sm].at.find(chunk);
-                if (queued != prefetch_queue_[sm].at.end() && queued->second.sent > t.ready) {
+                PrefetchQueue& q = prefetch_queue_[sm];
+                if (!q.waiting.insert(chunk).second) {
                     ++rt_.prefetch_duplicates;  // still waiting in the queue: dropped, as in AT
                     continue;
                 }
-                const uint64_t sent = issue.first_free(prefetch_[sm].book(t.ready + 1));
-                read(sm, chunk, sent, ReqKind::Prefetch);
-                remember(prefetch_queue_[sm], chunk, {sent, sent, false}, l1_[sm].lines());
-                ++rt_.prefetches_sent;
-                ++rt_.prefetch_responses;
+                q.chunks.push_back(chunk);
             }
+        }
+        PrefetchQueue& q = prefetch_queue_[sm];
+        if (!q.chunks.empty() && !q.scheduled) {
+            q.scheduled = true;
+            events_.push({t.ready + 1, next_seq_++, sm, kPrefetch});
         }
     }
     const StepInfo info = complete_fetch(t, rt_, fetch_class, f.l1_miss, f.dram, image_);

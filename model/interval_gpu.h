@@ -20,10 +20,12 @@
 // Plain C++ (no SystemC).
 #pragma once
 #include <cstdint>
+#include <deque>
 #include <queue>
 #include <vector>
 
 #include <absl/container/flat_hash_map.h>
+#include <absl/container/flat_hash_set.h>
 
 #include "bvh_image.h"
 #include "calendar.h"
@@ -72,6 +74,7 @@ private:
         uint64_t sent, at;
         bool dram;
         uint32_t merged = 0;  // L1: reads merged into the miss while in flight
+        bool prefetch = false;  // L1: the miss is a prefetch's
     };
     struct ReadyMap {
         absl::flat_hash_map<uint64_t, Ready> at;
@@ -97,11 +100,18 @@ private:
     TraversalOrder order_;
     uint64_t core_fs_, memory_fs_;  // clock periods in femtoseconds, as the SystemC clocks
     std::vector<PortCalendar> issue_, drain_;  // per SM: request port, response FIFO
-    std::vector<PortCalendar> prefetch_;       // per SM: the prefetch queue's one chunk per cycle
     std::vector<PortCalendar> l2_port_;        // per L2 slice: one lookup per cycle
     std::vector<SectorCache> l1_, l2_;
     std::vector<ReadyMap> l1_ready_, l2_ready_;
-    std::vector<ReadyMap> prefetch_queue_;     // per SM: prefetch chunks by the cycle they leave
+    // Per SM, TTP's prefetch queue: chunks waiting to leave in a cycle without a demand, the set
+    // of them (a chunk generated again while waiting is dropped), and whether its issue event is
+    // scheduled.
+    struct PrefetchQueue {
+        std::deque<uint64_t> chunks;
+        absl::flat_hash_set<uint64_t> waiting;
+        bool scheduled = false;
+    };
+    std::vector<PrefetchQueue> prefetch_queue_;
     DramBookings dram_;
     uint64_t floor_ = 0, ports_floor_ = 0, token_ = 0;
     RtUnitStats rt_;
@@ -120,7 +130,10 @@ private:
         std::vector<WarpRay> rays;
         std::vector<Thread> threads;
     };
-    struct Event {  // a thread's next node fetch, scheduled at `at`
+    // A thread's next node fetch, scheduled at `at`; or, with thread == kPrefetch, SM `trace`'s
+    // prefetch queue trying to send its oldest chunk in cycle `at`.
+    static constexpr uint32_t kPrefetch = ~0u;
+    struct Event {
         uint64_t at, seq;  // seq: scheduling order, for ties
         uint32_t trace, thread;
         bool operator>(const Event& o) const { return at != o.at ? at > o.at : seq > o.seq; }
@@ -131,6 +144,7 @@ private:
         bool l1_miss, dram;
     };
     void finish(uint32_t trace, std::vector<Finished>& finished);
+    void send_prefetch(uint32_t sm, uint64_t cycle);
 
     std::vector<Trace> traces_;
     std::vector<uint32_t> free_traces_;

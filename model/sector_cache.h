@@ -61,6 +61,8 @@ public:
         --stats_[size_t(k)].hits;
         ++stats_[size_t(k)].mshr_hits;
     }
+    // Interval fidelity: a demand read found a prefetched sector still on its way.
+    void count_late_prefetch() { ++stats_[size_t(ReqKind::Demand)].late_prefetches; }
     void count_reservation_fail(ReqKind k) {
         ++stats_[size_t(k)].accesses;
         ++stats_[size_t(k)].reservation_fails;
