@@ -124,7 +124,7 @@ uint64_t DramBookings::access(uint64_t addr, uint32_t bytes, uint64_t now, uint6
     ++st.reads;
     st.bytes += bytes;
     st.data_cycles += xfer;
-    st.queue_wait += column - (bank_start + (hit ? 0 : pre + cfg_.tRCD)) + (bank_start - now);
+    st.queue_wait += column - now - (hit ? 0 : pre + cfg_.tRCD);  // beyond the unloaded latency
     return bus_start + xfer;
 }
 

@@ -158,9 +158,10 @@ void IntervalGpu::start_trace(uint32_t sm, const std::vector<WarpRay>& rays, uin
     tr.sm = sm;
     tr.start = tr.end = start;
     tr.live = 0;
-    tr.rays = rays;
+    tr.keys.resize(rays.size());
     tr.threads.resize(rays.size());
     for (uint32_t i = 0; i < rays.size(); ++i) {
+        tr.keys[i] = rays[i].key;
         Thread& t = tr.threads[i];
         t.trav.start(rays[i].ray, image_.header(), order_);
         t.ready = start;
@@ -181,10 +182,10 @@ void IntervalGpu::start_trace(uint32_t sm, const std::vector<WarpRay>& rays, uin
 void IntervalGpu::finish(uint32_t id, std::vector<Finished>& finished) {
     Trace& tr = traces_[id];
     Finished f{tr.sm, tr.end, {}};
-    for (uint32_t i = 0; i < tr.rays.size(); ++i) {
+    for (uint32_t i = 0; i < tr.keys.size(); ++i) {
         const Thread& t = tr.threads[i];
         rt_.thread_cycles[size_t(ThreadStatus::Idle)] += tr.end - (t.trav.nodes_visited() ? t.ready : tr.start);
-        f.rays.push_back({tr.rays[i].key, t.trav.hit(), t.trav.nodes_visited(), t.l1_miss_nodes, t.dram_nodes});
+        f.rays.push_back({tr.keys[i], t.trav.hit(), t.trav.nodes_visited(), t.l1_miss_nodes, t.dram_nodes});
     }
     finished.push_back(std::move(f));
     free_traces_.push_back(id);

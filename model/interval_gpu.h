@@ -64,6 +64,7 @@ public:
     const std::vector<SectorCache>& l2() const { return l2_; }
     DramStats dram_stats() const { return dram_.total(); }
     uint64_t memory_cycle(uint64_t core_cycle) const;  // the memory-clock cycle at or after a core cycle
+    uint64_t core_period_fs() const { return core_fs_; }
 
 private:
     struct Served {
@@ -127,7 +128,7 @@ private:
     struct Trace {  // in a warp-buffer slot; reused
         uint32_t sm = 0, live = 0;  // live: threads not done
         uint64_t start = 0, end = 0;
-        std::vector<WarpRay> rays;
+        std::vector<uint64_t> keys;  // the rays' keys for the workload driver
         std::vector<Thread> threads;
     };
     // A thread's next node fetch, scheduled at `at`; or, with thread == kPrefetch, SM `trace`'s

@@ -1,7 +1,6 @@
 #include "interval_run.h"
 
 #include <chrono>
-#include <cmath>
 #include <iostream>
 #include <queue>
 
@@ -75,7 +74,7 @@ TimingResult run_interval(const HwConfig& cfg, const BvhImage& image, Workload& 
     r.rays = driver.results();
     r.summary = driver.summary();
     if (!driver.finished() || driver.rays_retired() != driver.rays_issued()) r.invariant_failures.push_back("not every ray retired");
-    HierarchyCounts h{gpu.rt_stats(), {}, {}, gpu.dram_stats(), end, double(std::llround(1e9 / cfg.core_mhz)), double(gpu.memory_cycle(end))};
+    HierarchyCounts h{gpu.rt_stats(), {}, {}, gpu.dram_stats(), end, double(gpu.core_period_fs()), double(gpu.memory_cycle(end))};
     for (int k = 0; k < kReqKinds; ++k) {
         for (const SectorCache& c : gpu.l1()) add(h.l1[k], c.stats(ReqKind(k)));
         for (const SectorCache& c : gpu.l2()) add(h.l2[k], c.stats(ReqKind(k)));
