@@ -1,6 +1,5 @@
 #include "gpu_platform.h"
 
-#include <chrono>
 #include <iostream>
 
 #include <systemc>
@@ -19,15 +18,16 @@ namespace {
 class Monitor : public sc_module {
 public:
     SC_HAS_PROCESS(Monitor);
-    Monitor(sc_module_name n, WorkloadDriver& driver, const ClockDomain& clock, uint64_t watchdog, bool progress,
+    Monitor(sc_module_name n, WorkloadDriver& driver, const ClockDomain& clock, uint64_t watchdog, bool show_progress,
             uint64_t period, std::function<void(uint64_t)> sample)
-        : sc_module(n), driver_(driver), clock_(clock), watchdog_(watchdog), progress_(progress), period_(period),
-          sample_(std::move(sample)), start_(std::chrono::steady_clock::now()), last_print_(start_) {
+        : sc_module(n), progress(show_progress), driver_(driver), clock_(clock), watchdog_(watchdog), period_(period),
+          sample_(std::move(sample)) {
         SC_METHOD(check);
     }
     bool stuck = false;
     std::string report;
     std::function<std::string()> describe_stuck;
+    TimingProgress progress;
 
 private:
     void check() {
@@ -42,31 +42,15 @@ private:
             sc_stop();
             return;
         }
-        const auto now = std::chrono::steady_clock::now();
-        if (progress_ && std::chrono::duration<double>(now - last_print_).count() > 2.0) {
-            last_print_ = now;
-            const double wall = std::chrono::duration<double>(now - start_).count();
-            const double f = driver_.fraction_done();
-            std::cerr << "\r  cycle " << c << ", rays retired " << driver_.rays_retired() << " (" << int(100 * f)
-                      << " % of pixel warps done), " << uint64_t(driver_.rays_retired() / std::max(wall, 1e-9)) << " rays/s";
-            if (f > 0.02) std::cerr << ", ETA " << int(wall * (1.0 - f) / f) << " s";
-            std::cerr << "   " << std::flush;
-            printed_ = true;
-        }
+        progress.update(c, driver_);
         next_trigger(clock_.period() * double(period_));
     }
 
-public:
-    bool printed_ = false;
-
-private:
     WorkloadDriver& driver_;
     const ClockDomain& clock_;
     uint64_t watchdog_;
-    bool progress_;
     uint64_t period_;
     std::function<void(uint64_t)> sample_;
-    std::chrono::steady_clock::time_point start_, last_print_;
 };
 
 }  // namespace
@@ -261,7 +245,7 @@ TimingResult GpuPlatform::run() {
     Impl& m = *impl_;
     sc_start();
     TimingResult r;
-    if (m.monitor->printed_) std::cerr << "\n";
+    m.monitor->progress.finish();
     // The frame ends when its last ray retires (the monitor may wake once more after that).
     r.cycles_simulated = r.cycles = m.driver.last_progress();
     const WorkloadDriver::Estimate est = m.driver.estimate();

@@ -1,7 +1,5 @@
 #include "interval_run.h"
 
-#include <chrono>
-#include <iostream>
 #include <queue>
 
 #include "model/interval_gpu.h"
@@ -23,9 +21,7 @@ TimingResult run_interval(const HwConfig& cfg, const BvhImage& image, Workload& 
     std::vector<uint32_t> idle(cfg.sms, 0);
     std::vector<IntervalGpu::Finished> finished;
     uint64_t end = 0;
-    const auto t0 = std::chrono::steady_clock::now();
-    auto last_print = t0;
-    bool printed = false;
+    TimingProgress progress(opt.progress);
     for (;;) {
         const uint64_t slot_at = free_slots.empty() ? ~0ull : free_slots.top().first, fetch_at = gpu.next_event();
         if (slot_at == ~0ull && fetch_at == ~0ull) break;
@@ -54,20 +50,9 @@ TimingResult run_interval(const HwConfig& cfg, const BvhImage& image, Workload& 
             const uint64_t r = driver.earliest_ready(f.sm);
             for (; idle[f.sm] > 0 && r != ~0ull; --idle[f.sm]) free_slots.push({std::max(r, f.end + 1), f.sm});
         }
-        if (opt.progress && !finished.empty()) {
-            const auto t = std::chrono::steady_clock::now();
-            if (std::chrono::duration<double>(t - last_print).count() > 2.0) {
-                last_print = t;
-                const double wall = std::chrono::duration<double>(t - t0).count(), f = driver.fraction_done();
-                std::cerr << "\r  cycle " << end << ", rays retired " << driver.rays_retired() << " (" << int(100 * f)
-                          << " % of pixel warps done), " << uint64_t(double(driver.rays_retired()) / std::max(wall, 1e-9)) << " rays/s";
-                if (f > 0.02) std::cerr << ", ETA " << int(wall * (1.0 - f) / f) << " s";
-                std::cerr << "   " << std::flush;
-                printed = true;
-            }
-        }
+        if (!finished.empty()) progress.update(end, driver);
     }
-    if (printed) std::cerr << "\n";
+    progress.finish();
 
     TimingResult r;
     r.cycles = r.cycles_simulated = end;  // the frame ends when its last ray retires

@@ -1,6 +1,7 @@
 #include "timing_stats.h"
 
 #include <algorithm>
+#include <iostream>
 
 namespace rtu {
 
@@ -144,6 +145,25 @@ void hierarchy_json(nlohmann::ordered_json& j, const HwConfig& cfg, const Hierar
                        {"average_power_w", seconds > 0 ? total_j / seconds : 0.0},
                        {"frame_total_j_estimate", total_j * energy_scale}};
     }
+}
+
+void TimingProgress::update(uint64_t cycle, const WorkloadDriver& driver) {
+    if (!enabled_) return;
+    const auto now = std::chrono::steady_clock::now();
+    if (std::chrono::duration<double>(now - last_print_).count() <= 2.0) return;
+    last_print_ = now;
+    const double wall = std::chrono::duration<double>(now - start_).count();
+    const double f = driver.fraction_done();
+    std::cerr << "\r  cycle " << cycle << ", rays retired " << driver.rays_retired() << " (" << int(100 * f)
+              << " % of pixel warps done), " << uint64_t(double(driver.rays_retired()) / std::max(wall, 1e-9)) << " rays/s";
+    if (f > 0.02) std::cerr << ", ETA " << int(wall * (1.0 - f) / f) << " s";
+    std::cerr << "   " << std::flush;
+    printed_ = true;
+}
+
+void TimingProgress::finish() {
+    if (printed_) std::cerr << "\n";
+    printed_ = false;
 }
 
 }  // namespace rtu

@@ -1,6 +1,8 @@
 // The statistics every timing fidelity reports (RT unit, pop streaks, L1, L2, prefetch, DRAM,
 // energy), from counters summed over the hierarchy's modules.
 #pragma once
+#include <chrono>
+
 #include <nlohmann/json.hpp>
 
 #include "model/config.h"
@@ -27,5 +29,19 @@ struct HierarchyCounts {
 // work over the simulated work (1 unless sampled).
 void hierarchy_json(nlohmann::ordered_json& j, const HwConfig& cfg, const HierarchyCounts& h,
                     const WorkloadDriver::RaySummary& sum, double energy_scale);
+
+// A timing run's progress on stderr, at most every 2 s: cycle, rays retired, share of pixel warps
+// done, rays/s and an estimate of the time left.
+class TimingProgress {
+public:
+    explicit TimingProgress(bool enabled) : enabled_(enabled) {}
+    void update(uint64_t cycle, const WorkloadDriver& driver);
+    // Ends the progress line, if one was printed.
+    void finish();
+
+private:
+    bool enabled_, printed_ = false;
+    std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now(), last_print_ = start_;
+};
 
 }  // namespace rtu
