@@ -1,6 +1,5 @@
 #include "gpu_platform.h"
 
-#include <iostream>
 
 #include <systemc>
 
