@@ -1,5 +1,7 @@
 #include "traversal.h"
 
+#include <optional>
+
 #include "treelet.h"
 
 #include <algorithm>
@@ -94,7 +96,9 @@ StepInfo TraversalThread::step(const BvhImage& image) {
 
     switch (e.type) {
         case NodeType::Internal: {
-            const InternalNode n = decode_internal(bytes);
+            std::optional<InternalNode> undecoded;  // a node the image did not decode up front
+            const InternalNode* pre = image.decoded_internal(e.addr);
+            const InternalNode& n = pre ? *pre : undecoded.emplace(decode_internal(bytes));
             bool first = true;
             for (int i = 0; i < n.count; ++i) {
                 if (n.type[i] == NodeType::Empty) continue;

@@ -263,6 +263,7 @@ int run(const Args& a) {
         const double mb = 1.0 / (1024.0 * 1024.0);
         j["memory_mb"] = {{"scene", double(scene_bytes) * mb},
                           {"bvh_image", double(bs.image_bytes) * mb},
+                          {"decoded_nodes", double(image.decoded_bytes()) * mb},  // host-side, within the peak
                           {"peak_resident", double(ru.ru_maxrss) / 1024.0},
                           {"target_1_5x_plus_200", 1.5 * double(scene_bytes + bs.image_bytes) * mb + 200.0}};
     }

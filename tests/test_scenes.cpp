@@ -225,6 +225,17 @@ void check_image(const Scene& s, const BvhImage& img) {
         todo.pop_back();
         const InternalNode n = decode_internal(img.at(addr, kBlockBytes));
         ++internal;
+        // The node decoded up front (all of them, in these scenes) is the same node.
+        const InternalNode* pre = img.decoded_internal(addr);
+        ASSERT_NE(pre, nullptr) << "internal node at " << addr << " not decoded up front";
+        EXPECT_EQ(pre->count, n.count);
+        EXPECT_EQ(pre->type, n.type);
+        EXPECT_EQ(pre->addr, n.addr);
+        for (int i = 0; i < n.count; ++i) EXPECT_TRUE(pre->box[i].lo == n.box[i].lo && pre->box[i].hi == n.box[i].hi);
+        EXPECT_EQ(img.decoded_internal(addr + kBlockBytes / 2), nullptr) << "not a node address";
+        if (n.type[0] != NodeType::Internal) {
+            EXPECT_EQ(img.decoded_internal(n.addr[0]), nullptr) << "a leaf";
+        }
         nodes_bytes += kBlockBytes;
         ASSERT_GE(n.count, 1);
         for (int i = 0; i < n.count; ++i) {

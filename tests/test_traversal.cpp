@@ -148,6 +148,41 @@ TEST(Traversal, NoLeakThroughVerticesAndEdgesOfAClosedMesh) {
 // Paper Table 1: BFS visits at least as many nodes per ray as DFS on average; on the same rays
 // both find the same closest hit distance (the primitive may differ at ties: the ship has
 // duplicated faces).
+// The internal nodes decoded up front (BvhImage::decoded_internal) are a host-side shortcut:
+// traversal with none of them, with only the top of the tree, and with all of them visits the
+// same nodes and finds the same hits, DFS and BFS.
+TEST(Traversal, NodesDecodedUpFrontChangeNoResult) {
+    for (const std::string name : {"bunny", "wknd"}) {
+        const Loaded l = load(name);
+        const BvhImage none(l.image.bytes(), 0);
+        const BvhImage top(l.image.bytes(), 7 * sizeof(InternalNode));
+        const uint64_t root = l.image.header().root;
+        ASSERT_NE(l.image.decoded_internal(root), nullptr);
+        EXPECT_EQ(none.decoded_internal(root), nullptr);
+        // Breadth first: the root, then its internal children.
+        const InternalNode* r = top.decoded_internal(root);
+        ASSERT_NE(r, nullptr);
+        for (int i = 0; i < r->count; ++i) {
+            if (r->type[i] == NodeType::Internal) {
+                EXPECT_NE(top.decoded_internal(r->addr[i]), nullptr) << name;
+            }
+        }
+        const FunctionalResult pt = run(l, WorkloadKind::PathTrace, TraversalOrder::DFS, nullptr, 32);
+        for (TraversalOrder order : {TraversalOrder::DFS, TraversalOrder::BFS})
+            for (size_t i = 0; i < pt.rays.size(); ++i) {
+                const TraceResult all = trace_ray(l.image, pt.rays[i], order);
+                for (const BvhImage* img : {&none, &top}) {
+                    const TraceResult other = trace_ray(*img, pt.rays[i], order);
+                    ASSERT_EQ(other.nodes_visited, all.nodes_visited) << name << " ray " << i;
+                    ASSERT_EQ(other.hit.hit, all.hit.hit) << name << " ray " << i;
+                    EXPECT_EQ(other.hit.t, all.hit.t) << name << " ray " << i;
+                    EXPECT_EQ(other.hit.geom, all.hit.geom) << name << " ray " << i;
+                    EXPECT_EQ(other.hit.prim, all.hit.prim) << name << " ray " << i;
+                }
+            }
+    }
+}
+
 TEST(Traversal, BfsVisitsAtLeastAsManyNodesAsDfs) {
     for (const std::string name : {"bunny", "ship", "wknd"}) {
         const Loaded l = load(name);
