@@ -31,6 +31,7 @@
 #include "calendar.h"
 #include "config.h"
 #include "dram.h"
+#include "event_wheel.h"
 #include "rt_unit_core.h"
 #include "sector_cache.h"
 #include "traversal.h"
@@ -137,7 +138,6 @@ private:
     struct Event {
         uint64_t at, seq;  // seq: scheduling order, for ties
         uint32_t trace, thread;
-        bool operator>(const Event& o) const { return at != o.at ? at > o.at : seq > o.seq; }
     };
     struct Fetch {  // a node fetch scheduled in the current cycle, for coalescing
         uint32_t trace;
@@ -149,7 +149,7 @@ private:
 
     std::vector<Trace> traces_;
     std::vector<uint32_t> free_traces_;
-    std::priority_queue<Event, std::vector<Event>, std::greater<Event>> events_;
+    EventWheel<Event> events_;
     uint64_t next_seq_ = 0;
     std::vector<Fetch> coalescing_;  // fetches scheduled at coalesce_at_
     uint64_t coalesce_at_ = ~0ull;

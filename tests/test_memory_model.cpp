@@ -7,6 +7,7 @@
 #include "model/calendar.h"
 #include "model/config.h"
 #include "model/dram.h"
+#include "model/event_wheel.h"
 #include "model/sector_cache.h"
 
 using namespace rtu;
@@ -219,6 +220,56 @@ TEST(PortCalendar, BooksTheEarliestFreeCycleInAnyOrder) {
     EXPECT_EQ(p.book(10), 12u);
     p.advance(11);
     EXPECT_EQ(p.book(0), 13u);  // 11 and 12 are still taken
+}
+
+// EventWheel against a min-heap on (at, seq): the same events in the same order, for pushes
+// mostly just ahead of the last event handed out (as the interval fidelity's fetches), and some
+// far ahead (beyond the window) or behind it, interleaved with pops, and across stretches where
+// only far events are left.
+TEST(EventWheel, HandsOutAsAHeapOnTimeThenSequence) {
+    struct Ev {
+        uint64_t at, seq;
+        bool operator>(const Ev& o) const { return at != o.at ? at > o.at : seq > o.seq; }
+    };
+    EventWheel<Ev> wheel;
+    std::priority_queue<Ev, std::vector<Ev>, std::greater<Ev>> heap;
+    std::mt19937_64 rng(5);
+    uint64_t seq = 0, now = 0, popped = 0, far = 0, behind = 0;
+    for (int i = 0; i < 200000; ++i) {
+        const uint64_t r = rng() % 100;
+        if (r < 55 || heap.empty()) {
+            uint64_t at = now + rng() % 400;  // ties in time are frequent
+            if (r == 0) {
+                at = now + EventWheel<Ev>::kWindow + rng() % 100000;
+                ++far;
+            }
+            if (r == 1 && now > 50) {
+                at = now - 1 - rng() % 50;
+                ++behind;
+            }
+            wheel.push({at, seq});
+            heap.push({at, seq});
+            ++seq;
+        } else {
+            ASSERT_EQ(wheel.size(), heap.size());
+            ASSERT_EQ(wheel.top().at, heap.top().at) << "pop " << popped;
+            ASSERT_EQ(wheel.top().seq, heap.top().seq) << "pop " << popped;
+            now = heap.top().at;
+            wheel.pop();
+            heap.pop();
+            ++popped;
+        }
+        if (i == 150000)  // drain all: the far events are all that is left at the end
+            while (!heap.empty()) {
+                ASSERT_EQ(wheel.top().seq, heap.top().seq);
+                now = heap.top().at;
+                wheel.pop();
+                heap.pop();
+            }
+    }
+    EXPECT_GT(popped, 50000u);
+    EXPECT_GT(far, 1000u);
+    EXPECT_GT(behind, 1000u);
 }
 
 // The fast fidelities' DRAM (DramBookings), hand-worked with the mobile preset's timing (memory
