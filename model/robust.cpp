@@ -25,25 +25,6 @@ BoxTestRay make_box_test_ray(const glm::vec3& org, const glm::vec3& dir) {
     return r;
 }
 
-bool intersect_box(const BoxTestRay& r, const Aabb& b, float tmin, float tmax, float* t_entry) {
-    constexpr float kFarScale = 1.0f + 2.0f * gamma_f(3);
-    const glm::vec3* bounds[2] = {&b.lo, &b.hi};
-    float t0 = tmin;
-    // The far end of the interval is widened the same way as each slab's far distance, so a
-    // box whose entry equals tmax (e.g. the closest hit so far) is not lost to rounding.
-    float t1 = tmax * kFarScale;
-    for (int a = 0; a < 3; ++a) {
-        float tn = ((*bounds[r.neg[a]])[a] - r.org[a]) * r.inv_dir[a];
-        float tf = ((*bounds[1 - r.neg[a]])[a] - r.org[a]) * r.inv_dir[a];
-        tf *= kFarScale;
-        t0 = safe_max(t0, tn);
-        t1 = safe_min(t1, tf);
-        if (t0 > t1) return false;
-    }
-    if (t_entry) *t_entry = t0;
-    return true;
-}
-
 bool intersect_triangle(const glm::vec3& org, const glm::vec3& dir, const glm::vec3& v0,
                         const glm::vec3& v1, const glm::vec3& v2, float tmin, float tmax,
                         TriangleHit* out) {

@@ -45,7 +45,25 @@ struct Aabb {
 // so that rounding in (bound - org) * inv_dir never loses a box the ray really touches.
 // A box is closed: a ray lying in a face plane hits it. Returns true and the entry distance
 // when the ray overlaps the box within [tmin, tmax].
-bool intersect_box(const BoxTestRay& r, const Aabb& b, float tmin, float tmax, float* t_entry);
+// Inline: traversal runs it for every child of every internal node it visits.
+inline bool intersect_box(const BoxTestRay& r, const Aabb& b, float tmin, float tmax, float* t_entry) {
+    constexpr float kFarScale = 1.0f + 2.0f * gamma_f(3);
+    const glm::vec3* bounds[2] = {&b.lo, &b.hi};
+    float t0 = tmin;
+    // The far end of the interval is widened the same way as each slab's far distance, so a
+    // box whose entry equals tmax (e.g. the closest hit so far) is not lost to rounding.
+    float t1 = tmax * kFarScale;
+    for (int a = 0; a < 3; ++a) {
+        float tn = ((*bounds[r.neg[a]])[a] - r.org[a]) * r.inv_dir[a];
+        float tf = ((*bounds[1 - r.neg[a]])[a] - r.org[a]) * r.inv_dir[a];
+        tf *= kFarScale;
+        t0 = safe_max(t0, tn);
+        t1 = safe_min(t1, tf);
+        if (t0 > t1) return false;
+    }
+    if (t_entry) *t_entry = t0;
+    return true;
+}
 
 // Watertight ray/triangle test (Woop, Benthin, Wald, JCGT 2013). Edge functions are evaluated
 // in float and re-evaluated in double when one is exactly zero, so that a ray through a shared
