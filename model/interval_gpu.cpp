@@ -84,8 +84,14 @@ IntervalGpu::Ready* IntervalGpu::in_flight(ReadyMap& m, uint64_t sector, uint64_
     return &r;
 }
 
+uint32_t IntervalGpu::slice_of(uint64_t addr) const { return uint32_t((addr / cfg_.l2.line) % cfg_.l2_slices); }
+
+void IntervalGpu::warm(uint32_t sm, uint64_t addr) {
+    if (!l1_[sm].warm(addr)) l2_[slice_of(addr)].warm(addr);
+}
+
 IntervalGpu::Ready IntervalGpu::read_l2(uint64_t addr, uint64_t cycle, ReqKind kind) {
-    const uint32_t s = uint32_t((addr / cfg_.l2.line) % cfg_.l2_slices);
+    const uint32_t s = slice_of(addr);
     SectorCache& tags = l2_[s];
     ReadyMap& ready = l2_ready_[s];
     const uint64_t c = l2_port_[s].book(cycle);  // one lookup per cycle

@@ -52,6 +52,10 @@ public:
         std::vector<RetiredRay> rays;
     };
     void start_trace(uint32_t sm, const std::vector<WarpRay>& rays, uint64_t start, std::vector<Finished>& finished);
+    // Functional warming before a sampled cluster (docs/sampling.md), as the AT and LT platforms
+    // do it: the sector holding `addr` into SM `sm`'s L1, and into its L2 slice when the L1 did
+    // not hold it (tags and LRU only, no statistics).
+    void warm(uint32_t sm, uint64_t addr);
     // The cycle of the earliest scheduled node fetch (~0: none).
     uint64_t next_event() const;
     // Runs that fetch: its chunks, the node's tests, and the thread's next fetch. A trace whose
@@ -89,6 +93,7 @@ private:
     static uint64_t mshr_slot(ReadyMap& m, SectorCache& tags, uint32_t mshrs, uint64_t c, ReqKind kind);
     Served read(uint32_t sm, uint64_t addr, uint64_t cycle, ReqKind kind);
     Ready read_l2(uint64_t addr, uint64_t cycle, ReqKind kind);
+    uint32_t slice_of(uint64_t addr) const;  // the L2 slice of an address, as the crossbar's
     void advance(uint64_t floor);
     uint64_t core_cycle(uint64_t memory_cycle) const;  // the core cycle at or after a memory cycle
     void remember(ReadyMap& m, uint64_t sector, Ready r, size_t lines);

@@ -87,25 +87,25 @@ struct GpuPlatform::Impl {
           treelets(o.order == TraversalOrder::Treelet || c.prefetch.kind == PrefetcherKind::Treelet
                        ? std::make_unique<Treelets>(form_treelets(img, c.prefetch.treelet_budget))
                        : nullptr),
-          driver(w, c.sms, c.warp_size, c.shade_latency, sampling(c, img, o, treelets.get())) {}
-
-    static SamplingOptions sampling(const HwConfig& c, const BvhImage& img, const TimingOptions& o, const Treelets* treelets) {
-        SamplingOptions s;
-        s.rate = o.sample_rate;
-        s.seed = o.sample_seed;
-        s.cluster = s.capacity = c.sms * c.warp_buffer;
-        s.make_workload = o.sample_workload;
-        s.threads = o.sample_threads;
-        s.progress = o.progress;
-        // Enough fetches to refill every cache twice over.
-        s.warm_window = 2 * (uint64_t(c.l2_slices) * c.l2.size_bytes + uint64_t(c.sms) * c.l1.size_bytes) / c.l1.sector;
-        const TraversalOrder order = o.order;
-        s.trace = [&img, order, treelets](const Ray& r, std::vector<StackEntry>* fetched) {
-            return trace_ray(img, r, order, treelets, fetched);
-        };
-        return s;
-    }
+          driver(w, c.sms, c.warp_size, c.shade_latency, sampling_options(c, img, o, treelets.get())) {}
 };
+
+SamplingOptions sampling_options(const HwConfig& c, const BvhImage& img, const TimingOptions& o, const Treelets* treelets) {
+    SamplingOptions s;
+    s.rate = o.sample_rate;
+    s.seed = o.sample_seed;
+    s.cluster = s.capacity = c.sms * c.warp_buffer;
+    s.make_workload = o.sample_workload;
+    s.threads = o.sample_threads;
+    s.progress = o.progress;
+    // Enough fetches to refill every cache twice over.
+    s.warm_window = 2 * (uint64_t(c.l2_slices) * c.l2.size_bytes + uint64_t(c.sms) * c.l1.size_bytes) / c.l1.sector;
+    const TraversalOrder order = o.order;
+    s.trace = [&img, order, treelets](const Ray& r, std::vector<StackEntry>* fetched) {
+        return trace_ray(img, r, order, treelets, fetched);
+    };
+    return s;
+}
 
 GpuPlatform::GpuPlatform(const HwConfig& cfg, const BvhImage& image, Workload& workload, const TimingOptions& opt)
     : impl_(new Impl(cfg, image, workload, opt)) {
@@ -290,31 +290,7 @@ TimingResult GpuPlatform::run() {
     const double mem_cycles = double(r.cycles_simulated) * double(m.core.period_fs()) / double(m.mem.period_fs());
     nlohmann::ordered_json j;
     j["cycles"] = r.cycles;
-    if (m.driver.sampled()) {
-        // Cycles and their 95 % interval: WorkloadDriver::Estimate (docs/sampling.md).
-        const double c = double(r.cycles), h = c * est.relative_half_width(double(r.cycles_simulated));
-        j["sampling"] = {{"rate", m.opt.sample_rate},
-                         {"warps_total", est.warps_total},
-                         {"warps_simulated", est.warps_simulated},
-                         {"cycles_simulated", r.cycles_simulated},
-                         {"work_simulated_residence_cycles", est.work_simulated},
-                         {"estimator", est.schedule ? "schedule (functional pre-pass)" : "stratified"},
-                         {"work_estimate_residence_cycles", est.work_estimate},
-                         {"work_estimate_stratified_residence_cycles", est.work_estimate_stratified},
-                         {"critical_path_node_fetches_frame", est.critical_nodes_total},
-                         {"prepass_threads", est.prepass_threads},
-                         {"residence_fit", {{"a", est.fit_a}, {"b_per_node", est.fit_b}, {"traces", est.fit_traces}}},
-                         {"schedule_model_cycles", {{"frame", est.model_frame}, {"sample", est.model_sample}}},
-                         {"cycles_estimate", r.cycles},
-                         {"saturated_until_cycle", est.saturated_until},
-                         {"work_done_saturated", est.work_saturated},
-                         {"cycles_ci95", {c - h, c + h}},
-                         {"relative_se", est.relative_se},
-                         {"variance_pairs", est.variance_pairs},
-                         {"node_fetch_l1_miss_share", {{"estimate", est.l1_miss_nodes.estimate}, {"ci95", {est.l1_miss_nodes.lo, est.l1_miss_nodes.hi}}}},
-                         {"node_fetch_dram_share", {{"estimate", est.dram_nodes.estimate}, {"ci95", {est.dram_nodes.lo, est.dram_nodes.hi}}}},
-                         {"schedule_model_misfit", est.model_misfit(double(r.cycles_simulated))}};
-    }
+    if (m.driver.sampled()) sampling_json(j, est, m.opt.sample_rate, r.cycles, r.cycles_simulated);
     HierarchyCounts h{rs, {l1[0], l1[1]}, {l2[0], l2[1]}, ds, r.cycles_simulated, double(m.core.period_fs()), mem_cycles};
     hierarchy_json(j, m.cfg, h, m.driver.summary(), est.scale());
     j["payloads_allocated"] = m.pool.allocated();

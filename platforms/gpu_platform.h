@@ -54,6 +54,11 @@ struct TimingResult {
     nlohmann::ordered_json stats;  // hierarchy statistics (no wall time)
 };
 
+// The workload driver's sampling options for a timing run (docs/sampling.md): clusters of as
+// many warps as the GPU holds, the functional pre-pass on `image`, warming enough to refill
+// every cache twice. `treelets` as for the run's traversal (may be null).
+SamplingOptions sampling_options(const HwConfig& cfg, const BvhImage& image, const TimingOptions& opt, const Treelets* treelets);
+
 class GpuPlatform {
 public:
     GpuPlatform(const HwConfig& cfg, const BvhImage& image, Workload& workload, const TimingOptions& opt);

@@ -9,8 +9,14 @@ namespace rtu {
 
 TimingResult run_interval(const HwConfig& cfg, const BvhImage& image, Workload& workload, const TimingOptions& opt) {
     IntervalGpu gpu(cfg, image, opt.order);
-    WorkloadDriver driver(workload, cfg.sms, cfg.warp_size, cfg.shade_latency);
+    WorkloadDriver driver(workload, cfg.sms, cfg.warp_size, cfg.shade_latency, sampling_options(cfg, image, opt, nullptr));
     driver.keep_rays(opt.keep_rays);
+    // Sampled run: when a simulated cluster starts, the caches are warmed with the node fetches
+    // of the clusters skipped before it.
+    driver.on_warm = [&gpu, sector = cfg.l1.sector](const std::vector<WarmFetch>& fetches) {
+        for (const WarmFetch& f : fetches)
+            for (uint32_t o = 0; o < f.bytes; o += sector) gpu.warm(f.sm, f.addr + o);
+    };
 
     // Warp-buffer slots by the cycle they are free (then by SM: deterministic order). A slot whose
     // SM has no trace ready and none coming yet idles until one of the SM's traces retires.
@@ -56,6 +62,8 @@ TimingResult run_interval(const HwConfig& cfg, const BvhImage& image, Workload& 
 
     TimingResult r;
     r.cycles = r.cycles_simulated = end;  // the frame ends when its last ray retires
+    const WorkloadDriver::Estimate est = driver.estimate();
+    if (driver.sampled()) r.cycles = uint64_t(std::llround(est.cycles_estimate(double(end))));
     r.rays = driver.results();
     r.summary = driver.summary();
     if (!driver.finished() || driver.rays_retired() != driver.rays_issued()) r.invariant_failures.push_back("not every ray retired");
@@ -65,8 +73,9 @@ TimingResult run_interval(const HwConfig& cfg, const BvhImage& image, Workload& 
         for (const SectorCache& c : gpu.l2()) add(h.l2[k], c.stats(ReqKind(k)));
     }
     nlohmann::ordered_json j;
-    j["cycles"] = end;
-    hierarchy_json(j, cfg, h, driver.summary(), 1.0);
+    j["cycles"] = r.cycles;
+    if (driver.sampled()) sampling_json(j, est, opt.sample_rate, r.cycles, end);
+    hierarchy_json(j, cfg, h, driver.summary(), est.scale());
     r.stats = j;
     return r;
 }

@@ -8,7 +8,7 @@
 
 namespace rtu {
 
-// Uses `fidelity`-independent options only: order, progress, keep_rays. Throws
+// Uses `fidelity`-independent options only: order, progress, keep_rays and sampling. Throws
 // std::invalid_argument for what the interval fidelity does not model (IntervalGpu).
 TimingResult run_interval(const HwConfig& cfg, const BvhImage& image, Workload& workload, const TimingOptions& opt);
 

@@ -97,9 +97,9 @@ int run(const Args& a) {
     if (!a.rays.empty() && !a.image.empty()) throw InputError("--image needs a scene workload, not --rays");
     if (!timing && (!a.vcd.empty() || !a.trace_warp.empty() || !a.sets.empty() || a.quantum || !a.prefetcher.empty() || a.sample != 1.0))
         throw InputError("--vcd, --trace-warp, --set, --quantum, --prefetcher and --sample need --fidelity at, lt or interval");
-    if (interval && (!a.vcd.empty() || !a.trace_warp.empty() || a.quantum || a.sample != 1.0))
-        throw InputError("--vcd, --trace-warp, --quantum and --sample need --fidelity at or lt (the interval fidelity has no "
-                         "SystemC signals, quantum or sampling)");
+    if (interval && (!a.vcd.empty() || !a.trace_warp.empty() || a.quantum))
+        throw InputError("--vcd, --trace-warp and --quantum need --fidelity at or lt (the interval fidelity has no "
+                         "SystemC signals or quantum)");
     if (a.sample_seed && a.sample == 1.0) throw InputError("--sample-seed needs --sample RATE below 1");
     if (a.threads == 0) throw InputError("--threads 0: the sampling pre-pass needs at least 1 thread");
     if (!(a.sample > 0.0 && a.sample <= 1.0))
@@ -366,7 +366,7 @@ int sc_main(int argc, char** argv) {
         ("set", po::value(&a.sets)->composing(), "override one configuration key, e.g. --set l1.size_kb=64 (repeatable)")
         ("quantum", po::value(&a.quantum), "LT quantum in core cycles (same as --set sim.quantum=N)")
         ("prefetcher", po::value(&a.prefetcher), "none, ttp, park, treelet, perfect-up, perfect-down (same as --set prefetch.kind=...; interval: none, ttp)")
-        ("sample", po::value(&a.sample), "simulate this share (0..1] of the frame's warps, stratified, and extrapolate (at, lt)")
+        ("sample", po::value(&a.sample), "simulate this share (0..1] of the frame's warps, stratified, and extrapolate (at, lt, interval)")
         ("sample-seed", po::value<uint64_t>()->notifier([&a](uint64_t v) { a.sample_seed = v; }),
          "which clusters --sample draws (default: --seed, which also seeds the rays)")
         ("threads", po::value(&a.threads)->default_value(a.threads),

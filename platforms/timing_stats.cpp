@@ -166,4 +166,31 @@ void TimingProgress::finish() {
     printed_ = false;
 }
 
+void sampling_json(nlohmann::ordered_json& j, const WorkloadDriver::Estimate& est, double rate, uint64_t cycles,
+                   uint64_t cycles_simulated) {
+    // Cycles and their 95 % interval: WorkloadDriver::Estimate (docs/sampling.md).
+    const double c = double(cycles), h = c * est.relative_half_width(double(cycles_simulated));
+    j["sampling"] = {{"rate", rate},
+                     {"warps_total", est.warps_total},
+                     {"warps_simulated", est.warps_simulated},
+                     {"cycles_simulated", cycles_simulated},
+                     {"work_simulated_residence_cycles", est.work_simulated},
+                     {"estimator", est.schedule ? "schedule (functional pre-pass)" : "stratified"},
+                     {"work_estimate_residence_cycles", est.work_estimate},
+                     {"work_estimate_stratified_residence_cycles", est.work_estimate_stratified},
+                     {"critical_path_node_fetches_frame", est.critical_nodes_total},
+                     {"prepass_threads", est.prepass_threads},
+                     {"residence_fit", {{"a", est.fit_a}, {"b_per_node", est.fit_b}, {"traces", est.fit_traces}}},
+                     {"schedule_model_cycles", {{"frame", est.model_frame}, {"sample", est.model_sample}}},
+                     {"cycles_estimate", cycles},
+                     {"saturated_until_cycle", est.saturated_until},
+                     {"work_done_saturated", est.work_saturated},
+                     {"cycles_ci95", {c - h, c + h}},
+                     {"relative_se", est.relative_se},
+                     {"variance_pairs", est.variance_pairs},
+                     {"node_fetch_l1_miss_share", {{"estimate", est.l1_miss_nodes.estimate}, {"ci95", {est.l1_miss_nodes.lo, est.l1_miss_nodes.hi}}}},
+                     {"node_fetch_dram_share", {{"estimate", est.dram_nodes.estimate}, {"ci95", {est.dram_nodes.lo, est.dram_nodes.hi}}}},
+                     {"schedule_model_misfit", est.model_misfit(double(cycles_simulated))}};
+}
+
 }  // namespace rtu

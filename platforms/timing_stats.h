@@ -30,6 +30,11 @@ struct HierarchyCounts {
 void hierarchy_json(nlohmann::ordered_json& j, const HwConfig& cfg, const HierarchyCounts& h,
                     const WorkloadDriver::RaySummary& sum, double energy_scale);
 
+// Adds `sampling` to `j` for a sampled run: the estimate of the frame's `cycles` with its 95 %
+// interval and every ingredient of the estimate (docs/sampling.md).
+void sampling_json(nlohmann::ordered_json& j, const WorkloadDriver::Estimate& est, double rate, uint64_t cycles,
+                   uint64_t cycles_simulated);
+
 // A timing run's progress on stderr, at most every 2 s: cycle, rays retired, share of pixel warps
 // done, rays/s and an estimate of the time left.
 class TimingProgress {
