@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Speed against error: every fidelity (AT, LT, interval, sampled AT and LT) on every scene, baseline and TTP, as a sweep manifest; and
+"""Speed against error: every fidelity (AT, LT, interval, sampled AT, LT and interval) on every scene, baseline and TTP, as a sweep manifest; and
 the sampled AT baseline with five more draws of the sample (sample seeds 2-6) for the accuracy
 and interval-coverage study.
 Usage: experiments.py MANIFEST [--size N] [--spp N] [--scenes a,b,...]"""
@@ -24,6 +24,9 @@ FIDELITIES = {  # id -> rtsim arguments
     "lt_s50": f"--fidelity lt --sample 0.5 {ONE_CORE}",
     "lt_s25": f"--fidelity lt --sample 0.25 {ONE_CORE}",
     "lt_s10": f"--fidelity lt --sample 0.1 {ONE_CORE}",
+    "iv_s50": f"--fidelity interval --sample 0.5 {ONE_CORE}",
+    "iv_s25": f"--fidelity interval --sample 0.25 {ONE_CORE}",
+    "iv_s10": f"--fidelity interval --sample 0.1 {ONE_CORE}",
 }
 SAMPLE_RATES = {"s50": "0.5", "s25": "0.25", "s10": "0.1"}
 EXTRA_SEEDS = range(2, 7)  # seed 1 is the rtsim default (--seed 1), run above as at_sNN_base
