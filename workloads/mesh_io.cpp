@@ -2,12 +2,15 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <charconv>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <iostream>
 #include <map>
+#include <string_view>
+#include <type_traits>
 
 #include <assimp/Importer.hpp>
 #include <assimp/postprocess.h>
@@ -34,44 +37,61 @@ std::string mesh_extension(const std::string& path) {
     return dot == std::string::npos ? std::string() : p.substr(dot + 1);
 }
 
-// Parses a whole token as a float; false if it is not a number.
-bool parse_float(const std::string& tok, float* out) {
+// Parses a whole token as a number (float, double or long); false if it is not one. From_chars
+// first (no allocation, no locale); what it does not take (a leading '+', hexadecimal, out of
+// range) goes to strtof / strtod / strtol as it always did, so every token reads as before.
+template <class T>
+bool parse_number(std::string_view tok, T* out) {
     if (tok.empty()) return false;
+    T v;
+    const auto r = std::from_chars(tok.data(), tok.data() + tok.size(), v);
+    if (r.ec == std::errc() && r.ptr == tok.data() + tok.size()) {
+        *out = v;
+        return true;
+    }
+    const std::string s(tok);
     char* end = nullptr;
     errno = 0;
-    const float v = std::strtof(tok.c_str(), &end);
-    if (end != tok.c_str() + tok.size()) return false;
+    if constexpr (std::is_same_v<T, float>) v = std::strtof(s.c_str(), &end);
+    else if constexpr (std::is_same_v<T, double>) v = std::strtod(s.c_str(), &end);
+    else v = std::strtol(s.c_str(), &end, 10);
+    if (end != s.c_str() + s.size()) return false;
     *out = v;
     return true;
 }
+bool parse_float(std::string_view tok, float* out) { return parse_number(tok, out); }
 
-void check_finite(const std::string& file, size_t line, const std::string& tok, float v) {
+void check_finite(const std::string& file, size_t line, std::string_view tok, float v) {
     if (!std::isfinite(v))
-        throw input_error(file, line, "vertex coordinate '" + tok + "' is not finite (NaN or infinity)");
+        throw input_error(file, line, "vertex coordinate '" + std::string(tok) + "' is not finite (NaN or infinity)");
 }
 
-// Whitespace-separated tokens (a hand loop: string streams dominated the load time of the
-// 981-file sprng folder).
-std::vector<std::string> split(const std::string& s) {
-    std::vector<std::string> out;
+// Whitespace-separated tokens of `s`, as views into it, into `out` (reused: no allocation per
+// line once it has grown; string streams, then a vector of strings, dominated load times).
+void split(std::string_view s, std::vector<std::string_view>& out) {
+    out.clear();
     const size_t n = s.size();
     size_t i = 0;
     while (i < n) {
         while (i < n && std::isspace(static_cast<unsigned char>(s[i]))) ++i;
         size_t j = i;
         while (j < n && !std::isspace(static_cast<unsigned char>(s[j]))) ++j;
-        if (j > i) out.emplace_back(s, i, j - i);
+        if (j > i) out.push_back(s.substr(i, j - i));
         i = j;
     }
+}
+std::vector<std::string_view> split(std::string_view s) {
+    std::vector<std::string_view> out;
+    split(s, out);
     return out;
 }
 
-// Next line of `data` from `pos` (without its newline); false at the end.
-bool next_line(const std::string& data, size_t& pos, std::string& line) {
+// Next line of `data` from `pos` (without its newline), as a view into `data`; false at the end.
+bool next_line(const std::string& data, size_t& pos, std::string_view& line) {
     if (pos >= data.size()) return false;
     const size_t nl = data.find('\n', pos);
     const size_t end = nl == std::string::npos ? data.size() : nl;
-    line.assign(data, pos, end - pos);
+    line = std::string_view(data).substr(pos, end - pos);
     pos = end + 1;
     return true;
 }
@@ -93,42 +113,43 @@ void load_mtl(Scene& scene, const std::string& path, std::map<std::string, uint3
     }
     const std::string data = read_file_maybe_gz(path);
     size_t pos = 0;
-    std::string line;
+    std::string_view line;
+    std::vector<std::string_view> t;
     Material* cur = nullptr;
     std::vector<Material> mats;
     std::vector<int> illum;
     std::vector<float> dissolve;
     size_t lineno = 0;
-    auto vec = [&](const std::vector<std::string>& t) {
+    auto vec = [&]() {
         glm::vec3 v(0.0f);
         for (int i = 0; i < 3 && i + 1 < int(t.size()); ++i)
-            if (!parse_float(t[i + 1], &v[i])) throw input_error(path, lineno, "bad number '" + t[i + 1] + "'");
+            if (!parse_float(t[i + 1], &v[i])) throw input_error(path, lineno, "bad number '" + std::string(t[i + 1]) + "'");
         return v;
     };
     while (next_line(data, pos, line)) {
         ++lineno;
         const auto hash = line.find('#');
-        if (hash != std::string::npos) line.resize(hash);
-        const auto t = split(line);
+        if (hash != std::string::npos) line = line.substr(0, hash);
+        split(line, t);
         if (t.empty()) continue;
         if (t[0] == "newmtl") {
             mats.push_back(Material{});
-            mats.back().name = t.size() > 1 ? t[1] : "";
+            mats.back().name = t.size() > 1 ? std::string(t[1]) : "";
             illum.push_back(2);
             dissolve.push_back(1.0f);
             cur = &mats.back();
         } else if (!cur) {
             continue;
         } else if (t[0] == "Kd") {
-            cur->albedo = vec(t);
+            cur->albedo = vec();
         } else if (t[0] == "Ke") {
-            cur->emission = vec(t);
+            cur->emission = vec();
         } else if (t[0] == "Ni" && t.size() > 1) {
             parse_float(t[1], &cur->ior);
         } else if (t[0] == "d" && t.size() > 1) {
             parse_float(t[1], &dissolve.back());
         } else if (t[0] == "illum" && t.size() > 1) {
-            illum.back() = std::atoi(t[1].c_str());
+            illum.back() = std::atoi(std::string(t[1]).c_str());
         }
     }
     for (size_t i = 0; i < mats.size(); ++i) {
@@ -149,47 +170,46 @@ void load_obj(Scene& scene, Mesh& mesh, const std::string& path) {
     std::map<std::string, uint32_t> materials;
     const uint32_t default_material = add_material(scene, Material{});
     uint32_t current = default_material;
-    std::string line;
+    std::string_view line;
+    std::vector<std::string_view> t;
     size_t lineno = 0;
     std::vector<uint32_t> poly;
     while (next_line(data, pos, line)) {
         ++lineno;
         const auto hash = line.find('#');
-        if (hash != std::string::npos) line.resize(hash);
-        if (!line.empty() && line.back() == '\r') line.pop_back();
-        const auto t = split(line);
+        if (hash != std::string::npos) line = line.substr(0, hash);
+        if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+        split(line, t);
         if (t.empty()) continue;
         if (t[0] == "v") {
-            if (t.size() < 4) throw input_error(path, lineno, "vertex needs 3 coordinates: '" + line + "'");
+            if (t.size() < 4) throw input_error(path, lineno, "vertex needs 3 coordinates: '" + std::string(line) + "'");
             glm::vec3 v;
             for (int a = 0; a < 3; ++a) {
                 if (!parse_float(t[a + 1], &v[a]))
-                    throw input_error(path, lineno, "bad vertex coordinate '" + t[a + 1] + "'");
+                    throw input_error(path, lineno, "bad vertex coordinate '" + std::string(t[a + 1]) + "'");
                 check_finite(path, lineno, t[a + 1], v[a]);
             }
             mesh.vertices.push_back(v);
         } else if (t[0] == "f") {
-            if (t.size() < 4) throw input_error(path, lineno, "face needs at least 3 vertices: '" + line + "'");
+            if (t.size() < 4) throw input_error(path, lineno, "face needs at least 3 vertices: '" + std::string(line) + "'");
             poly.clear();
             for (size_t k = 1; k < t.size(); ++k) {
-                const std::string idx = t[k].substr(0, t[k].find('/'));
-                char* end = nullptr;
-                const long v = std::strtol(idx.c_str(), &end, 10);
-                if (idx.empty() || *end != '\0')
-                    throw input_error(path, lineno, "bad face index '" + t[k] + "'");
+                long v = 0;
+                if (!parse_number(t[k].substr(0, t[k].find('/')), &v))
+                    throw input_error(path, lineno, "bad face index '" + std::string(t[k]) + "'");
                 const long n = long(mesh.vertices.size());
                 const long i = v > 0 ? v - 1 : n + v;
                 if (v == 0 || i < 0 || i >= n)
-                    throw input_error(path, lineno, "face index '" + t[k] + "' out of range (1.." + std::to_string(n) + ")");
+                    throw input_error(path, lineno, "face index '" + std::string(t[k]) + "' out of range (1.." + std::to_string(n) + ")");
                 poly.push_back(uint32_t(i));
             }
             fan(mesh, poly, current);
         } else if (t[0] == "usemtl") {
-            const std::string name = t.size() > 1 ? t[1] : "";
+            const std::string name = t.size() > 1 ? std::string(t[1]) : "";
             auto it = materials.find(name);
             current = it == materials.end() ? default_material : it->second;
         } else if (t[0] == "mtllib" && t.size() > 1) {
-            load_mtl(scene, (fs::path(path).parent_path() / t[1]).string(), materials);
+            load_mtl(scene, (fs::path(path).parent_path() / std::string(t[1])).string(), materials);
         }
     }
 }
@@ -275,14 +295,14 @@ private:
         throw input_error(path_, 0, "byte " + std::to_string(pos_) + ": " + msg);
     }
 
-    std::string next_line() {
+    std::string_view next_line() {
         if (pos_ >= data_.size()) fail("unexpected end of file");
         const size_t nl = data_.find('\n', pos_);
         const size_t end = nl == std::string::npos ? data_.size() : nl;
-        std::string l = data_.substr(pos_, end - pos_);
+        std::string_view l = std::string_view(data_).substr(pos_, end - pos_);
         pos_ = end + (nl == std::string::npos ? 0 : 1);
         ++line_;
-        if (!l.empty() && l.back() == '\r') l.pop_back();
+        if (!l.empty() && l.back() == '\r') l.remove_suffix(1);
         return l;
     }
 
@@ -296,14 +316,15 @@ private:
                 if (t.size() < 2) fail("format line incomplete");
                 ascii_ = t[1] == "ascii";
                 big_endian_ = t[1] == "binary_big_endian";
-                if (!ascii_ && !big_endian_ && t[1] != "binary_little_endian") fail("unknown PLY format '" + t[1] + "'");
+                if (!ascii_ && !big_endian_ && t[1] != "binary_little_endian") fail("unknown PLY format '" + std::string(t[1]) + "'");
             } else if (t[0] == "element") {
                 if (t.size() < 3) fail("element line incomplete");
                 PlyElement e;
                 e.name = t[1];
+                const std::string count(t[2]);
                 char* end = nullptr;
-                e.count = std::strtoull(t[2].c_str(), &end, 10);
-                if (*end) fail("bad element count '" + t[2] + "'");
+                e.count = std::strtoull(count.c_str(), &end, 10);
+                if (*end) fail("bad element count '" + count + "'");
                 elements_.push_back(e);
             } else if (t[0] == "property") {
                 if (elements_.empty()) fail("property before any element");
@@ -322,18 +343,18 @@ private:
                 if (!ply_type_size(p.type)) fail("unknown PLY type '" + p.type + "'");
                 elements_.back().props.push_back(p);
             } else {
-                fail("unexpected header line starting with '" + t[0] + "'");
+                fail("unexpected header line starting with '" + std::string(t[0]) + "'");
             }
         }
     }
 
     void begin_record() {
         if (!ascii_) return;
-        std::string l;
+        std::string_view l;
         do {
             l = next_line();
         } while (l.find_first_not_of(" \t") == std::string::npos);
-        tokens_ = split(l);
+        split(l, tokens_);
         tok_ = 0;
     }
     void end_record() {
@@ -343,10 +364,9 @@ private:
     double read_value(const std::string& type) {
         if (ascii_) {
             if (tok_ >= tokens_.size()) fail("too few values on the line");
-            const std::string& s = tokens_[tok_++];
-            char* end = nullptr;
-            const double v = std::strtod(s.c_str(), &end);
-            if (*end) fail("bad number '" + s + "'");
+            const std::string_view s = tokens_[tok_++];
+            double v = 0;
+            if (!parse_number(s, &v)) fail("bad number '" + std::string(s) + "'");
             return v;
         }
         const size_t n = ply_type_size(type);
@@ -370,7 +390,7 @@ private:
     size_t pos_ = 0, line_ = 0;
     bool ascii_ = true, big_endian_ = false;
     std::vector<PlyElement> elements_;
-    std::vector<std::string> tokens_;
+    std::vector<std::string_view> tokens_;  // of the current record's line, in data_
     size_t tok_ = 0;
 };
 
