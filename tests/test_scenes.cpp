@@ -123,6 +123,32 @@ TEST(MeshFiles, BadInputNamesFileLineAndValue) {
     EXPECT_THROW(s.validate(), InputError);
 }
 
+// Numbers are read as strtof / strtol read them, including what the fast path (from_chars) does
+// not take: a leading '+', hexadecimal floats, underflow; CRLF line ends and comments are
+// stripped; face indices may be relative, carry texture/normal parts, or have a '+'.
+TEST(MeshFiles, NumbersReadAsStrtofReadsThem) {
+    TempDir dir;
+    Scene s;
+    load_mesh_file(s, write_text(dir.file("n.obj"), "v +1 0x1p-1 1e-50\r\nv 2.5e3 -0.1 .25 # a comment\r\n"
+                                                      "v 1 2 3\nf 1/7/8 +2 -1\n"));
+    ASSERT_EQ(s.meshes.size(), 1u);
+    const Mesh& m = s.meshes[0];
+    ASSERT_EQ(m.vertices.size(), 3u);
+    EXPECT_EQ(m.vertices[0].x, 1.0f);
+    EXPECT_EQ(m.vertices[0].y, 0.5f);
+    EXPECT_EQ(m.vertices[0].z, std::strtof("1e-50", nullptr));
+    EXPECT_EQ(m.vertices[1].x, 2500.0f);
+    EXPECT_EQ(m.vertices[1].y, std::strtof("-0.1", nullptr));
+    EXPECT_EQ(m.vertices[1].z, 0.25f);
+    ASSERT_EQ(m.triangles.size(), 1u);
+    EXPECT_EQ(m.triangles[0], glm::uvec3(0, 1, 2));
+    EXPECT_NE(load_error(write_text(dir.file("f.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2x 3\n")).find("f.obj:4: bad face index '2x'"),
+              std::string::npos);
+    EXPECT_NE(load_error(write_text(dir.file("b.ply"), "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+                                                       "property float z\nend_header\n0 1.5.2 0\n")).find("b.ply:8: bad number '1.5.2'"),
+              std::string::npos);
+}
+
 namespace {
 // The same quad + triangle as PLY: one quad (fanned into two) and one triangle.
 std::string ascii_ply() {
