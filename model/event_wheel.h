@@ -7,7 +7,6 @@
 // handed out exactly as the heap alone would. T needs fields `at` and `seq`.
 #pragma once
 #include <cstdint>
-#include <functional>
 #include <queue>
 #include <vector>
 
