@@ -129,4 +129,3 @@ uint64_t DramBookings::access(uint64_t addr, uint32_t bytes, uint64_t now, uint6
 }
 
 }  // namespace rtu
-

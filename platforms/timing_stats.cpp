@@ -55,7 +55,6 @@ void add(CacheStats& a, const CacheStats& b) {
     a.unused_evictions += b.unused_evictions;
 }
 
-
 void add(RtUnitStats& a, const RtUnitStats& b) {
     a.warps += b.warps;
     a.rays += b.rays;
