@@ -21,26 +21,12 @@
 #include "bvh_image.h"
 #include "config.h"
 #include "prefetcher.h"
+#include "trace_source.h"
 #include "traversal.h"
 
 namespace rtu {
 
 constexpr uint32_t kChunkBytes = 32;
-
-// One ray handed to the RT unit: the direction is already rescaled (scale_direction), `key`
-// identifies it to the workload.
-struct WarpRay {
-    Ray ray;
-    int scale = 0;
-    uint64_t key = 0;
-};
-
-struct RetiredRay {
-    uint64_t key;
-    Hit hit;  // t in the rescaled units (the driver undoes the scaling)
-    uint32_t nodes_visited;
-    uint32_t l1_miss_nodes = 0, dram_nodes = 0;  // of its node fetches: not served by L1 / served by DRAM
-};
 
 // A 32 B read leaving the RT unit.
 struct ChunkRequest {

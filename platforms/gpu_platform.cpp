@@ -1,10 +1,17 @@
 #include "gpu_platform.h"
 
-
 #include <systemc>
 
 #include "model/treelet.h"
 #include "timing_stats.h"
+#include "tlm/cache.h"
+#include "tlm/clock.h"
+#include "tlm/crossbar.h"
+#include "tlm/dram.h"
+#include "tlm/payload.h"
+#include "tlm/protocol_checker.h"
+#include "tlm/rt_unit.h"
+#include "workloads/workload_driver.h"
 
 namespace rtu {
 
@@ -89,23 +96,6 @@ struct GpuPlatform::Impl {
                        : nullptr),
           driver(w, c.sms, c.warp_size, c.shade_latency, sampling_options(c, img, o, treelets.get())) {}
 };
-
-SamplingOptions sampling_options(const HwConfig& c, const BvhImage& img, const TimingOptions& o, const Treelets* treelets) {
-    SamplingOptions s;
-    s.rate = o.sample_rate;
-    s.seed = o.sample_seed;
-    s.cluster = s.capacity = c.sms * c.warp_buffer;
-    s.make_workload = o.sample_workload;
-    s.threads = o.sample_threads;
-    s.progress = o.progress;
-    // Enough fetches to refill every cache twice over.
-    s.warm_window = 2 * (uint64_t(c.l2_slices) * c.l2.size_bytes + uint64_t(c.sms) * c.l1.size_bytes) / c.l1.sector;
-    const TraversalOrder order = o.order;
-    s.trace = [&img, order, treelets](const Ray& r, std::vector<StackEntry>* fetched) {
-        return trace_ray(img, r, order, treelets, fetched);
-    };
-    return s;
-}
 
 GpuPlatform::GpuPlatform(const HwConfig& cfg, const BvhImage& image, Workload& workload, const TimingOptions& opt)
     : impl_(new Impl(cfg, image, workload, opt)) {

@@ -4,7 +4,7 @@
 // retire when its slowest thread is done. No SystemC kernel: slot-free events and the GPU's
 // fetch events, merged in time order.
 #pragma once
-#include "gpu_platform.h"
+#include "timing_run.h"
 
 namespace rtu {
 

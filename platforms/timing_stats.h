@@ -9,7 +9,7 @@
 #include "model/dram.h"
 #include "model/rt_unit_core.h"
 #include "model/sector_cache.h"
-#include "tlm/driver.h"
+#include "workloads/workload_driver.h"
 
 namespace rtu {
 

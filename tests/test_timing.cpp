@@ -12,6 +12,8 @@
 #include "model/interval_gpu.h"
 #include "test_util.h"
 #include "tlm/fifo_peq.h"
+#include "tlm/payload.h"
+#include "tlm/protocol_checker.h"
 
 #include <tlm_utils/peq_with_get.h>
 #include "workloads/bvh_builder.h"

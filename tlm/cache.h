@@ -17,9 +17,9 @@
 #include "clock.h"
 #include "fifo_peq.h"
 #include "model/calendar.h"
+#include "model/fidelity.h"
 #include "model/sector_cache.h"
 #include "payload.h"
-#include "rt_unit.h"
 
 namespace rtu {
 

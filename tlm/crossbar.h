@@ -13,8 +13,8 @@
 
 #include "clock.h"
 #include "fifo_peq.h"
+#include "model/fidelity.h"
 #include "payload.h"
-#include "rt_unit.h"
 
 namespace rtu {
 

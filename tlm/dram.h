@@ -14,8 +14,8 @@
 
 #include "clock.h"
 #include "model/dram.h"
+#include "model/fidelity.h"
 #include "payload.h"
-#include "rt_unit.h"
 
 namespace rtu {
 

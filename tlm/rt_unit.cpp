@@ -9,8 +9,8 @@ namespace rtu {
 using namespace sc_core;
 
 RtUnit::RtUnit(sc_module_name name, uint32_t sm, const HwConfig& cfg, const BvhImage& image, TraversalOrder order,
-               WorkloadDriver& driver, PayloadPool& pool, const ClockDomain& clock, Fidelity fidelity, const Treelets* treelets)
-    : sc_module(name), socket("to_l1"), sm_(sm), core_(cfg, image, order, treelets), image_(image), driver_(driver), pool_(pool),
+               TraceSource& source, PayloadPool& pool, const ClockDomain& clock, Fidelity fidelity, const Treelets* treelets)
+    : sc_module(name), socket("to_l1"), sm_(sm), core_(cfg, image, order, treelets), image_(image), source_(source), pool_(pool),
       clock_(clock) {
     if (fidelity == Fidelity::AT) {
         socket.register_nb_transport_bw(this, &RtUnit::nb_transport_bw);
@@ -41,7 +41,7 @@ tlm::tlm_generic_payload* RtUnit::make_payload(const ChunkRequest& r) {
 
 void RtUnit::pull_work(uint64_t c) {
     while (core_.has_free_slot()) {
-        auto trace = driver_.next_trace(sm_, c);
+        auto trace = source_.next_trace(sm_, c);
         if (!trace) break;
         core_.accept_warp(*trace, c);
     }
@@ -69,13 +69,13 @@ void RtUnit::tick() {
         }
         core_.cycle(c);
         auto retired = core_.take_retired();
-        if (!retired.empty()) driver_.retire(sm_, retired, c);
+        if (!retired.empty()) source_.retire(sm_, retired, c);
         if (on_cycle) on_cycle(c);
     }
     uint64_t next = core_.next_event(c);
     if (!waiting_end_req_ && core_.has_request(c + 1)) next = c + 1;
     if (core_.has_free_slot()) {
-        const uint64_t r = driver_.earliest_ready(sm_);
+        const uint64_t r = source_.earliest_ready(sm_);
         if (r != ~0ull) next = std::min(next, std::max(c + 1, r));
     }
     if (next != ~0ull) wake_at(next);
@@ -131,14 +131,14 @@ void RtUnit::lt_loop() {
         }
         core_.cycle(c);
         auto retired = core_.take_retired();
-        if (!retired.empty()) driver_.retire(sm_, retired, c);
+        if (!retired.empty()) source_.retire(sm_, retired, c);
         if (on_cycle) on_cycle(c);
 
         uint64_t next = core_.next_event(c);
         if (core_.has_request(c + 1)) next = c + 1;
         if (!responses.empty()) next = std::min(next, std::max(c + 1, responses.top().at));
         if (core_.has_free_slot()) {
-            const uint64_t r = driver_.earliest_ready(sm_);
+            const uint64_t r = source_.earliest_ready(sm_);
             if (r != ~0ull) next = std::min(next, std::max(c + 1, r));
         }
         if (next == ~0ull) break;  // nothing in flight and no trace will come for this SM

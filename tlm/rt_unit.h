@@ -1,7 +1,7 @@
 // The RT unit of one SM as a SystemC module: RtUnitCore (model/) behind one TLM-2.0 initiator
 // socket to the SM's L1. AT: non-blocking transport, one 32 B request per cycle, an SC_METHOD that
 // sleeps until its next event. LT: blocking transport with a quantum keeper; the unit runs ahead
-// of simulated time by up to one quantum.
+// of simulated time by up to one quantum. Its traces come from a TraceSource (model/trace_source.h).
 #pragma once
 #include <functional>
 
@@ -10,20 +10,19 @@
 #include <tlm_utils/simple_initiator_socket.h>
 
 #include "clock.h"
-#include "driver.h"
+#include "model/fidelity.h"
 #include "model/rt_unit_core.h"
+#include "model/trace_source.h"
 #include "payload.h"
 
 namespace rtu {
-
-enum class Fidelity { AT, LT };
 
 class RtUnit : public sc_core::sc_module {
 public:
     tlm_utils::simple_initiator_socket<RtUnit> socket;
 
     RtUnit(sc_core::sc_module_name name, uint32_t sm, const HwConfig& cfg, const BvhImage& image, TraversalOrder order,
-           WorkloadDriver& driver, PayloadPool& pool, const ClockDomain& clock, Fidelity fidelity,
+           TraceSource& source, PayloadPool& pool, const ClockDomain& clock, Fidelity fidelity,
            const Treelets* treelets = nullptr);
     SC_HAS_PROCESS(RtUnit);
 
@@ -43,7 +42,7 @@ private:
     uint32_t sm_;
     RtUnitCore core_;
     const BvhImage& image_;
-    WorkloadDriver& driver_;
+    TraceSource& source_;
     PayloadPool& pool_;
     const ClockDomain& clock_;
     bool waiting_end_req_ = false;

@@ -1,0 +1,60 @@
+// One run of the model, whatever its fidelity: the scene loaded, its BVH image built, the
+// workload made, the run done (functional, AT, LT or interval), checked against Embree when asked,
+// and its statistics gathered. rtsim parses its command line into a RunSpec, calls run_simulation
+// and writes what comes back; other programs can do the same.
+#pragma once
+#include <cstdint>
+#include <iosfwd>
+#include <string>
+#include <vector>
+
+#include <glm/vec3.hpp>
+#include <nlohmann/json.hpp>
+
+#include "model/config.h"
+#include "model/fidelity.h"
+#include "model/traversal.h"
+#include "workloads/rays.h"
+#include "workloads/workload_driver.h"
+
+namespace rtu {
+
+struct RunSpec {
+    std::string scene = "wknd", assets;
+    bool flatten = false;
+    std::string workload = "pt";  // primary, pt, ao or sh
+    std::string rays;             // a ray file, in place of the workload
+    WorkloadParams params;
+    TraversalOrder order = TraversalOrder::DFS;
+    Fidelity fidelity = Fidelity::Functional;
+    // Timing fidelities: the configuration (resolved into `hw`; written into the statistics).
+    Config config;
+    HwConfig hw{};
+    double sample_rate = 1.0;  // < 1: sampled simulation (docs/sampling.md)
+    uint64_t sample_seed = 1;
+    unsigned threads = 1;      // the sampling pre-pass's threads
+    std::string vcd;           // AT, LT: waveforms into this file (without the .vcd SystemC adds)
+    int trace_sm = -1, trace_warp = -1;
+    bool verify = false;       // every ray against Embree (robust mode)
+    bool keep_rays = false;    // return every ray with its hit (for a hits file)
+    bool progress = false;     // progress on stderr
+};
+
+struct RunResult {
+    nlohmann::ordered_json stats;  // everything rtsim writes with --stats
+    std::vector<TracedRay> rays;   // in (path, seq) order, with RunSpec::keep_rays or verify
+    std::vector<glm::vec3> image;  // a scene workload's frame (linear RGB), else empty
+    int width = 0, height = 0;
+    // A timing run that stopped without finishing (the watchdog, or no events left): its outputs
+    // must not be written.
+    std::string stuck;
+    std::vector<std::string> invariant_failures;
+    uint64_t mismatches = 0;       // --verify: rays outside the documented classes
+    uint64_t first_mismatch = 0;
+};
+
+// `log` (may be null) receives the scene and BVH lines as the run reaches them. Throws
+// InputError for bad input and std::exception for internal errors.
+RunResult run_simulation(const RunSpec& spec, std::ostream* log);
+
+}  // namespace rtu

@@ -1,0 +1,22 @@
+#include "timing_run.h"
+
+namespace rtu {
+
+SamplingOptions sampling_options(const HwConfig& c, const BvhImage& img, const TimingOptions& o, const Treelets* treelets) {
+    SamplingOptions s;
+    s.rate = o.sample_rate;
+    s.seed = o.sample_seed;
+    s.cluster = s.capacity = c.sms * c.warp_buffer;
+    s.make_workload = o.sample_workload;
+    s.threads = o.sample_threads;
+    s.progress = o.progress;
+    // Enough fetches to refill every cache twice over.
+    s.warm_window = 2 * (uint64_t(c.l2_slices) * c.l2.size_bytes + uint64_t(c.sms) * c.l1.size_bytes) / c.l1.sector;
+    const TraversalOrder order = o.order;
+    s.trace = [&img, order, treelets](const Ray& r, std::vector<StackEntry>* fetched) {
+        return trace_ray(img, r, order, treelets, fetched);
+    };
+    return s;
+}
+
+}  // namespace rtu

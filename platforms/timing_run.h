@@ -1,0 +1,61 @@
+// What the timing fidelities share at their entry: the options of a run and its result. AT and
+// LT run on the SystemC platform (platforms/gpu_platform.h), the interval fidelity without a
+// kernel (platforms/interval_run.h); both take and return these. Plain C++ (no SystemC).
+#pragma once
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "model/bvh_image.h"
+#include "model/config.h"
+#include "model/fidelity.h"
+#include "model/traversal.h"
+#include "workloads/sampling.h"
+#include "workloads/workload_driver.h"
+
+namespace rtu {
+
+struct Treelets;
+
+struct TimingOptions {
+    Fidelity fidelity = Fidelity::AT;  // AT or LT on the SystemC platform; the interval run ignores it
+    TraversalOrder order = TraversalOrder::DFS;
+    bool progress = false;
+    std::string vcd;                  // VCD file (without the .vcd suffix SystemC adds)
+    int trace_sm = -1, trace_warp = -1;  // one warp-buffer slot whose threads' stack depths are traced
+    uint32_t trace_window = 1000;     // cycles per sample of windowed waveforms (miss rate, bandwidth)
+    bool check_protocol = false;      // AT: a base-protocol checker on every socket
+    double sample_rate = 1.0;         // < 1: sampled simulation of this share of the frame's warps
+    uint64_t sample_seed = 1;
+    // Sampled runs: makes fresh instances of the workload for the functional pre-pass
+    // (docs/sampling.md), one per thread; empty: the plain stratified estimate.
+    std::function<std::unique_ptr<Workload>()> sample_workload;
+    unsigned sample_threads = 1;
+    // Keep every ray with its hit for TimingResult::rays (hits files, verification); without,
+    // memory holds only the rays in flight.
+    bool keep_rays = true;
+};
+
+struct TimingResult {
+    std::vector<TracedRay> rays;    // with TimingOptions::keep_rays
+    WorkloadDriver::RaySummary summary;  // always
+    uint64_t cycles = 0;            // the frame's cycles (extrapolated when sampled)
+    uint64_t cycles_simulated = 0;  // cycles of what was actually simulated
+    bool stuck = false;
+    std::string stuck_report;
+    std::vector<std::string> invariant_failures;
+    std::vector<std::string> protocol_violations;  // with check_protocol
+    uint64_t protocol_transactions = 0;
+    nlohmann::ordered_json stats;  // hierarchy statistics (no wall time)
+};
+
+// The workload driver's sampling options for a timing run (docs/sampling.md): clusters of as
+// many warps as the GPU holds, the functional pre-pass on `image`, warming enough to refill
+// every cache twice. `treelets` as for the run's traversal (may be null).
+SamplingOptions sampling_options(const HwConfig& cfg, const BvhImage& image, const TimingOptions& opt, const Treelets* treelets);
+
+}  // namespace rtu

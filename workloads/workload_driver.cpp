@@ -1,0 +1,209 @@
+#include "workload_driver.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace rtu {
+
+class WorkloadDriver::Frame : public FrameWarps {
+public:
+    explicit Frame(const std::vector<ShaderWarp>& warps) : warps_(warps) {}
+    size_t warps() const override { return warps_.size(); }
+    uint32_t sm(size_t w) const override { return warps_[w].sm; }
+    void threads(size_t w, std::vector<uint32_t>& paths, std::vector<RayQueue>& first) const override {
+        const ShaderWarp& sw = warps_[w];
+        paths.resize(sw.threads.size());
+        first.resize(std::max(first.size(), sw.threads.size()));
+        for (size_t i = 0; i < sw.threads.size(); ++i) {
+            paths[i] = sw.threads[i].path;
+            first[i] = sw.threads[i].pending;
+        }
+    }
+
+private:
+    const std::vector<ShaderWarp>& warps_;
+};
+
+WorkloadDriver::WorkloadDriver(Workload& workload, uint32_t sms, uint32_t warp_size, uint32_t shade_latency,
+                               const SamplingOptions& sampling)
+    : workload_(workload), shade_(shade_latency), ready_(sms),
+      estimator_({sms, std::max<uint32_t>(1, sampling.capacity / std::max<uint32_t>(1, sms)), shade_latency}, sampling.capacity) {
+    std::vector<WorkRay> first;
+    workload_.begin(first);
+    // Paths in order; each run of warp_size paths (neighbouring pixels) is one shader warp.
+    uint32_t max_path = 0;
+    for (const WorkRay& w : first) max_path = std::max(max_path, w.path);
+    path_warp_.assign(first.empty() ? 0 : max_path + 1, ~0u);
+    for (const WorkRay& w : first) {
+        if (path_warp_[w.path] == ~0u) {
+            if (warps_.empty() || warps_.back().threads.size() == warp_size) {
+                ShaderWarp sw;
+                sw.sm = uint32_t(warps_.size() % sms);
+                warps_.push_back(std::move(sw));
+            }
+            warps_.back().threads.push_back(Thread{w.path, 0, {}});
+            path_warp_[w.path] = uint32_t(warps_.size() - 1);
+        }
+        ShaderWarp& sw = warps_[path_warp_[w.path]];
+        auto it = std::find_if(sw.threads.begin(), sw.threads.end(), [&](const Thread& t) { return t.path == w.path; });
+        it->pending.push_back(w);
+    }
+    warps_total_ = warps_.size();
+    records_of_warps_.assign(warps_.size(), WarpRecord{});
+    if (sampling.rate < 1.0 && !warps_.empty()) {
+        sampled_ = true;
+        const SampleDesign design(warps_.size(), sampling.cluster, sampling.rate, sampling.seed);
+        // The pre-pass also records, for each simulated cluster, the last node fetches of the
+        // clusters skipped before it, to warm the caches with when it starts.
+        std::vector<std::vector<uint32_t>> trace_nodes;
+        if (sampling.make_workload && sampling.trace) {
+            PrepassResult p = run_prepass(Frame(warps_), sampling, design.feeds(), design.strata());
+            trace_nodes = p.trace_nodes;
+            warm_ = std::move(p.warm);
+            estimator_.set_prepass(std::move(p));
+        }
+        std::vector<ShaderWarp> kept;
+        std::vector<WarpRecord> kept_records;
+        for (uint64_t h = 0; h < design.strata(); ++h)
+            for (uint64_t w = design.first_warp(h); w < design.end_warp(h); ++w) {
+                ShaderWarp sw = std::move(warps_[w]);
+                sw.sm = uint32_t(kept.size() % sms);
+                kept.push_back(std::move(sw));
+                WarpRecord rec;
+                rec.weight = design.weight(h);
+                rec.stratum = uint32_t(h);
+                if (!trace_nodes.empty()) {
+                    rec.trace_nodes = std::move(trace_nodes[w]);
+                    for (uint32_t n : rec.trace_nodes) rec.critical_nodes += n;
+                }
+                kept_records.push_back(std::move(rec));
+            }
+        warps_ = std::move(kept);
+        records_of_warps_ = std::move(kept_records);
+        for (uint32_t i = 0; i < warps_.size(); ++i)
+            for (const Thread& t : warps_[i].threads) path_warp_[t.path] = i;
+    }
+    for (uint32_t i = 0; i < warps_.size(); ++i) enqueue(i, 0);
+    live_warps_ = warps_.size();
+}
+
+WorkloadDriver::Estimate WorkloadDriver::estimate() const { return estimator_.estimate(records_of_warps_, warps_total_, sampled_); }
+
+void WorkloadDriver::enqueue(uint32_t warp, uint64_t ready_at) { ready_[warps_[warp].sm].insert({ready_at, warp}); }
+
+uint64_t WorkloadDriver::earliest_ready(uint32_t sm) const { return ready_[sm].empty() ? ~0ull : ready_[sm].begin()->first; }
+
+std::optional<std::vector<WarpRay>> WorkloadDriver::next_trace(uint32_t sm, uint64_t now) {
+    auto& q = ready_[sm];
+    while (!q.empty() && q.begin()->first <= now) {
+        const uint32_t wi = q.begin()->second;
+        q.erase(q.begin());
+        ShaderWarp& sw = warps_[wi];
+        const uint32_t stratum = records_of_warps_[wi].stratum;
+        if (stratum < warm_.size() && !warm_[stratum].empty()) {  // the first trace of a simulated cluster
+            if (on_warm) on_warm(warm_[stratum]);
+            std::vector<WarmFetch>().swap(warm_[stratum]);
+        }
+        std::vector<WarpRay> rays;
+        std::vector<RetiredRay> invalid;
+        for (Thread& t : sw.threads) {
+            if (t.pending.empty()) continue;
+            const WorkRay w = t.pending.front();
+            t.pending.pop_front();
+            Record rec;
+            rec.r.path = w.path;
+            rec.r.seq = t.next_seq++;
+            rec.r.ray = w.ray;
+            rec.work = w;
+            rec.warp = wi;
+            rec.r.valid = is_valid_ray(w.ray);
+            Ray scaled = w.ray;
+            rec.scale = rec.r.valid ? scale_direction(scaled) : 0;
+            uint64_t key = records_.size();
+            if (!keep_rays_ && !free_records_.empty()) {  // the slot of a retired ray
+                key = free_records_.back();
+                free_records_.pop_back();
+                records_[key] = rec;
+            } else {
+                records_.push_back(rec);
+            }
+            ++issued_;
+            if (!rec.r.valid) {
+                // Invalid rays never reach the RT unit: a miss (counted when it retires).
+                invalid.push_back({key, Hit{}, 0});
+                continue;
+            }
+            rays.push_back({scaled, rec.scale, key});
+        }
+        sw.in_flight = uint32_t(rays.size() + invalid.size());
+        sw.issued_at = now;
+        if (!invalid.empty()) retire(sm, invalid, now);
+        if (!rays.empty()) return rays;
+    }
+    return std::nullopt;
+}
+
+void WorkloadDriver::retire(uint32_t sm, const std::vector<RetiredRay>& rays, uint64_t now) {
+    std::vector<WorkRay> follow;
+    for (const RetiredRay& rr : rays) {
+        Record& rec = records_.at(rr.key);
+        rec.r.hit = rr.hit;
+        if (rec.r.hit.hit) rec.r.hit.t = std::ldexp(rec.r.hit.t, -rec.scale);
+        rec.r.nodes_visited = rr.nodes_visited;
+        summary_.rays += 1;
+        summary_.invalid += !rec.r.valid;
+        summary_.hits += rec.r.hit.hit;
+        summary_.nodes_visited += rr.nodes_visited;
+        summary_.l1_miss_nodes += rr.l1_miss_nodes;
+        summary_.dram_nodes += rr.dram_nodes;
+        summary_.max_nodes = std::max(summary_.max_nodes, rr.nodes_visited);
+        ShaderWarp& sw = warps_[rec.warp];
+        WarpRecord& wr = records_of_warps_[rec.warp];
+        wr.nodes += rr.nodes_visited;
+        wr.l1_miss_nodes += rr.l1_miss_nodes;
+        wr.dram_nodes += rr.dram_nodes;
+        last_progress_ = now;
+        follow.clear();
+        workload_.complete(rec.work, rec.r.hit, follow);
+        for (const WorkRay& f : follow) {
+            auto it = std::find_if(sw.threads.begin(), sw.threads.end(), [&](const Thread& t) { return t.path == f.path; });
+            it->pending.push_back(f);
+        }
+        if (--sw.in_flight == 0) {
+            // The trace left the RT unit: its residence there is the warp's work (cycles of a
+            // warp-buffer slot), which is what the GPU's throughput is made of.
+            estimator_.on_trace_done(wr, double(now - sw.issued_at));
+            const bool more = std::any_of(sw.threads.begin(), sw.threads.end(), [](const Thread& t) { return !t.pending.empty(); });
+            if (more)
+                enqueue(rec.warp, now + shade_);
+            else
+                estimator_.on_warp_finished(--live_warps_, now);
+        }
+        if (!keep_rays_) free_records_.push_back(rr.key);  // reused by a later ray (next_trace)
+    }
+    (void)sm;
+}
+
+std::vector<TracedRay> WorkloadDriver::results() const {
+    std::vector<TracedRay> out;
+    if (!keep_rays_) return out;
+    out.reserve(records_.size());
+    for (const Record& r : records_) out.push_back(r.r);
+    std::sort(out.begin(), out.end(), [](const TracedRay& a, const TracedRay& b) {
+        return a.path != b.path ? a.path < b.path : a.seq < b.seq;
+    });
+    return out;
+}
+
+std::string WorkloadDriver::oldest_in_flight() const {
+    const ShaderWarp* oldest = nullptr;
+    size_t idx = 0;
+    for (size_t i = 0; i < warps_.size(); ++i)
+        if (warps_[i].in_flight && (!oldest || warps_[i].issued_at < oldest->issued_at)) oldest = &warps_[i], idx = i;
+    if (!oldest) return "no trace in flight";
+    return "SM " + std::to_string(oldest->sm) + " shader warp " + std::to_string(idx) + " (trace issued at cycle " +
+           std::to_string(oldest->issued_at) + ", " + std::to_string(oldest->in_flight) + " rays outstanding)";
+}
+
+}  // namespace rtu
