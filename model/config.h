@@ -11,7 +11,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "prefetcher.h"
+#include "prefetch_config.h"
 
 namespace rtu {
 

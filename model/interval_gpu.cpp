@@ -23,10 +23,13 @@ IntervalGpu::IntervalGpu(const HwConfig& cfg, const BvhImage& image, TraversalOr
       dram_(cfg.dram, cfg.l2.line) {
     if (order == TraversalOrder::Treelet)
         throw std::invalid_argument("the interval fidelity models DFS and BFS traversal, not treelet traversal (use --fidelity at or lt)");
-    if (cfg.prefetch.kind != PrefetcherKind::None && cfg.prefetch.kind != PrefetcherKind::Ttp)
+    prefetcher_ = make_prefetcher(cfg.prefetch, order, cfg.lat, nullptr);
+    // A fetch event is where a pop happens: the prefetchers that act on other moments (a node's
+    // test, a warp's scheduling, the limit studies) are AT's and LT's.
+    if (prefetcher_->hooks() & ~unsigned(Prefetcher::OnPop))
         throw std::invalid_argument(std::string("the interval fidelity models the prefetchers none and ttp, not '") +
-                                    prefetcher_name(cfg.prefetch.kind) + "' (use --fidelity at or lt)");
-    if (cfg.prefetch.kind == PrefetcherKind::Ttp && cfg.prefetch.priority_after != 0)
+                                    prefetcher_->name() + "' (use --fidelity at or lt)");
+    if (prefetcher_->hooks() && cfg.prefetch.priority_after != 0)
         throw std::invalid_argument("the interval fidelity sends prefetches only in cycles without a demand "
                                     "(prefetch.priority_after 0), not after " + std::to_string(cfg.prefetch.priority_after) +
                                     " cycles (use --fidelity at or lt)");
@@ -164,18 +167,12 @@ void IntervalGpu::start_trace(uint32_t sm, const std::vector<WarpRay>& rays, uin
     tr.sm = sm;
     tr.start = tr.end = start;
     tr.live = 0;
-    tr.keys.resize(rays.size());
     tr.threads.resize(rays.size());
     for (uint32_t i = 0; i < rays.size(); ++i) {
-        tr.keys[i] = rays[i].key;
         Thread& t = tr.threads[i];
-        t.trav.start(rays[i].ray, image_.header(), order_);
+        t.rt.start(rays[i], image_.header(), order_, nullptr);
         t.ready = start;
-        t.streak = 0;
-        t.l1_miss_nodes = t.dram_nodes = 0;
-        t.ttp_dfs = TtpDfs{};
-        t.ttp_bfs = TtpBfs{};
-        if (!t.trav.done()) {
+        if (!t.rt.trav.done()) {
             ++tr.live;
             events_.push({start, next_seq_++, id, i});
         }
@@ -188,10 +185,9 @@ void IntervalGpu::start_trace(uint32_t sm, const std::vector<WarpRay>& rays, uin
 void IntervalGpu::finish(uint32_t id, std::vector<Finished>& finished) {
     Trace& tr = traces_[id];
     Finished f{tr.sm, tr.end, {}};
-    for (uint32_t i = 0; i < tr.keys.size(); ++i) {
-        const Thread& t = tr.threads[i];
-        rt_.thread_cycles[size_t(ThreadStatus::Idle)] += tr.end - (t.trav.nodes_visited() ? t.ready : tr.start);
-        f.rays.push_back({tr.keys[i], t.trav.hit(), t.trav.nodes_visited(), t.l1_miss_nodes, t.dram_nodes});
+    for (const Thread& t : tr.threads) {
+        rt_.thread_cycles[size_t(ThreadStatus::Idle)] += tr.end - (t.rt.trav.nodes_visited() ? t.ready : tr.start);
+        f.rays.push_back(t.rt.retired());
     }
     finished.push_back(std::move(f));
     free_traces_.push_back(id);
@@ -200,15 +196,30 @@ void IntervalGpu::finish(uint32_t id, std::vector<Finished>& finished) {
 // Fetches run in time order and book their chunks from the cycle after they are scheduled, so
 // when cycle `cycle` comes every demand for it has booked: a free request port then means no
 // demand waits, and the oldest prefetch chunk leaves.
+void IntervalGpu::Sink::prefetch(const StackEntry& node, uint64_t) {
+    PrefetchQueue& q = gpu.prefetch_queue_[sm].chunks;
+    for (uint32_t c = 0; c < chunks_of(node.type); ++c) {
+        const uint64_t chunk = chunk_address(node.addr, c);
+        ++gpu.rt_.prefetches_generated;
+        if (q.waiting(chunk)) {
+            ++gpu.rt_.prefetch_duplicates;  // still waiting in the queue: dropped, as in AT
+            continue;
+        }
+        ChunkRequest r;
+        r.addr = chunk;
+        r.prefetch = true;
+        q.push(r);
+    }
+}
+
 void IntervalGpu::send_prefetch(uint32_t sm, uint64_t cycle) {
-    PrefetchQueue& q = prefetch_queue_[sm];
+    SmPrefetchQueue& q = prefetch_queue_[sm];
     PortCalendar& issue = issue_[sm];
     const uint64_t sent = issue.first_free(cycle);
     if (sent == cycle) {
         issue.book(cycle);
-        const uint64_t chunk = q.chunks.front();
-        q.chunks.pop_front();
-        q.waiting.erase(chunk);
+        const uint64_t chunk = q.chunks.front().addr;
+        q.chunks.pop();
         read(sm, chunk, cycle, ReqKind::Prefetch);
         ++rt_.prefetches_sent;
         ++rt_.prefetch_responses;
@@ -228,7 +239,8 @@ void IntervalGpu::run_next(std::vector<Finished>& finished) {
     advance(ev.at);  // every later fetch is scheduled at or after this one
     if (ev.thread == kPrefetch) return send_prefetch(ev.trace, ev.at);
     if (ev.at != coalesce_at_) {
-        coalescing_.clear();
+        coalescer_.clear();
+        coalesced_.clear();
         coalesce_at_ = ev.at;
     }
     Trace& tr = traces_[ev.trace];
@@ -236,26 +248,28 @@ void IntervalGpu::run_next(std::vector<Finished>& finished) {
     const uint32_t sm = tr.sm;
     PortCalendar& issue = issue_[sm];
     PortCalendar& drain = drain_[sm];
-    const StackEntry e = t.trav.peek();
-    uint8_t fetch_class = 0;
-    if (t.trav.next_is_pop()) {
-        t.streak = uint8_t(std::min(t.streak + 1, 4));
-        fetch_class = t.streak;
+    const StackEntry e = t.rt.trav.peek();
+    // On a pop, TTP's picks join the SM's prefetch queue, which sends one chunk in each cycle the
+    // request port has no demand for (send_prefetch).
+    sink_.sm = sm;
+    const uint8_t fetch_class = t.rt.begin_fetch(*prefetcher_, sink_);
+    SmPrefetchQueue& pq = prefetch_queue_[sm];
+    if (!pq.chunks.empty() && !pq.scheduled) {
+        pq.scheduled = true;
+        events_.push({t.ready + 1, next_seq_++, sm, kPrefetch});
     }
     ++rt_.node_fetches;
     ++rt_.streak_fetches[fetch_class];
     // Threads of one trace that fetch the same node scheduled in the same cycle share one fetch.
-    auto same = std::find_if(coalescing_.begin(), coalescing_.end(),
-                             [&](const Fetch& x) { return x.trace == ev.trace && x.addr == e.addr; });
-    Fetch f{ev.trace, e.addr, t.ready, false, false};
-    if (same != coalescing_.end()) {
-        f = *same;
+    const auto [g, fresh] = coalescer_.add({ev.trace, e.addr});
+    if (!fresh) {
         ++rt_.coalesced;
     } else {
-        const uint32_t chunks = node_bytes(e.type) / kChunkBytes;
+        Fetch f{t.ready, false, false};
+        const uint32_t chunks = chunks_of(e.type);
         for (uint32_t c = 0; c < chunks; ++c) {
             const uint64_t sent = issue.book(t.ready + 1);
-            const Served s = read(sm, e.addr + uint64_t(c) * kChunkBytes, sent, ReqKind::Demand);
+            const Served s = read(sm, chunk_address(e.addr, c), sent, ReqKind::Demand);
             // Drained from the response FIFO one per cycle, at the earliest in the cycle after
             // the request left (an L1 hit's answer comes in that same cycle).
             f.done = std::max(f.done, drain.book(std::max(s.at, sent + 1)));
@@ -264,43 +278,15 @@ void IntervalGpu::run_next(std::vector<Finished>& finished) {
         }
         rt_.chunk_requests += chunks;
         rt_.responses += chunks;
-        coalescing_.push_back(f);
+        coalesced_.push_back(f);
     }
-    // TTP: on a pop, the entries below the popped one that the state machine picks join the SM's
-    // prefetch queue, which sends one chunk in each cycle the request port has no demand for
-    // (send_prefetch).
-    if (fetch_class > 0 && cfg_.prefetch.kind == PrefetcherKind::Ttp) {
-        const auto& st = t.trav.stack();
-        picks_.clear();
-        if (order_ == TraversalOrder::DFS)
-            t.ttp_dfs.on_pop(st.size() - 1, cfg_.prefetch.depth, picks_);
-        else
-            t.ttp_bfs.on_pop(st.size() - 1, cfg_.prefetch.bfs_n, picks_);
-        for (size_t k : picks_) {
-            const StackEntry& p = order_ == TraversalOrder::DFS ? st[k] : st[k + 1];
-            for (uint32_t c = 0; c < node_bytes(p.type) / kChunkBytes; ++c) {
-                const uint64_t chunk = p.addr + uint64_t(c) * kChunkBytes;
-                ++rt_.prefetches_generated;
-                PrefetchQueue& q = prefetch_queue_[sm];
-                if (!q.waiting.insert(chunk).second) {
-                    ++rt_.prefetch_duplicates;  // still waiting in the queue: dropped, as in AT
-                    continue;
-                }
-                q.chunks.push_back(chunk);
-            }
-        }
-        PrefetchQueue& q = prefetch_queue_[sm];
-        if (!q.chunks.empty() && !q.scheduled) {
-            q.scheduled = true;
-            events_.push({t.ready + 1, next_seq_++, sm, kPrefetch});
-        }
-    }
-    const StepInfo info = complete_fetch(t, rt_, fetch_class, f.l1_miss, f.dram, image_);
+    const Fetch f = coalesced_[g];
+    const StepInfo info = t.rt.complete_fetch(rt_, fetch_class, f.l1_miss, f.dram, image_, *prefetcher_);
     const uint32_t math = rt_math_latency(cfg_.lat, info);
     rt_.thread_cycles[size_t(ThreadStatus::WaitMemory)] += f.done - t.ready;
     rt_.thread_cycles[size_t(ThreadStatus::InMath)] += math;
     t.ready = f.done + math;
-    if (!t.trav.done()) {
+    if (!t.rt.trav.done()) {
         events_.push({t.ready, next_seq_++, ev.trace, ev.thread});
         return;
     }

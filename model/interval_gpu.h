@@ -6,8 +6,10 @@
 // their math latency, and the thread's next fetch is scheduled when they end. All of that is
 // worked out at once, so the time between two fetches of a thread costs nothing to simulate.
 // A trace leaves its warp-buffer slot when its slowest thread is done. Threads of a trace that
-// fetch the same node in the same cycle share one fetch (intra-warp coalescing). TTP (DFS and
-// BFS) prefetches on pops, as in AT.
+// fetch the same node in the same cycle share one fetch (intra-warp coalescing). The threads,
+// their pop streaks, the prefetcher's hooks and the prefetch queue are the RT unit's own
+// (model/rt_thread.h, model/prefetcher.h, model/prefetch_queue.h): TTP (DFS and BFS) prefetches on
+// pops, as in AT.
 //
 // Fetches run in the order they are scheduled, across all traces. Shared resources are booked
 // by timestamp (PortCalendar, DramBookings), since a fetch books cycles after its own; each
@@ -21,6 +23,7 @@
 #pragma once
 #include <cstdint>
 #include <deque>
+#include <memory>
 #include <queue>
 #include <vector>
 
@@ -32,6 +35,10 @@
 #include "config.h"
 #include "dram.h"
 #include "event_wheel.h"
+#include "node_fetch.h"
+#include "prefetch_queue.h"
+#include "prefetcher.h"
+#include "rt_thread.h"
 #include "rt_unit_core.h"
 #include "sector_cache.h"
 #include "traversal.h"
@@ -41,7 +48,7 @@ namespace rtu {
 class IntervalGpu {
 public:
     // Throws std::invalid_argument for what the fidelity does not model: treelet traversal and
-    // prefetchers other than none and TTP.
+    // prefetchers with hooks other than on_pop (Park, Treelet, the limit studies).
     IntervalGpu(const HwConfig& cfg, const BvhImage& image, TraversalOrder order);
 
     // A trace (at most warp_size rays) of SM `sm` enters a warp-buffer slot at cycle `start`;
@@ -110,31 +117,32 @@ private:
     std::vector<PortCalendar> l2_port_;        // per L2 slice: one lookup per cycle
     std::vector<SectorCache> l1_, l2_;
     std::vector<ReadyMap> l1_ready_, l2_ready_;
-    // Per SM, TTP's prefetch queue: chunks waiting to leave in a cycle without a demand, the set
-    // of them (a chunk generated again while waiting is dropped), and whether its issue event is
-    // scheduled.
-    struct PrefetchQueue {
-        std::deque<uint64_t> chunks;
-        absl::flat_hash_set<uint64_t> waiting;
+    // Per SM, the prefetch queue and whether its issue event is scheduled.
+    struct SmPrefetchQueue {
+        PrefetchQueue chunks;
         bool scheduled = false;
     };
-    std::vector<PrefetchQueue> prefetch_queue_;
+    std::vector<SmPrefetchQueue> prefetch_queue_;
+    std::unique_ptr<Prefetcher> prefetcher_;
+    // The prefetcher's picks go into an SM's prefetch queue as chunks.
+    struct Sink : PrefetchSink {
+        explicit Sink(IntervalGpu& g) : gpu(g) {}
+        void prefetch(const StackEntry& node, uint64_t deadline) override;
+        IntervalGpu& gpu;
+        uint32_t sm = 0;
+    };
+    Sink sink_{*this};
     DramBookings dram_;
     uint64_t floor_ = 0, ports_floor_ = 0, token_ = 0;
     RtUnitStats rt_;
 
     struct Thread {
-        TraversalThread trav;
+        RtThread rt;
         uint64_t ready = 0;  // cycle its next fetch is scheduled
-        uint8_t streak = 0;
-        uint32_t l1_miss_nodes = 0, dram_nodes = 0;
-        TtpDfs ttp_dfs;
-        TtpBfs ttp_bfs;
     };
     struct Trace {  // in a warp-buffer slot; reused
         uint32_t sm = 0, live = 0;  // live: threads not done
         uint64_t start = 0, end = 0;
-        std::vector<uint64_t> keys;  // the rays' keys for the workload driver
         std::vector<Thread> threads;
     };
     // A thread's next node fetch, scheduled at `at`; or, with thread == kPrefetch, SM `trace`'s
@@ -145,8 +153,7 @@ private:
         uint32_t trace, thread;
     };
     struct Fetch {  // a node fetch scheduled in the current cycle, for coalescing
-        uint32_t trace;
-        uint64_t addr, done;  // done: the cycle its last chunk drained
+        uint64_t done;  // the cycle its last chunk drained
         bool l1_miss, dram;
     };
     void finish(uint32_t trace, std::vector<Finished>& finished);
@@ -156,9 +163,10 @@ private:
     std::vector<uint32_t> free_traces_;
     EventWheel<Event> events_;
     uint64_t next_seq_ = 0;
-    std::vector<Fetch> coalescing_;  // fetches scheduled at coalesce_at_
+    // Fetches scheduled at coalesce_at_, by (trace, node address).
+    FetchCoalescer<std::pair<uint32_t, uint64_t>> coalescer_;
+    std::vector<Fetch> coalesced_;
     uint64_t coalesce_at_ = ~0ull;
-    std::vector<size_t> picks_;
 };
 
 }  // namespace rtu

@@ -1,29 +1,177 @@
 #include "prefetcher.h"
 
+#include <map>
 #include <stdexcept>
 
-namespace rtu {
+#include "node_fetch.h"
+#include "treelet.h"
 
-PrefetcherKind parse_prefetcher(const std::string& n) {
-    if (n == "none") return PrefetcherKind::None;
-    if (n == "ttp") return PrefetcherKind::Ttp;
-    if (n == "park") return PrefetcherKind::Park;
-    if (n == "treelet") return PrefetcherKind::Treelet;
-    if (n == "perfect-up") return PrefetcherKind::PerfectUp;
-    if (n == "perfect-down") return PrefetcherKind::PerfectDown;
-    throw std::invalid_argument("--prefetcher '" + n + "': allowed are none, ttp, park, treelet, perfect-up, perfect-down");
+namespace rtu {
+namespace {
+
+// Stack entry `k` counted from the next one to be popped (DFS and treelet traversal: the top;
+// BFS: the head).
+const StackEntry& from_next(const std::deque<StackEntry>& st, TraversalOrder order, size_t k) {
+    return order == TraversalOrder::BFS ? st[k] : st[st.size() - 1 - k];
 }
 
-const char* prefetcher_name(PrefetcherKind k) {
-    switch (k) {
-        case PrefetcherKind::None: return "none";
-        case PrefetcherKind::Ttp: return "ttp";
-        case PrefetcherKind::Park: return "park";
-        case PrefetcherKind::Treelet: return "treelet";
-        case PrefetcherKind::PerfectUp: return "perfect-up";
-        case PrefetcherKind::PerfectDown: return "perfect-down";
+class NoPrefetcher : public Prefetcher {
+public:
+    PrefetcherKind kind() const override { return PrefetcherKind::None; }
+    unsigned hooks() const override { return 0; }
+};
+
+// TTP (paper section 4): on each pop, the state machine picks the entries below the popped one.
+class TtpPrefetcher : public Prefetcher {
+public:
+    TtpPrefetcher(const PrefetchConfig& c, TraversalOrder order) : cfg_(c), bfs_(order == TraversalOrder::BFS) {}
+    PrefetcherKind kind() const override { return PrefetcherKind::Ttp; }
+    unsigned hooks() const override { return OnPop; }
+    void on_pop(PrefetchThreadState& s, const std::deque<StackEntry>& st, PrefetchSink& sink) override {
+        if (st.empty()) return;
+        picks_.clear();
+        // The stack after the pop is the current one without its top (DFS) or head (BFS).
+        if (bfs_) {
+            s.bfs.on_pop(st.size() - 1, cfg_.bfs_n, picks_);
+            for (size_t pos : picks_) sink.prefetch(st[pos + 1], ~0ull);
+        } else {
+            s.dfs.on_pop(st.size() - 1, cfg_.depth, picks_);
+            for (size_t i : picks_) sink.prefetch(st[i], ~0ull);
+        }
     }
-    return "?";
+    void on_push(PrefetchThreadState& s, size_t size) override { s.dfs.on_push(size); }
+
+private:
+    PrefetchConfig cfg_;
+    bool bfs_;
+    std::vector<size_t> picks_;
+};
+
+// Park et al. (as the TTP paper models them, section 6.7): while a leaf test runs, prefetch as
+// many stack entries as can leave during it (one 32 B chunk per cycle of the intersection test
+// itself, 8 cycles in the paper's setup), next pop first; what has not left when the test ends
+// is dropped.
+class ParkPrefetcher : public Prefetcher {
+public:
+    ParkPrefetcher(TraversalOrder order, const RtLatency& lat) : order_(order), lat_(lat) {}
+    PrefetcherKind kind() const override { return PrefetcherKind::Park; }
+    unsigned hooks() const override { return OnNodeTest; }
+    void on_node_test(const StepInfo& step, const std::deque<StackEntry>& st, uint64_t test_end, PrefetchSink& sink) override {
+        if (step.type != NodeType::Triangle && step.type != NodeType::Procedural) return;
+        uint32_t budget = step.type == NodeType::Triangle ? lat_.ray_triangle : lat_.procedural;
+        for (size_t k = 0; k < st.size(); ++k) {
+            const StackEntry& e = from_next(st, order_, k);
+            const uint32_t chunks = chunks_of(e.type);
+            if (chunks > budget) break;
+            budget -= chunks;
+            sink.prefetch(e, test_end);
+        }
+    }
+
+private:
+    TraversalOrder order_;
+    RtLatency lat_;
+};
+
+// Treelet (Chou et al.): when at least `treelet_threshold` of the warp's live threads head for
+// the same next treelet, the whole treelet is prefetched (once per warp).
+class TreeletPrefetcher : public Prefetcher {
+public:
+    TreeletPrefetcher(const PrefetchConfig& c, const Treelets& t) : threshold_(c.treelet_threshold), treelets_(t) {}
+    PrefetcherKind kind() const override { return PrefetcherKind::Treelet; }
+    unsigned hooks() const override { return OnWarpScheduled; }
+    void on_warp_scheduled(PrefetchWarpState& ws, const WarpThreads& threads, uint32_t live, PrefetchSink& sink) override {
+        std::map<uint32_t, uint32_t> votes;
+        for (uint32_t i = 0; i < threads.size(); ++i)
+            if (const TraversalThread* t = threads.live(i)) {
+                const uint32_t n = t->next_treelet();
+                if (n != ~0u) ++votes[n];
+            }
+        uint32_t best = ~0u, count = 0;
+        for (const auto& [id, c] : votes)
+            if (c > count) best = id, count = c;
+        if (best == ~0u || double(count) < threshold_ * double(live)) return;
+        if (!ws.treelets_prefetched.insert(best).second) return;
+        for (const StackEntry& e : treelets_.nodes[best]) sink.prefetch(e, ~0ull);
+    }
+
+private:
+    double threshold_;
+    const Treelets& treelets_;
+};
+
+// The limit studies (paper section 6.1): node reads of some pop-streak classes always hit L1.
+class PerfectPrefetcher : public Prefetcher {
+public:
+    explicit PerfectPrefetcher(bool upward) : upward_(upward) {}
+    PrefetcherKind kind() const override { return upward_ ? PrefetcherKind::PerfectUp : PrefetcherKind::PerfectDown; }
+    unsigned hooks() const override { return LimitStudy; }
+    // Upward: 2nd and later consecutive pops; downward: 1st pops.
+    bool answered_as_l1_hit(uint8_t c) const override { return upward_ ? c >= 2 : c == 1; }
+
+private:
+    bool upward_;
+};
+
+// Every prefetcher once: its name, what it needs, how it is built.
+struct Entry {
+    PrefetcherKind kind;
+    const char* name;
+    bool needs_treelet_traversal;
+    std::unique_ptr<Prefetcher> (*make)(const PrefetchConfig&, TraversalOrder, const RtLatency&, const Treelets*);
+};
+const Entry kPrefetchers[] = {
+    {PrefetcherKind::None, "none", false, [](const PrefetchConfig&, TraversalOrder, const RtLatency&, const Treelets*) -> std::unique_ptr<Prefetcher> {
+         return std::make_unique<NoPrefetcher>();
+     }},
+    {PrefetcherKind::Ttp, "ttp", false, [](const PrefetchConfig& c, TraversalOrder o, const RtLatency&, const Treelets*) -> std::unique_ptr<Prefetcher> {
+         return std::make_unique<TtpPrefetcher>(c, o);
+     }},
+    {PrefetcherKind::Park, "park", false, [](const PrefetchConfig&, TraversalOrder o, const RtLatency& l, const Treelets*) -> std::unique_ptr<Prefetcher> {
+         return std::make_unique<ParkPrefetcher>(o, l);
+     }},
+    {PrefetcherKind::Treelet, "treelet", true, [](const PrefetchConfig& c, TraversalOrder, const RtLatency&, const Treelets* t) -> std::unique_ptr<Prefetcher> {
+         if (!t) throw std::invalid_argument("the Treelet prefetcher needs the BVH's treelets");
+         return std::make_unique<TreeletPrefetcher>(c, *t);
+     }},
+    {PrefetcherKind::PerfectUp, "perfect-up", false, [](const PrefetchConfig&, TraversalOrder, const RtLatency&, const Treelets*) -> std::unique_ptr<Prefetcher> {
+         return std::make_unique<PerfectPrefetcher>(true);
+     }},
+    {PrefetcherKind::PerfectDown, "perfect-down", false, [](const PrefetchConfig&, TraversalOrder, const RtLatency&, const Treelets*) -> std::unique_ptr<Prefetcher> {
+         return std::make_unique<PerfectPrefetcher>(false);
+     }},
+};
+
+const Entry& entry(PrefetcherKind k) {
+    for (const Entry& e : kPrefetchers)
+        if (e.kind == k) return e;
+    throw std::logic_error("unknown prefetcher kind");
+}
+
+}  // namespace
+
+PrefetcherKind parse_prefetcher(const std::string& n) {
+    std::string names;
+    for (const Entry& e : kPrefetchers) {
+        if (n == e.name) return e.kind;
+        names += std::string(names.empty() ? "" : ", ") + e.name;
+    }
+    throw std::invalid_argument("--prefetcher '" + n + "': allowed are " + names);
+}
+
+const char* prefetcher_name(PrefetcherKind k) { return entry(k).name; }
+
+void check_prefetcher(const PrefetchConfig& cfg, TraversalOrder order) {
+    const Entry& e = entry(cfg.kind);
+    if (e.needs_treelet_traversal && order != TraversalOrder::Treelet)
+        throw std::invalid_argument(std::string("--prefetcher ") + e.name + " needs --traversal treelet (the " + e.name +
+                                    " prefetcher requires treelet traversal)");
+}
+
+std::unique_ptr<Prefetcher> make_prefetcher(const PrefetchConfig& cfg, TraversalOrder order, const RtLatency& lat,
+                                            const Treelets* treelets) {
+    check_prefetcher(cfg, order);
+    return entry(cfg.kind).make(cfg, order, lat, treelets);
 }
 
 }  // namespace rtu

@@ -1,4 +1,9 @@
-// Prefetch policies that watch a thread's traversal stack (paper section 4). Plain C++.
+// The prefetchers of the paper's experiments behind one interface, built once from the
+// configuration (make_prefetcher): TTP for DFS and for BFS (paper section 4), Park et al. (section
+// 6.7), Treelet (Chou et al., section 6.6) and the perfect upward / downward limit studies
+// (section 6.1). Every fidelity's RT unit calls the same hooks at the same moments of a node
+// fetch; a prefetcher answers with stack entries through a PrefetchSink, which splits them into
+// 32 B chunks for the prefetch queue (model/prefetch_queue.h). Plain C++.
 //
 // TTP for DFS: a 2-bit state per thread and a prefetch pointer. A push resets the state to S0
 // and the pointer to the top of stack T. Each pop advances S0 -> S1 -> S2 -> S3 (saturating);
@@ -13,24 +18,19 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <deque>
+#include <memory>
 #include <string>
+#include <unordered_set>
 #include <vector>
+
+#include "config.h"
+#include "prefetch_config.h"
+#include "traversal.h"
 
 namespace rtu {
 
-enum class PrefetcherKind : uint8_t { None, Ttp, Park, Treelet, PerfectUp, PerfectDown };
-PrefetcherKind parse_prefetcher(const std::string& name);  // throws std::invalid_argument
-const char* prefetcher_name(PrefetcherKind k);
-
-struct PrefetchConfig {
-    PrefetcherKind kind = PrefetcherKind::None;
-    std::array<uint32_t, 3> depth{1, 2, 16};  // TTP DFS depths of S1, S2, S3
-    uint32_t bfs_n = 1;                       // TTP BFS: entries prefetched per pop
-    uint32_t priority_after = 0;              // 0: prefetch only in cycles without a demand request;
-                                              // X: a prefetch goes first if none was sent in the last X cycles
-    uint32_t treelet_budget = 512;            // Treelet: bytes per treelet
-    double treelet_threshold = 0.75;          // Treelet: share of a warp's threads that must head for a treelet
-};
+struct Treelets;
 
 class TtpDfs {
 public:
@@ -68,5 +68,66 @@ public:
 private:
     size_t ahead_ = 0;  // head entries already prefetched
 };
+
+// A prefetcher's state per thread, beside the thread's traversal stack in the warp buffer (TTP:
+// the 2-bit state machine and the prefetch pointer, or the BFS head count).
+struct PrefetchThreadState {
+    TtpDfs dfs;
+    TtpBfs bfs;
+};
+
+// A prefetcher's state per warp (Treelet: the treelets already prefetched for the warp).
+struct PrefetchWarpState {
+    std::unordered_set<uint32_t> treelets_prefetched;
+};
+
+// Where a prefetcher's picks go: the RT unit splits each node into chunks and queues them.
+class PrefetchSink {
+public:
+    virtual ~PrefetchSink() = default;
+    // `deadline`: the cycle after which an unsent chunk is dropped (~0: none).
+    virtual void prefetch(const StackEntry& node, uint64_t deadline) = 0;
+};
+
+// A warp's threads as the Treelet prefetcher reads them when the warp is scheduled.
+class WarpThreads {
+public:
+    virtual ~WarpThreads() = default;
+    virtual uint32_t size() const = 0;
+    // Thread i's traversal, or null if the thread is done.
+    virtual const TraversalThread* live(uint32_t i) const = 0;
+};
+
+class Prefetcher {
+public:
+    // The hooks a prefetcher uses (a fidelity that does not call one refuses the prefetcher).
+    enum Hook : unsigned { OnPop = 1, OnNodeTest = 2, OnWarpScheduled = 4, LimitStudy = 8 };
+
+    virtual ~Prefetcher() = default;
+    virtual PrefetcherKind kind() const = 0;
+    const char* name() const { return prefetcher_name(kind()); }
+    virtual unsigned hooks() const = 0;
+    // A thread's node fetch is scheduled and pops `stack`'s next entry (DFS: the top; BFS: the
+    // head); `stack` still holds it.
+    virtual void on_pop(PrefetchThreadState&, const std::deque<StackEntry>& stack, PrefetchSink&) {}
+    // A thread pushed; `size` is its stack's size after the push.
+    virtual void on_push(PrefetchThreadState&, size_t size) {}
+    // A thread's node arrived and its tests (`step`) start now and end at cycle `test_end`;
+    // `stack` is the thread's stack after the step.
+    virtual void on_node_test(const StepInfo& step, const std::deque<StackEntry>& stack, uint64_t test_end, PrefetchSink&) {}
+    // The warp scheduler moved a warp's ready threads to the memory access queue; `live`
+    // threads of the warp are not done.
+    virtual void on_warp_scheduled(PrefetchWarpState&, const WarpThreads& threads, uint32_t live, PrefetchSink&) {}
+    // Limit studies: a node fetch of pop-streak class `fetch_class` is answered as an L1 hit.
+    virtual bool answered_as_l1_hit(uint8_t fetch_class) const { return false; }
+};
+
+// The configured prefetcher for `order`. Throws std::invalid_argument where it cannot work:
+// Treelet without treelet traversal (or without `treelets`). `lat`: the RT unit's math latencies
+// (Park's prefetch window is the leaf test).
+std::unique_ptr<Prefetcher> make_prefetcher(const PrefetchConfig& cfg, TraversalOrder order, const RtLatency& lat,
+                                            const Treelets* treelets);
+// The same checks of the combination, before there are treelets to build it with.
+void check_prefetcher(const PrefetchConfig& cfg, TraversalOrder order);
 
 }  // namespace rtu

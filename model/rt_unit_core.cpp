@@ -1,35 +1,28 @@
 #include "rt_unit_core.h"
 
-#include <map>
-
-#include "treelet.h"
-
 #include <algorithm>
 #include <stdexcept>
 
 namespace rtu {
 
-RtUnitCore::RtUnitCore(const HwConfig& cfg, const BvhImage& image, TraversalOrder order, const Treelets* treelets)
-    : cfg_(cfg), image_(image), order_(order), treelets_(treelets), warps_(cfg.warp_buffer) {
-    if ((order == TraversalOrder::Treelet || cfg.prefetch.kind == PrefetcherKind::Treelet) && !treelets)
-        throw std::logic_error("treelet traversal / prefetching needs treelets");
-}
+// A warp's threads as the prefetcher reads them.
+class RtUnitCore::WarpView : public WarpThreads {
+public:
+    explicit WarpView(const Warp& w) : w_(w) {}
+    uint32_t size() const override { return uint32_t(w_.threads.size()); }
+    const TraversalThread* live(uint32_t i) const override {
+        return w_.threads[i].status == ThreadStatus::Idle ? nullptr : &w_.threads[i].rt.trav;
+    }
 
-// Treelet prefetcher: when at least `treelet_threshold` of the warp's live threads head for the
-// same next treelet, the whole treelet is prefetched (once per warp).
-void RtUnitCore::prefetch_popular_treelet(Warp& w, uint32_t warp) {
-    std::map<uint32_t, uint32_t> votes;
-    for (const Thread& t : w.threads)
-        if (t.status != ThreadStatus::Idle) {
-            const uint32_t n = t.trav.next_treelet();
-            if (n != ~0u) ++votes[n];
-        }
-    uint32_t best = ~0u, count = 0;
-    for (const auto& [id, c] : votes)
-        if (c > count) best = id, count = c;
-    if (best == ~0u || double(count) < cfg_.prefetch.treelet_threshold * double(w.live)) return;
-    if (!w.treelets_prefetched.insert(best).second) return;
-    for (const StackEntry& e : treelets_->nodes[best]) prefetch_entry(e, warp, 0);
+private:
+    const Warp& w_;
+};
+
+RtUnitCore::RtUnitCore(const HwConfig& cfg, const BvhImage& image, TraversalOrder order, const Treelets* treelets)
+    : cfg_(cfg), image_(image), order_(order), treelets_(treelets),
+      prefetcher_(make_prefetcher(cfg.prefetch, order, cfg.lat, treelets)), warps_(cfg.warp_buffer),
+      scheduler_(cfg.warp_buffer), maq_(cfg.prefetch.priority_after), fifo_(cfg.response_fifo) {
+    if (order == TraversalOrder::Treelet && !treelets) throw std::logic_error("treelet traversal needs treelets");
 }
 
 bool RtUnitCore::has_free_slot() const {
@@ -55,12 +48,12 @@ uint32_t RtUnitCore::active_threads() const {
 
 int RtUnitCore::stack_depth(uint32_t w, uint32_t t) const {
     if (w >= warps_.size() || !warps_[w].used || t >= warps_[w].threads.size()) return -1;
-    return int(warps_[w].threads[t].trav.stack().size());
+    return int(warps_[w].threads[t].rt.trav.stack().size());
 }
 
 bool RtUnitCore::stack_contains(uint32_t w, uint32_t t, uint64_t addr) const {
     if (w >= warps_.size() || !warps_[w].used || t >= warps_[w].threads.size()) return false;
-    for (const StackEntry& e : warps_[w].threads[t].trav.stack())
+    for (const StackEntry& e : warps_[w].threads[t].rt.trav.stack())
         if (e.addr == addr) return true;
     return false;
 }
@@ -83,15 +76,14 @@ void RtUnitCore::accept_warp(const std::vector<WarpRay>& rays, uint64_t now) {
     if (it == warps_.end()) throw std::logic_error("no free warp-buffer slot");
     Warp& w = *it;
     w.used = true;
-    w.treelets_prefetched.clear();
+    w.prefetch = PrefetchWarpState{};
     w.threads.assign(rays.size(), Thread{});
     w.live = w.ready = 0;
     for (size_t i = 0; i < rays.size(); ++i) {
         Thread& t = w.threads[i];
-        t.key = rays[i].key;
         t.since = now;
-        t.trav.start(rays[i].ray, image_.header(), order_, treelets_);
-        if (!t.trav.done()) {
+        t.rt.start(rays[i], image_.header(), order_, treelets_);
+        if (!t.rt.trav.done()) {
             t.status = ThreadStatus::WaitSchedule;
             ++w.live;
             ++w.ready;
@@ -100,7 +92,7 @@ void RtUnitCore::accept_warp(const std::vector<WarpRay>& rays, uint64_t now) {
     ++stats_.warps;
     stats_.rays += rays.size();
     if (w.live == 0) {  // every ray missed the root box
-        for (const Thread& t : w.threads) retired_.push_back({t.key, t.trav.hit(), t.trav.nodes_visited(), 0, 0});
+        for (const Thread& t : w.threads) retired_.push_back(t.rt.retired());
         w.used = false;
     }
 }
@@ -119,73 +111,38 @@ uint32_t rt_math_latency(const RtLatency& lat, const StepInfo& s) {
 
 uint32_t RtUnitCore::math_latency(const StepInfo& s) const { return rt_math_latency(cfg_.lat, s); }
 
-bool RtUnitCore::has_request(uint64_t now) {
-    if (!selected_) {
-        while (!pfq_.empty() && pfq_.front().deadline < now) {
-            pfq_.pop_front();
-            ++stats_.prefetches_expired;
-        }
-    }
-    return !maq_.empty() || !pfq_.empty();
-}
+bool RtUnitCore::has_request(uint64_t now) { return maq_.has_request(now, stats_.prefetches_expired); }
 
 const ChunkRequest& RtUnitCore::front_request(uint64_t now) {
     if (!has_request(now)) throw std::logic_error("front_request without a request");
-    if (!selected_) {
-        const uint32_t x = cfg_.prefetch.priority_after;
-        const bool starving = x > 0 && now >= last_prefetch_sent_ + x;
-        selected_prefetch_ = !pfq_.empty() && (maq_.empty() || starving);
-        selected_ = true;
-    }
-    return selected_prefetch_ ? pfq_.front() : maq_.front();
+    return maq_.front(now);
 }
 
 void RtUnitCore::pop_request(uint64_t now) {
-    if (!selected_) front_request(now);
-    if (selected_prefetch_) {
-        prefetch_ids_.insert(pfq_.front().id);
-        pfq_.pop_front();
-        last_prefetch_sent_ = now;
-        ++stats_.prefetches_sent;
-    } else {
-        maq_.pop_front();
-    }
-    selected_ = false;
+    const ChunkRequest r = maq_.pop(now);
+    if (!r.prefetch) return;
+    prefetch_ids_.insert(r.id);
+    ++stats_.prefetches_sent;
 }
 
-void RtUnitCore::prefetch_entry(const StackEntry& e, uint32_t warp, uint32_t thread, uint64_t deadline) {
-    for (uint32_t c = 0; c < node_bytes(e.type) / kChunkBytes; ++c) {
-        const uint64_t addr = e.addr + uint64_t(c) * kChunkBytes;
-        ++stats_.prefetches_generated;
-        if (std::any_of(pfq_.begin(), pfq_.end(), [&](const ChunkRequest& r) { return r.addr == addr; })) {
-            ++stats_.prefetch_duplicates;
+void RtUnitCore::Sink::prefetch(const StackEntry& e, uint64_t deadline) {
+    PrefetchQueue& q = core.maq_.prefetches();
+    for (uint32_t c = 0; c < chunks_of(e.type); ++c) {
+        const uint64_t addr = chunk_address(e.addr, c);
+        ++core.stats_.prefetches_generated;
+        if (q.waiting(addr)) {
+            ++core.stats_.prefetch_duplicates;
             continue;
         }
         ChunkRequest r;
-        r.id = next_id_++;
+        r.id = core.next_id_++;
         r.addr = addr;
         r.warp = warp;
         r.thread = thread;
-        r.streak = 0;
         r.prefetch = true;
         r.deadline = deadline;
-        if (on_prefetch_generated) on_prefetch_generated(r);
-        pfq_.push_back(r);
-    }
-}
-
-// TTP: the thread is about to pop; its stack after the pop is the current one without its top
-// (DFS) or head (BFS).
-void RtUnitCore::prefetch_on_pop(Thread& t, uint32_t warp, uint32_t thread) {
-    const auto& st = t.trav.stack();
-    if (st.empty()) return;
-    std::vector<size_t> picks;
-    if (order_ == TraversalOrder::DFS) {
-        t.ttp_dfs.on_pop(st.size() - 1, cfg_.prefetch.depth, picks);
-        for (size_t i : picks) prefetch_entry(st[i], warp, thread);
-    } else {
-        t.ttp_bfs.on_pop(st.size() - 1, cfg_.prefetch.bfs_n, picks);
-        for (size_t pos : picks) prefetch_entry(st[pos + 1], warp, thread);
+        if (core.on_prefetch_generated) core.on_prefetch_generated(r);
+        q.push(r);
     }
 }
 
@@ -194,66 +151,66 @@ void RtUnitCore::on_response(uint64_t id, bool l1_miss, bool dram, uint64_t now)
         ++stats_.prefetch_responses;
         return;
     }
-    fifo_.push_back({id, {l1_miss, dram}});
+    if (fifo_.full()) throw std::logic_error("response into a full response FIFO");
+    fifo_.push({id, l1_miss, dram});
     stats_.max_response_fifo = std::max<uint64_t>(stats_.max_response_fifo, fifo_.size());
     (void)now;
 }
 
 void RtUnitCore::cycle(uint64_t now) {
-    // Limit studies: fetches answered as L1 hits reach the response FIFO on their cycle.
-    while (!perfect_.empty() && perfect_.front().first <= now) {
-        fifo_.push_back({perfect_.front().second, {false, false}});
-        perfect_.pop_front();
+    answer_limit_study_fetches(now);
+    drain_response(now);
+    finish_math(now);
+    schedule_warp(now);
+}
+
+// Limit studies: fetches answered as L1 hits reach the response FIFO on their cycle.
+void RtUnitCore::answer_limit_study_fetches(uint64_t now) {
+    while (!limit_study_.empty() && limit_study_.front().first <= now) {
+        fifo_.push({limit_study_.front().second, false, false});
+        limit_study_.pop_front();
     }
-    // Response FIFO: one response per cycle.
-    if (!fifo_.empty()) {
-        const auto [id, flags] = fifo_.front();
-        fifo_.pop_front();
-        ++stats_.responses;
-        Pending& p = slot_of(id);
-        if (p.id != id) throw std::logic_error("response for an unknown or answered request");
-        p.id = 0;  // free again; `p` stays valid below (nothing is issued while responses drain)
-        --inflight_count_;
-        Warp& w = warps_[p.warp];
-        for (uint16_t ti : p.threads) {
-            Thread& t = w.threads[ti];
-            t.fetch_l1_miss |= flags.first;
-            t.fetch_dram |= flags.second;
-            if (--t.chunks_left > 0) continue;
-            // The whole node is here: decode it and run its tests.
-            const StepInfo info = complete_fetch(t, stats_, t.fetch_class, t.fetch_l1_miss, t.fetch_dram, image_);
-            // Park et al. (as the TTP paper models them): while a leaf test runs, prefetch as many
-            // stack entries as can leave during it (one 32 B chunk per cycle), next pop first;
-            // what has not left when the test ends is dropped.
-            if (cfg_.prefetch.kind == PrefetcherKind::Park && (info.type == NodeType::Triangle || info.type == NodeType::Procedural)) {
-                const auto& st = t.trav.stack();
-                // Chunk slots during the intersection test itself (8 cycles in the paper's setup).
-                uint32_t budget = info.type == NodeType::Triangle ? cfg_.lat.ray_triangle : cfg_.lat.procedural;
-                const uint64_t test_end = now + math_latency(info);
-                for (size_t k = 0; k < st.size(); ++k) {
-                    const StackEntry& e = order_ == TraversalOrder::DFS ? st[st.size() - 1 - k] : st[k];
-                    const uint32_t chunks = node_bytes(e.type) / kChunkBytes;
-                    if (chunks > budget) break;
-                    budget -= chunks;
-                    prefetch_entry(e, p.warp, ti, test_end);
-                }
-            }
-            set_status(t, ThreadStatus::InMath, now);
-            math_.push({now + math_latency(info), p.warp, ti});
-        }
+}
+
+// Response FIFO: one response per cycle. A thread whose node is now whole runs the node's tests.
+void RtUnitCore::drain_response(uint64_t now) {
+    if (fifo_.empty()) return;
+    const ChunkResponse resp = fifo_.pop();
+    ++stats_.responses;
+    Pending& p = slot_of(resp.id);
+    if (p.id != resp.id) throw std::logic_error("response for an unknown or answered request");
+    p.id = 0;  // free again; `p` stays valid below (nothing is issued while responses drain)
+    --inflight_count_;
+    Warp& w = warps_[p.warp];
+    for (uint16_t ti : p.threads) {
+        Thread& t = w.threads[ti];
+        t.fetch_l1_miss |= resp.l1_miss;
+        t.fetch_dram |= resp.dram;
+        if (--t.chunks_left > 0) continue;
+        const StepInfo info = t.rt.complete_fetch(stats_, t.fetch_class, t.fetch_l1_miss, t.fetch_dram, image_, *prefetcher_);
+        const uint64_t end = now + math_latency(info);
+        sink_.warp = p.warp;
+        sink_.thread = ti;
+        prefetcher_->on_node_test(info, t.rt.trav.stack(), end, sink_);
+        set_status(t, ThreadStatus::InMath, now);
+        math_.push({end, p.warp, ti});
     }
-    // Math pipelines: threads whose tests end by now.
+}
+
+// Math pipelines: threads whose tests end by now are ready for their next node, or done; a warp
+// whose threads are all done leaves the warp buffer.
+void RtUnitCore::finish_math(uint64_t now) {
     while (!math_.empty() && math_.top().at <= now) {
         const MathDone m = math_.top();
         math_.pop();
         Warp& w = warps_[m.warp];
         Thread& t = w.threads[m.thread];
-        if (t.trav.done()) {
+        if (t.rt.trav.done()) {
             set_status(t, ThreadStatus::Idle, now);
             if (--w.live == 0) {
                 for (Thread& x : w.threads) {
                     set_status(x, ThreadStatus::Idle, now);
-                    retired_.push_back({x.key, x.trav.hit(), x.trav.nodes_visited(), x.l1_miss_nodes, x.dram_nodes});
+                    retired_.push_back(x.rt.retired());
                 }
                 w.used = false;
                 w.threads.clear();
@@ -263,81 +220,70 @@ void RtUnitCore::cycle(uint64_t now) {
             ++w.ready;
         }
     }
-    // Warp scheduler: one warp's ready threads go to the memory access queue, coalesced.
-    for (uint32_t k = 0; k < warps_.size(); ++k) {
-        const uint32_t wi = (rr_ + k) % uint32_t(warps_.size());
-        Warp& w = warps_[wi];
-        if (!w.used || w.ready == 0) continue;
-        rr_ = wi + 1;
-        // Unique node addresses of this warp's ready threads (at most one per thread), on the stack.
-        uint32_t n_nodes = 0;
-        std::array<uint64_t, 64> keys;
-        std::array<NodeType, 64> types;
-        std::array<uint8_t, 64> counts;
-        std::array<std::array<uint16_t, 64>, 64> members;
-        for (uint16_t ti = 0; ti < w.threads.size(); ++ti) {
-            Thread& t = w.threads[ti];
-            if (t.status != ThreadStatus::WaitSchedule) continue;
-            const StackEntry& e = t.trav.peek();
-            if (t.trav.next_is_pop()) {
-                t.streak = uint8_t(std::min(t.streak + 1, 4));
-                t.fetch_class = t.streak;
-                if (cfg_.prefetch.kind == PrefetcherKind::Ttp) prefetch_on_pop(t, wi, ti);
-            } else {
-                t.fetch_class = 0;
-            }
-            const bool perfect = (cfg_.prefetch.kind == PrefetcherKind::PerfectUp && t.fetch_class >= 2) ||
-                                 (cfg_.prefetch.kind == PrefetcherKind::PerfectDown && t.fetch_class == 1);
-            ++stats_.streak_fetches[t.fetch_class];
-            t.fetch_l1_miss = t.fetch_dram = false;
-            t.fetch_type = e.type;
-            t.chunks_left = node_bytes(e.type) / kChunkBytes;
-            set_status(t, ThreadStatus::WaitMemory, now);
-            ++stats_.node_fetches;
-            // Coalesce identical addresses (a limit-study hit does not merge with a real fetch).
-            const uint64_t key = e.addr | (perfect ? 1ull : 0ull);  // node addresses are 64 B aligned
-            uint32_t k = 0;
-            while (k < n_nodes && keys[k] != key) ++k;
-            if (k == n_nodes) {
-                keys[k] = key;
-                types[k] = e.type;
-                counts[k] = 0;
-                ++n_nodes;
-            } else {
-                ++stats_.coalesced;
-            }
-            members[k][counts[k]++] = ti;
+}
+
+// Warp scheduler: one warp's ready threads go to the memory access queue, their node reads
+// coalesced and split into chunks.
+void RtUnitCore::schedule_warp(uint64_t now) {
+    const int picked = scheduler_.pick([&](uint32_t s) { return warps_[s].used && warps_[s].ready > 0; });
+    if (picked < 0) return;
+    const uint32_t wi = uint32_t(picked);
+    Warp& w = warps_[wi];
+    coalescer_.clear();
+    for (uint16_t ti = 0; ti < w.threads.size(); ++ti) {
+        Thread& t = w.threads[ti];
+        if (t.status != ThreadStatus::WaitSchedule) continue;
+        const StackEntry e = t.rt.trav.peek();
+        sink_.warp = wi;
+        sink_.thread = ti;
+        t.fetch_class = t.rt.begin_fetch(*prefetcher_, sink_);
+        const bool limit_study = prefetcher_->answered_as_l1_hit(t.fetch_class);
+        ++stats_.streak_fetches[t.fetch_class];
+        t.fetch_l1_miss = t.fetch_dram = false;
+        t.chunks_left = chunks_of(e.type);
+        set_status(t, ThreadStatus::WaitMemory, now);
+        ++stats_.node_fetches;
+        // Coalesce identical addresses (a limit-study hit does not merge with a real fetch).
+        const auto [g, fresh] = coalescer_.add(e.addr | (limit_study ? 1ull : 0ull));  // node addresses are 64 B aligned
+        if (fresh) {
+            if (group_type_.size() <= g) group_type_.resize(g + 1), group_members_.resize(g + 1);
+            group_type_[g] = e.type;
+            group_members_[g].clear();
+        } else {
+            ++stats_.coalesced;
         }
-        w.ready = 0;
-        if (cfg_.prefetch.kind == PrefetcherKind::Treelet) prefetch_popular_treelet(w, wi);
-        for (uint32_t n = 0; n < n_nodes; ++n) {
-            const uint32_t chunks = node_bytes(types[n]) / kChunkBytes;
-            const bool perfect = keys[n] & 1ull;
-            const uint64_t base = keys[n] & ~1ull;
-            for (uint32_t c = 0; c < chunks; ++c) {
-                ChunkRequest r;
-                r.id = next_id_++;
-                r.addr = base + uint64_t(c) * kChunkBytes;
-                r.warp = wi;
-                r.thread = members[n][0];
-                r.streak = w.threads[members[n][0]].fetch_class;
-                Pending& slot = claim_slot(r.id);
-                slot.id = r.id;
-                slot.warp = wi;
-                slot.threads.assign(members[n].begin(), members[n].begin() + counts[n]);
-                ++inflight_count_;
-                ++stats_.chunk_requests;
-                if (perfect) {
-                    perfect_.push_back({now + std::max<uint64_t>(1, cfg_.l1_hit_latency) + c, r.id});
-                    ++stats_.perfect_hits;
-                } else {
-                    maq_.push_back(r);
-                }
-            }
-        }
-        stats_.max_request_queue = std::max<uint64_t>(stats_.max_request_queue, maq_.size());
-        break;
+        group_members_[g].push_back(ti);
     }
+    w.ready = 0;
+    sink_.warp = wi;
+    sink_.thread = 0;
+    prefetcher_->on_warp_scheduled(w.prefetch, WarpView(w), w.live, sink_);
+    for (uint32_t g = 0; g < coalescer_.groups(); ++g) {
+        const std::vector<uint16_t>& members = group_members_[g];
+        const bool limit_study = coalescer_.key(g) & 1ull;
+        const uint64_t node = coalescer_.key(g) & ~1ull;
+        for (uint32_t c = 0; c < chunks_of(group_type_[g]); ++c) {
+            ChunkRequest r;
+            r.id = next_id_++;
+            r.addr = chunk_address(node, c);
+            r.warp = wi;
+            r.thread = members[0];
+            r.streak = w.threads[members[0]].fetch_class;
+            Pending& slot = claim_slot(r.id);
+            slot.id = r.id;
+            slot.warp = wi;
+            slot.threads.assign(members.begin(), members.end());
+            ++inflight_count_;
+            ++stats_.chunk_requests;
+            if (limit_study) {
+                limit_study_.push_back({now + std::max<uint64_t>(1, cfg_.l1_hit_latency) + c, r.id});
+                ++stats_.perfect_hits;
+            } else {
+                maq_.push(r);
+            }
+        }
+    }
+    stats_.max_request_queue = std::max<uint64_t>(stats_.max_request_queue, maq_.depth());
 }
 
 RtUnitCore::Pending& RtUnitCore::claim_slot(uint64_t id) {
@@ -372,14 +318,14 @@ std::vector<RetiredRay> RtUnitCore::take_retired() {
 }
 
 bool RtUnitCore::idle() const {
-    return maq_.empty() && pfq_.empty() && fifo_.empty() && math_.empty() && inflight_count_ == 0 && perfect_.empty() &&
-           warps_resident() == 0;
+    return maq_.empty() && fifo_.empty() && math_.empty() && inflight_count_ == 0 &&
+           limit_study_.empty() && warps_resident() == 0;
 }
 
 uint64_t RtUnitCore::next_event(uint64_t now) const {
     if (!fifo_.empty()) return now + 1;
     uint64_t next = ~0ull;
-    if (!perfect_.empty()) next = std::max(now + 1, perfect_.front().first);
+    if (!limit_study_.empty()) next = std::max(now + 1, limit_study_.front().first);
     for (const Warp& w : warps_)
         if (w.used && w.ready) return now + 1;
     if (!math_.empty()) next = std::min(next, std::max(now + 1, math_.top().at));

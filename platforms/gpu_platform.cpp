@@ -91,9 +91,9 @@ struct GpuPlatform::Impl {
 
     Impl(const HwConfig& c, const BvhImage& img, Workload& w, const TimingOptions& o)
         : cfg(c), image(img), opt(o), core(c.core_mhz), mem(c.memory_mhz),
-          treelets(o.order == TraversalOrder::Treelet || c.prefetch.kind == PrefetcherKind::Treelet
-                       ? std::make_unique<Treelets>(form_treelets(img, c.prefetch.treelet_budget))
-                       : nullptr),
+          // Treelet traversal (and with it the Treelet prefetcher, which needs it) works on treelets.
+          treelets(o.order == TraversalOrder::Treelet ? std::make_unique<Treelets>(form_treelets(img, c.prefetch.treelet_budget))
+                                                      : nullptr),
           driver(w, c.sms, c.warp_size, c.shade_latency, sampling_options(c, img, o, treelets.get())) {}
 };
 
@@ -167,7 +167,7 @@ GpuPlatform::GpuPlatform(const HwConfig& cfg, const BvhImage& image, Workload& w
             unit->on_cycle = [unit, tr, traced_warp, impl](uint64_t) {
                 const RtUnitCore& c = unit->core();
                 tr->warps = int(c.warp_buffer_occupancy());
-                tr->maq = int(c.request_queue_depth());
+                tr->maq = int(c.memory_access_queue_depth());
                 tr->fifo = int(c.response_fifo_depth());
                 tr->active = int(c.active_threads());
                 if (traced_warp)
@@ -220,7 +220,7 @@ GpuPlatform::GpuPlatform(const HwConfig& cfg, const BvhImage& image, Workload& w
             const RtUnitCore& c = u->core();
             if (c.warps_resident())
                 s += std::string(u->name()) + ": " + std::to_string(c.warps_resident()) + " warps, " +
-                     std::to_string(c.request_queue_depth()) + " queued requests; ";
+                     std::to_string(c.memory_access_queue_depth()) + " queued requests; ";
         }
         return s;
     };

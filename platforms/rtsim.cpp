@@ -13,6 +13,7 @@
 #include <systemc>
 
 #include "output.h"
+#include "model/prefetcher.h"
 #include "simulation.h"
 #include "workloads/input_error.h"
 #include "workloads/verify.h"
@@ -95,9 +96,10 @@ RunSpec spec_of(const Args& a) {
             if (a.quantum) spec.config.set("sim.quantum=" + std::to_string(a.quantum));
             if (!a.prefetcher.empty()) spec.config.set("prefetch.kind=" + a.prefetcher);
             spec.hw = spec.config.resolve();
-            if (spec.hw.prefetch.kind == PrefetcherKind::Treelet && spec.order != TraversalOrder::Treelet)
-                throw ConfigError("--prefetcher treelet needs --traversal treelet (the Treelet prefetcher requires treelet traversal)");
+            check_prefetcher(spec.hw.prefetch, spec.order);
         } catch (const ConfigError& e) {
+            throw InputError(e.what());
+        } catch (const std::invalid_argument& e) {
             throw InputError(e.what());
         }
     }

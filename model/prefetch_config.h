@@ -1,0 +1,24 @@
+// The prefetcher's configuration keys (prefetch.* in platforms/configs/*.json). The prefetchers
+// themselves are in model/prefetcher.h. Plain C++.
+#pragma once
+#include <array>
+#include <cstdint>
+#include <string>
+
+namespace rtu {
+
+enum class PrefetcherKind : uint8_t { None, Ttp, Park, Treelet, PerfectUp, PerfectDown };
+PrefetcherKind parse_prefetcher(const std::string& name);  // throws std::invalid_argument
+const char* prefetcher_name(PrefetcherKind k);
+
+struct PrefetchConfig {
+    PrefetcherKind kind = PrefetcherKind::None;
+    std::array<uint32_t, 3> depth{1, 2, 16};  // TTP DFS depths of S1, S2, S3
+    uint32_t bfs_n = 1;                       // TTP BFS: entries prefetched per pop
+    uint32_t priority_after = 0;              // 0: prefetch only in cycles without a demand request;
+                                              // X: a prefetch goes first if none was sent in the last X cycles
+    uint32_t treelet_budget = 512;            // Treelet: bytes per treelet
+    double treelet_threshold = 0.75;          // Treelet: share of a warp's threads that must head for a treelet
+};
+
+}  // namespace rtu
