@@ -16,9 +16,6 @@ IntervalGpu::IntervalGpu(const HwConfig& cfg, const BvhImage& image, TraversalOr
       memory_fs_(uint64_t(std::llround(1e9 / cfg.memory_mhz))),
       issue_(cfg.sms),
       drain_(cfg.sms),
-      l2_port_(cfg.l2_slices),
-      l1_ready_(cfg.sms),
-      l2_ready_(cfg.l2_slices),
       prefetch_queue_(cfg.sms),
       dram_(cfg.dram, cfg.l2.line) {
     if (order == TraversalOrder::Treelet)
@@ -33,124 +30,61 @@ IntervalGpu::IntervalGpu(const HwConfig& cfg, const BvhImage& image, TraversalOr
         throw std::invalid_argument("the interval fidelity sends prefetches only in cycles without a demand "
                                     "(prefetch.priority_after 0), not after " + std::to_string(cfg.prefetch.priority_after) +
                                     " cycles (use --fidelity at or lt)");
-    for (uint32_t s = 0; s < cfg.sms; ++s) l1_.emplace_back(cfg.l1);
-    for (uint32_t s = 0; s < cfg.l2_slices; ++s) l2_.emplace_back(cfg.l2);
+    // The L1 takes what the RT unit's request port sends, one chunk per cycle; an L2 slice books
+    // its own lookups.
+    for (uint32_t s = 0; s < cfg.sms; ++s) l1_.emplace_back(cfg.l1, cfg.l1_hit_latency, false);
+    for (uint32_t s = 0; s < cfg.l2_slices; ++s) l2_.emplace_back(cfg.l2, cfg.l2.latency, true);
 }
 
 uint64_t IntervalGpu::memory_cycle(uint64_t c) const { return (c * core_fs_ + memory_fs_ - 1) / memory_fs_; }
 uint64_t IntervalGpu::core_cycle(uint64_t m) const { return (m * memory_fs_ + core_fs_ - 1) / core_fs_; }
 
-// Sectors whose data arrived by the floor are plain hits for every later read: they are
-// forgotten when the map has grown to twice its size after the last pruning (at least 4 entries
-// per cache line), so that pruning costs O(1) per read.
-void IntervalGpu::remember(ReadyMap& m, uint64_t sector, Ready r, size_t lines) {
-    m.at[sector] = r;
-    if (m.at.size() <= std::max(m.prune_above, 4 * lines)) return;
-    for (auto it = m.at.begin(); it != m.at.end();) {
-        if (it->second.at <= floor_)
-            m.at.erase(it++);
-        else
-            ++it;
-    }
-    m.prune_above = 2 * m.at.size();
-}
-
 void IntervalGpu::advance(uint64_t floor) {
     if (floor <= floor_) return;
     floor_ = floor;
+    for (CacheBookings& c : l1_) c.advance(floor);
+    for (CacheBookings& c : l2_) c.advance(floor);
     // The ports' rings are recycled every 1,024 cycles: bookings come at or after the floor
     // anyway, since fetches run in time order.
     if (floor < ports_floor_ + 1024) return;
     ports_floor_ = floor;
     for (PortCalendar& p : issue_) p.advance(floor);
     for (PortCalendar& p : drain_) p.advance(floor);
-    for (PortCalendar& p : l2_port_) p.advance(floor);
-}
-
-uint64_t IntervalGpu::mshr_slot(ReadyMap& m, SectorCache& tags, uint32_t mshrs, uint64_t c, ReqKind kind) {
-    while (!m.mshr_free.empty() && m.mshr_free.top() <= c) m.mshr_free.pop();
-    if (m.mshr_free.size() < mshrs) return c;
-    tags.count_reservation_fail(kind);
-    const uint64_t t = m.mshr_free.top();
-    m.mshr_free.pop();
-    return t;
-}
-
-IntervalGpu::Ready* IntervalGpu::in_flight(ReadyMap& m, uint64_t sector, uint64_t cycle) {
-    auto f = m.at.find(sector);
-    if (f == m.at.end() || f->second.at <= cycle) return nullptr;
-    Ready& r = f->second;
-    if (cycle < r.sent) {
-        r.at = cycle + (r.at - r.sent);
-        r.sent = cycle;
-    }
-    return &r;
 }
 
 uint32_t IntervalGpu::slice_of(uint64_t addr) const { return uint32_t((addr / cfg_.l2.line) % cfg_.l2_slices); }
 
 void IntervalGpu::warm(uint32_t sm, uint64_t addr) {
-    if (!l1_[sm].warm(addr)) l2_[slice_of(addr)].warm(addr);
+    if (!l1_[sm].tags().warm(addr)) l2_[slice_of(addr)].tags().warm(addr);
 }
 
-IntervalGpu::Ready IntervalGpu::read_l2(uint64_t addr, uint64_t cycle, ReqKind kind) {
-    const uint32_t s = slice_of(addr);
-    SectorCache& tags = l2_[s];
-    ReadyMap& ready = l2_ready_[s];
-    const uint64_t c = l2_port_[s].book(cycle);  // one lookup per cycle
-    const uint64_t sector = tags.sector_of(addr);
-    const CacheOutcome o = tags.read(addr, ++token_, kind);
-    if (o == CacheOutcome::Hit) {
-        const Ready* r = in_flight(ready, sector, c);
-        if (r && r->at > c + cfg_.l2.latency) {  // still on its way from DRAM
-            tags.count_as_mshr_hit(kind);
-            return {c, r->at, true};
-        }
-        return {c, c + cfg_.l2.latency, false};
-    }
-    // A miss (the tags never hold a pending sector here, so never a reservation fail): DRAM
-    // after the lookup; the sector is filled at once, marked with the cycle its data arrives.
-    const uint64_t m = mshr_slot(ready, tags, cfg_.l2.mshrs, c, kind);
-    const uint64_t mem = memory_cycle(m + cfg_.l2.latency);
-    const uint64_t done = core_cycle(dram_.access(sector, cfg_.l2.sector, mem, memory_cycle(floor_)));
-    ready.mshr_free.push(done);
-    tags.fill(sector);
-    remember(ready, sector, {c, done, true}, tags.lines());
-    return {c, done, true};
+IntervalGpu::Served IntervalGpu::read_l2(uint64_t addr, uint64_t cycle, ReqKind kind) {
+    CacheBookings& l2 = l2_[slice_of(addr)];
+    const CacheBookings::Lookup l = l2.lookup(addr, cycle, kind);
+    if (l.outcome != CacheBookings::Lookup::Miss) return {l.ready, false, l.dram};
+    // A miss: DRAM after the lookup's latency.
+    const uint64_t done = core_cycle(dram_.access(l2.tags().sector_of(addr), cfg_.l2.sector, memory_cycle(l.ready), memory_cycle(floor_)));
+    l2.fill(addr, l, done, true, kind);
+    return {done, false, true};
 }
 
 IntervalGpu::Served IntervalGpu::read(uint32_t sm, uint64_t addr, uint64_t cycle, ReqKind kind) {
-    SectorCache& tags = l1_[sm];
-    ReadyMap& ready = l1_ready_[sm];
-    const uint64_t sector = tags.sector_of(addr);
-    const CacheOutcome o = tags.read(addr, ++token_, kind);
-    if (o == CacheOutcome::Hit) {
-        Ready* r = in_flight(ready, sector, cycle);
-        if (r && r->at > cycle + cfg_.l1_hit_latency) {  // still on its way
-            if (r->merged + 1 >= cfg_.l1.mshr_merge) {
-                // The MSHR holds its limit of requests: a reservation fail. The read retries when
-                // the sector arrives (then a hit), and the request port waits for it.
-                tags.count_reservation_fail(kind);
-                issue_[sm].hold(cycle + 1, r->at);
-                return {r->at + cfg_.l1_hit_latency, false, false};
-            }
-            ++r->merged;
-            tags.count_as_mshr_hit(kind);
-            if (kind == ReqKind::Demand && r->prefetch) {
-                tags.count_late_prefetch();  // the demand found the prefetch still on its way
-                r->prefetch = false;
-            }
-            return {r->at, true, r->dram};
-        }
-        return {cycle + cfg_.l1_hit_latency, false, false};
+    CacheBookings& l1 = l1_[sm];
+    const CacheBookings::Lookup l = l1.lookup(addr, cycle, kind);
+    switch (l.outcome) {
+        case CacheBookings::Lookup::Hit: return {l.ready, false, false};
+        case CacheBookings::Lookup::InFlight: return {l.ready, true, l.dram};
+        case CacheBookings::Lookup::Retry:
+            // A reservation fail holds the RT unit's request port until the sector arrives (END_REQ
+            // withheld, as in AT); the retry then hits.
+            issue_[sm].hold(cycle + 1, l.retry_at);
+            return {l.ready, false, false};
+        case CacheBookings::Lookup::Miss: break;
     }
     const uint64_t xbar = cfg_.xbar_latency;
-    const uint64_t m = mshr_slot(ready, tags, cfg_.l1.mshrs, cycle, kind);
-    const Ready r = read_l2(sector, m + cfg_.l1_hit_latency + xbar, kind);
+    const Served r = read_l2(l1.tags().sector_of(addr), l.ready + xbar, kind);
     const uint64_t done = r.at + xbar;
-    ready.mshr_free.push(done);
-    tags.fill(sector);
-    remember(ready, sector, {cycle, done, r.dram, 0, kind == ReqKind::Prefetch}, tags.lines());
+    l1.fill(addr, l, done, r.dram, kind);
     return {done, true, r.dram};
 }
 

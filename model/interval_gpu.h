@@ -31,6 +31,7 @@
 #include <absl/container/flat_hash_set.h>
 
 #include "bvh_image.h"
+#include "cache_bookings.h"
 #include "calendar.h"
 #include "config.h"
 #include "dram.h"
@@ -72,8 +73,8 @@ public:
     // RT-unit statistics summed over the SMs (thread_cycles: WaitMemory from a fetch's
     // scheduling to its data, InMath, and Idle for finished threads waiting for their trace).
     const RtUnitStats& rt_stats() const { return rt_; }
-    const std::vector<SectorCache>& l1() const { return l1_; }
-    const std::vector<SectorCache>& l2() const { return l2_; }
+    const std::vector<CacheBookings>& l1() const { return l1_; }
+    const std::vector<CacheBookings>& l2() const { return l2_; }
     DramStats dram_stats() const { return dram_.total(); }
     uint64_t memory_cycle(uint64_t core_cycle) const;  // the memory-clock cycle at or after a core cycle
     uint64_t core_period_fs() const { return core_fs_; }
@@ -83,40 +84,18 @@ private:
         uint64_t at;  // core cycle the chunk's data is at the RT unit
         bool l1_miss, dram;
     };
-    struct Ready {  // a sector's miss left at `sent` and its data arrives at `at`; `dram`: from DRAM
-        uint64_t sent, at;
-        bool dram;
-        uint32_t merged = 0;  // L1: reads merged into the miss while in flight
-        bool prefetch = false;  // L1: the miss is a prefetch's
-    };
-    struct ReadyMap {
-        absl::flat_hash_map<uint64_t, Ready> at;
-        size_t prune_above = 0;  // size that triggers the next prune
-        // Cycles the cache's MSHRs in use free up (as LT: a miss waits for a free one).
-        std::priority_queue<uint64_t, std::vector<uint64_t>, std::greater<uint64_t>> mshr_free;
-    };
-    // The cycle at or after `c` a miss of cache `tags` gets an MSHR (counting a reservation fail
-    // if it had to wait).
-    static uint64_t mshr_slot(ReadyMap& m, SectorCache& tags, uint32_t mshrs, uint64_t c, ReqKind kind);
     Served read(uint32_t sm, uint64_t addr, uint64_t cycle, ReqKind kind);
-    Ready read_l2(uint64_t addr, uint64_t cycle, ReqKind kind);
+    Served read_l2(uint64_t addr, uint64_t cycle, ReqKind kind);  // l1_miss unused
     uint32_t slice_of(uint64_t addr) const;  // the L2 slice of an address, as the crossbar's
     void advance(uint64_t floor);
     uint64_t core_cycle(uint64_t memory_cycle) const;  // the core cycle at or after a memory cycle
-    void remember(ReadyMap& m, uint64_t sector, Ready r, size_t lines);
-    // The miss of `sector` still in flight at `cycle`, or null when its data is there. A read
-    // timestamped before the miss left takes the miss over (it would have been the one to miss,
-    // and the later read the one to merge).
-    static Ready* in_flight(ReadyMap& m, uint64_t sector, uint64_t cycle);
 
     HwConfig cfg_;
     const BvhImage& image_;
     TraversalOrder order_;
     uint64_t core_fs_, memory_fs_;  // clock periods in femtoseconds, as the SystemC clocks
     std::vector<PortCalendar> issue_, drain_;  // per SM: request port, response FIFO
-    std::vector<PortCalendar> l2_port_;        // per L2 slice: one lookup per cycle
-    std::vector<SectorCache> l1_, l2_;
-    std::vector<ReadyMap> l1_ready_, l2_ready_;
+    std::vector<CacheBookings> l1_, l2_;       // per SM / per L2 slice
     // Per SM, the prefetch queue and whether its issue event is scheduled.
     struct SmPrefetchQueue {
         PrefetchQueue chunks;
@@ -133,7 +112,7 @@ private:
     };
     Sink sink_{*this};
     DramBookings dram_;
-    uint64_t floor_ = 0, ports_floor_ = 0, token_ = 0;
+    uint64_t floor_ = 0, ports_floor_ = 0;
     RtUnitStats rt_;
 
     struct Thread {

@@ -16,6 +16,10 @@ namespace rtu {
 enum class ReqKind : uint8_t { Demand = 0, Prefetch = 1 };
 constexpr int kReqKinds = 2;
 
+// Which cache of the hierarchy: the L1 of an SM (the RT unit reads it) or an L2 slice (DRAM
+// below it).
+enum class CacheRole : uint8_t { L1, L2 };
+
 enum class CacheOutcome : uint8_t {
     Hit,              // sector present
     MshrHit,          // sector pending: merged into its MSHR
@@ -61,7 +65,7 @@ public:
         --stats_[size_t(k)].hits;
         ++stats_[size_t(k)].mshr_hits;
     }
-    // Interval fidelity: a demand read found a prefetched sector still on its way.
+    // LT and interval (CacheBookings): a demand read found a prefetched sector still on its way.
     void count_late_prefetch() { ++stats_[size_t(ReqKind::Demand)].late_prefetches; }
     void count_reservation_fail(ReqKind k) {
         ++stats_[size_t(k)].accesses;

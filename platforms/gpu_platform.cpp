@@ -120,7 +120,7 @@ GpuPlatform::GpuPlatform(const HwConfig& cfg, const BvhImage& image, Workload& w
         const std::string id = std::to_string(s);
         m.rt.emplace_back(new RtUnit(("rt_unit_" + id).c_str(), s, cfg, image, opt.order, m.driver, m.pool, m.core, opt.fidelity,
                                      m.treelets.get()));
-        m.l1.emplace_back(new Cache(("l1_" + id).c_str(), 1, cfg.l1, cfg.l1_hit_latency, m.pool, m.core, opt.fidelity));
+        m.l1.emplace_back(new Cache(("l1_" + id).c_str(), CacheRole::L1, cfg.l1, cfg.l1_hit_latency, m.pool, m.core, opt.fidelity));
         link(m.rt[s]->socket, m.l1[s]->in, "rt_unit_" + id + "_l1_" + id);
     }
     m.xbar.reset(new Crossbar("crossbar", cfg.l2_slices, cfg.l2.line, cfg.xbar_latency, m.core, opt.fidelity));
@@ -128,7 +128,7 @@ GpuPlatform::GpuPlatform(const HwConfig& cfg, const BvhImage& image, Workload& w
     m.dram.reset(new Dram("dram", cfg.dram, cfg.l2.line, m.mem, opt.fidelity));
     for (uint32_t s = 0; s < cfg.l2_slices; ++s) {
         const std::string id = std::to_string(s);
-        m.l2.emplace_back(new Cache(("l2_" + id).c_str(), 2, cfg.l2, cfg.l2.latency, m.pool, m.core, opt.fidelity));
+        m.l2.emplace_back(new Cache(("l2_" + id).c_str(), CacheRole::L2, cfg.l2, cfg.l2.latency, m.pool, m.core, opt.fidelity));
         link(m.xbar->out, m.l2[s]->in, "crossbar_l2_" + id);
         link(m.l2[s]->out, m.dram->in, "l2_" + id + "_dram");
     }

@@ -69,8 +69,8 @@ TimingResult run_interval(const HwConfig& cfg, const BvhImage& image, Workload& 
     if (!driver.finished() || driver.rays_retired() != driver.rays_issued()) r.invariant_failures.push_back("not every ray retired");
     HierarchyCounts h{gpu.rt_stats(), {}, {}, gpu.dram_stats(), end, double(gpu.core_period_fs()), double(gpu.memory_cycle(end))};
     for (int k = 0; k < kReqKinds; ++k) {
-        for (const SectorCache& c : gpu.l1()) add(h.l1[k], c.stats(ReqKind(k)));
-        for (const SectorCache& c : gpu.l2()) add(h.l2[k], c.stats(ReqKind(k)));
+        for (const CacheBookings& c : gpu.l1()) add(h.l1[k], c.tags().stats(ReqKind(k)));
+        for (const CacheBookings& c : gpu.l2()) add(h.l2[k], c.tags().stats(ReqKind(k)));
     }
     nlohmann::ordered_json j;
     j["cycles"] = r.cycles;

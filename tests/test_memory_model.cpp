@@ -4,6 +4,7 @@
 #include <random>
 #include <set>
 
+#include "model/cache_bookings.h"
 #include "model/calendar.h"
 #include "model/config.h"
 #include "model/dram.h"
@@ -327,4 +328,69 @@ TEST(Calendar, BooksTheEarliestFreeGapInAnyOrder) {
         for (uint64_t c = expect; c < expect + len; ++c) busy.insert(c);
     }
     EXPECT_LT(cal.intervals(), 4096u);  // the pruning that keeps the newest half never ran
+}
+
+// CacheBookings (LT and interval): requests in any timestamp order against a cache whose tags
+// are filled at once. Fully associative, 4 lines, 2 MSHRs merging 3 requests each, hit latency 5.
+TEST(CacheBookings, HandWorkedSequence) {
+    CacheBookings c(CacheConfig{512, 0, 128, 32, 2, 3, 0}, 5, true);
+    using L = CacheBookings::Lookup;
+    auto demand = [&](uint64_t addr, uint64_t cycle) { return c.lookup(addr, cycle, ReqKind::Demand); };
+    // A: a miss at 10 leaves at 15 (lookup + hit latency); its data comes at 100, from DRAM.
+    L a = demand(0x000, 10);
+    EXPECT_EQ(a.outcome, L::Miss);
+    EXPECT_EQ(a.ready, 15u);
+    c.fill(0x000, a, 100, true, ReqKind::Demand);
+    // B: a read at 20 waits for it (an MSHR hit), with the data's source.
+    L b = demand(0x000, 20);
+    EXPECT_EQ(b.outcome, L::InFlight);
+    EXPECT_EQ(b.ready, 100u);
+    EXPECT_TRUE(b.dram);
+    // C: a read timestamped at 8, before the miss left at 10, takes the miss over: its data comes
+    // 90 cycles after 8.
+    L cc = demand(0x000, 8);
+    EXPECT_EQ(cc.outcome, L::InFlight);
+    EXPECT_EQ(cc.ready, 98u);
+    // D: a third merge exceeds the merge limit of 3 requests: a reservation fail that retries when
+    // the sector arrives (98), a hit 5 cycles later; the port is held until then.
+    L d = demand(0x000, 30);
+    EXPECT_EQ(d.outcome, L::Retry);
+    EXPECT_EQ(d.retry_at, 98u);
+    EXPECT_EQ(d.ready, 103u);
+    // E: the next lookup gets the port at 99; a sector miss with an MSHR free (A's frees at 100).
+    L e = demand(0x020, 31);
+    EXPECT_EQ(e.cycle, 99u);
+    EXPECT_EQ(e.outcome, L::Miss);
+    EXPECT_EQ(e.ready, 104u);
+    c.fill(0x020, e, 200, true, ReqKind::Demand);
+    // F at 100: A's MSHR is free again. G at 101: both MSHRs busy (E until 200, F until 300): the
+    // miss waits for E's, a reservation fail.
+    L f = demand(0x040, 100);
+    EXPECT_EQ(f.ready, 105u);
+    c.fill(0x040, f, 300, true, ReqKind::Demand);
+    L g = demand(0x060, 101);
+    EXPECT_EQ(g.outcome, L::Miss);
+    EXPECT_EQ(g.ready, 205u);
+    c.fill(0x060, g, 400, true, ReqKind::Demand);
+    // H: a prefetch's miss waits for F's MSHR (300); I: a demand read finds it on its way (late,
+    // useful); J: a second demand read is not counted again.
+    L h = c.lookup(0x080, 102, ReqKind::Prefetch);
+    EXPECT_EQ(h.ready, 305u);
+    c.fill(0x080, h, 500, true, ReqKind::Prefetch);
+    EXPECT_EQ(demand(0x080, 103).outcome, L::InFlight);
+    EXPECT_EQ(demand(0x080, 104).outcome, L::InFlight);
+    // K: once the data is there, a plain hit.
+    L k = demand(0x000, 150);
+    EXPECT_EQ(k.outcome, L::Hit);
+    EXPECT_EQ(k.ready, 155u);
+
+    const CacheStats s = c.tags().stats(ReqKind::Demand), p = c.tags().stats(ReqKind::Prefetch);
+    EXPECT_EQ(s.mshr_hits, 4u);          // B, C, I, J
+    EXPECT_EQ(s.reservation_fails, 2u);  // D, G
+    EXPECT_EQ(s.hits, 2u);               // D's lookup, K
+    EXPECT_EQ(s.sector_misses + s.line_misses, 4u);  // A, E, F, G
+    EXPECT_EQ(s.accesses, s.hits + s.mshr_hits + s.sector_misses + s.line_misses + s.reservation_fails);
+    EXPECT_EQ(p.reservation_fails, 1u);  // H
+    EXPECT_EQ(s.useful_prefetches, 1u);
+    EXPECT_EQ(s.late_prefetches, 1u);
 }

@@ -199,13 +199,13 @@ TEST(TimingInterval, SingleRayLatenciesAreTheHandWorkedSums) {
     EXPECT_EQ(d.reads, 4u);
     EXPECT_EQ(d.row_misses, 2u);
     EXPECT_EQ(d.row_hits, 2u);
-    EXPECT_EQ(gpu.l1()[0].stats(ReqKind::Demand).line_misses, 2u);
-    EXPECT_EQ(gpu.l1()[0].stats(ReqKind::Demand).sector_misses, 2u);
+    EXPECT_EQ(gpu.l1()[0].tags().stats(ReqKind::Demand).line_misses, 2u);
+    EXPECT_EQ(gpu.l1()[0].tags().stats(ReqKind::Demand).sector_misses, 2u);
 
     EXPECT_EQ(time_trace(0, {r}, 1000), 1000 + (2 + 1 + internal) + (2 + 1 + leaf));  // 1038
-    EXPECT_EQ(gpu.l1()[0].stats(ReqKind::Demand).hits, 4u);
+    EXPECT_EQ(gpu.l1()[0].tags().stats(ReqKind::Demand).hits, 4u);
     EXPECT_EQ(time_trace(1, {r}, 2000), 2000 + (2 + hw.l2.latency + internal) + (2 + hw.l2.latency + leaf));  // 2356
-    EXPECT_EQ(gpu.l2()[0].stats(ReqKind::Demand).hits + gpu.l2()[1].stats(ReqKind::Demand).hits, 4u);
+    EXPECT_EQ(gpu.l2()[0].tags().stats(ReqKind::Demand).hits + gpu.l2()[1].tags().stats(ReqKind::Demand).hits, 4u);
     EXPECT_EQ(time_trace(0, {r, r}, 3000), 3038u);
     EXPECT_EQ(gpu.rt_stats().coalesced, 2u);
     EXPECT_EQ(gpu.dram_stats().reads, 4u);

@@ -4,9 +4,11 @@ namespace rtu {
 
 using namespace sc_core;
 
-Cache::Cache(sc_module_name name, int level, const CacheConfig& cfg, uint32_t hit_latency, PayloadPool& pool,
+Cache::Cache(sc_module_name name, CacheRole role, const CacheConfig& cfg, uint32_t hit_latency, PayloadPool& pool,
              const ClockDomain& clock, Fidelity fidelity)
-    : sc_module(name), in("in"), out("out"), level_(level), cfg_(cfg), hit_latency_(hit_latency), tags_(cfg), pool_(pool),
+    : sc_module(name), in("in"), out("out"), role_(role), cfg_(cfg), hit_latency_(hit_latency),
+      // LT: the L1 takes its RT unit's requests, one per cycle, in order; an L2 slice books its lookups.
+      lt_(cfg, hit_latency, role == CacheRole::L2), tags_(lt_.tags()), pool_(pool),
       clock_(clock), fidelity_(fidelity), resp_due_("resp_due"), hit_peq_(resp_due_, resp_seq_), fill_peq_(resp_due_, resp_seq_) {
     if (fidelity == Fidelity::AT) {
         in.register_nb_transport_fw(this, &Cache::nb_transport_fw);
@@ -44,7 +46,7 @@ bool Cache::lookup(tlm::tlm_generic_payload& t) {
             tlm::tlm_generic_payload* down = pool_.acquire(sector, cfg_.sector, t.get_data_ptr() - (t.get_address() - sector));
             RtExtension& de = ext(*down);
             de = e;
-            de.requester = level_ == 1 ? Requester::L1 : Requester::L2;
+            de.requester = role_ == CacheRole::L1 ? Requester::L1 : Requester::L2;
             de.l1_miss = de.dram = false;
             de.id = sector;
             // The tag lookup takes the hit latency before the miss leaves.
@@ -128,12 +130,12 @@ tlm::tlm_sync_enum Cache::nb_transport_bw(tlm::tlm_generic_payload& t, tlm::tlm_
         return tlm::TLM_COMPLETED;
     }
     // A sector arrived: every request waiting on it gets its response.
-    const bool from_dram = level_ == 2 || ext(t).dram;
+    const bool from_dram = role_ == CacheRole::L2 || ext(t).dram;
     for (uint64_t token : tags_.fill(t.get_address())) {
         tlm::tlm_generic_payload* up = waiting_.at(token);
         waiting_.erase(token);
         RtExtension& e = ext(*up);
-        if (level_ == 1) e.l1_miss = true;
+        if (role_ == CacheRole::L1) e.l1_miss = true;
         e.dram = e.dram || from_dram;
         respond_later(*up, false);
     }
@@ -151,43 +153,26 @@ tlm::tlm_sync_enum Cache::nb_transport_bw(tlm::tlm_generic_payload& t, tlm::tlm_
 
 void Cache::b_transport(tlm::tlm_generic_payload& t, sc_time& d) {
     RtExtension& e = ext(t);
-    const uint64_t horizon = clock_.cycle_at_or_before(sc_time_stamp());
-    uint64_t c = port_.book(clock_.cycle_at_or_after(sc_time_stamp() + d), 1, horizon);  // one lookup per cycle
-    const uint64_t sector = tags_.sector_of(t.get_address());
-    uint64_t done;
-    auto f = fill_at_.find(sector);
-    const CacheOutcome o = tags_.read(t.get_address(), next_token_++, e.kind);
-    if (o == CacheOutcome::Hit) {
-        // Valid in the tags, but its data may still be on the way at this timestamp.
-        if (f != fill_at_.end() && f->second > c + hit_latency_) {
-            done = f->second;
-            tags_.count_as_mshr_hit(e.kind);
-            if (level_ == 1) e.l1_miss = true;
-        } else {
-            done = c + hit_latency_;
-        }
-    } else {
-        // Miss: wait for a free MSHR at this timestamp, fetch, and fill at once (the sector is
-        // marked with the cycle its data arrives).
-        while (!lt_mshr_.empty() && lt_mshr_.top() <= c) lt_mshr_.pop();
-        if (lt_mshr_.size() >= cfg_.mshrs) {
-            tags_.count_reservation_fail(e.kind);
-            c = lt_mshr_.top();
-        }
+    lt_.advance(clock_.cycle_at_or_before(sc_time_stamp()));  // no requester is behind simulated time
+    const CacheBookings::Lookup l = lt_.lookup(t.get_address(), clock_.cycle_at_or_after(sc_time_stamp() + d), e.kind);
+    uint64_t done = l.ready;
+    if (l.outcome == CacheBookings::Lookup::InFlight) {  // waits for a miss on its way
+        if (role_ == CacheRole::L1) e.l1_miss = true;
+        e.dram = e.dram || l.dram;
+    } else if (l.outcome == CacheBookings::Lookup::Miss) {
+        const uint64_t sector = tags_.sector_of(t.get_address());
         tlm::tlm_generic_payload* down = pool_.acquire(sector, cfg_.sector, t.get_data_ptr() - (t.get_address() - sector));
         ext(*down) = e;
-        ext(*down).requester = level_ == 1 ? Requester::L1 : Requester::L2;
+        ext(*down).requester = role_ == CacheRole::L1 ? Requester::L1 : Requester::L2;
         ext(*down).dram = false;
-        sc_time dd = clock_.time_of(c + hit_latency_) - sc_time_stamp();
+        sc_time dd = clock_.time_of(l.ready) - sc_time_stamp();
         out->b_transport(*down, dd);
         done = clock_.cycle_at_or_after(sc_time_stamp() + dd);
-        e.dram = e.dram || level_ == 2 || ext(*down).dram;
-        if (level_ == 1) e.l1_miss = true;
+        const bool dram = role_ == CacheRole::L2 || ext(*down).dram;
+        e.dram = e.dram || dram;
+        if (role_ == CacheRole::L1) e.l1_miss = true;
         down->release();
-        tags_.fill(sector);
-        fill_at_[sector] = done;
-        lt_mshr_.push(done);
-        if (fill_at_.size() > 8 * tags_.lines()) fill_at_.clear();  // stale entries: all in the past
+        lt_.fill(t.get_address(), l, done, dram, e.kind);
     }
     t.set_response_status(tlm::TLM_OK_RESPONSE);
     d = clock_.time_of(done) - sc_time_stamp();

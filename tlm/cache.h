@@ -1,12 +1,11 @@
 // A sector cache (L1 of an SM, or one L2 slice) as a SystemC module: SectorCache (model/) behind
 // a TLM-2.0 target socket (from the RT unit or the crossbar) and an initiator socket (towards
-// L2 or DRAM). One lookup per cycle; a reservation fail holds END_REQ until an MSHR frees, which
-// stops the requester (base-protocol backpressure). LT: b_transport, booking the port and the
-// MSHRs by request timestamp.
+// L2 or DRAM). AT: one lookup per cycle; a reservation fail holds END_REQ until an MSHR frees,
+// which stops the requester (base-protocol backpressure). LT: b_transport, timed by
+// CacheBookings (model/cache_bookings.h, as the interval fidelity's caches are).
 #pragma once
 #include <deque>
 #include <functional>
-#include <queue>
 #include <absl/container/flat_hash_map.h>
 
 #include <systemc>
@@ -16,7 +15,7 @@
 
 #include "clock.h"
 #include "fifo_peq.h"
-#include "model/calendar.h"
+#include "model/cache_bookings.h"
 #include "model/fidelity.h"
 #include "model/sector_cache.h"
 #include "payload.h"
@@ -28,16 +27,16 @@ public:
     tlm_utils::simple_target_socket<Cache> in;
     tlm_utils::simple_initiator_socket<Cache> out;
 
-    // `level` 1 marks responses as L1 misses when not hits; `level` 2 marks them as DRAM-served
+    // An L1 marks responses as L1 misses when not hits; an L2 slice marks them as DRAM-served
     // when they came from below.
-    Cache(sc_core::sc_module_name name, int level, const CacheConfig& cfg, uint32_t hit_latency, PayloadPool& pool,
+    Cache(sc_core::sc_module_name name, CacheRole role, const CacheConfig& cfg, uint32_t hit_latency, PayloadPool& pool,
           const ClockDomain& clock, Fidelity fidelity);
     SC_HAS_PROCESS(Cache);
 
-    const SectorCache& tags() const { return tags_; }
+    const SectorCache& tags() const { return lt_.tags(); }
     // Functional warming before a sampled run (SectorCache::warm); returns whether it hit.
     bool warm(uint64_t addr) { return tags_.warm(addr); }
-    size_t mshrs_in_use() const { return fidelity_ == Fidelity::AT ? tags_.mshrs_in_use() : lt_mshr_.size(); }
+    size_t mshrs_in_use() const { return fidelity_ == Fidelity::AT ? tags_.mshrs_in_use() : lt_.mshrs_in_use(); }
 
 private:
     // AT
@@ -50,10 +49,11 @@ private:
     // LT
     void b_transport(tlm::tlm_generic_payload& t, sc_core::sc_time& d);
 
-    int level_;
+    CacheRole role_;
     CacheConfig cfg_;
     uint32_t hit_latency_;
-    SectorCache tags_;
+    CacheBookings lt_;   // LT's timing; its tags are AT's too
+    SectorCache& tags_;
     PayloadPool& pool_;
     const ClockDomain& clock_;
     Fidelity fidelity_;
@@ -71,11 +71,6 @@ private:
     uint64_t last_resp_cycle_ = ~0ull, last_miss_cycle_ = ~0ull;
     std::deque<std::pair<uint64_t, tlm::tlm_generic_payload*>> miss_queue_;  // (cycle it may leave, request)
     bool down_waiting_end_req_ = false;
-
-    // LT state: port bookings, fill times of sectors, MSHR release cycles.
-    Calendar port_;
-    absl::flat_hash_map<uint64_t, uint64_t> fill_at_;
-    std::priority_queue<uint64_t, std::vector<uint64_t>, std::greater<uint64_t>> lt_mshr_;  // release cycles
 };
 
 }  // namespace rtu

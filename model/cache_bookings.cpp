@@ -1,0 +1,87 @@
+#include "cache_bookings.h"
+
+#include <algorithm>
+
+namespace rtu {
+
+CacheBookings::CacheBookings(const CacheConfig& cfg, uint32_t hit_latency, bool own_port)
+    : cfg_(cfg), hit_latency_(hit_latency), own_port_(own_port), tags_(cfg) {}
+
+void CacheBookings::advance(uint64_t floor) {
+    if (floor <= floor_) return;
+    floor_ = floor;
+    // The port's ring is recycled every 1,024 cycles: bookings come at or after the floor anyway.
+    if (own_port_ && floor >= port_floor_ + 1024) {
+        port_floor_ = floor;
+        port_.advance(floor);
+    }
+}
+
+// The miss of `sector` still in flight at `cycle`, or null when its data is there. A read
+// timestamped before the miss left takes the miss over.
+CacheBookings::InFlightSector* CacheBookings::in_flight(uint64_t sector, uint64_t cycle) {
+    auto f = sectors_.find(sector);
+    if (f == sectors_.end() || f->second.at <= cycle) return nullptr;
+    InFlightSector& r = f->second;
+    if (cycle < r.sent) {
+        r.at = cycle + (r.at - r.sent);
+        r.sent = cycle;
+    }
+    return &r;
+}
+
+// The cycle at or after `c` a miss gets an MSHR (counting a reservation fail if it had to wait).
+uint64_t CacheBookings::mshr_slot(uint64_t c, ReqKind kind) {
+    while (!mshr_free_.empty() && mshr_free_.top() <= c) mshr_free_.pop();
+    if (mshr_free_.size() < cfg_.mshrs) return c;
+    tags_.count_reservation_fail(kind);
+    const uint64_t t = mshr_free_.top();
+    mshr_free_.pop();
+    return t;
+}
+
+CacheBookings::Lookup CacheBookings::lookup(uint64_t addr, uint64_t cycle, ReqKind kind) {
+    const uint64_t c = own_port_ ? port_.book(cycle) : cycle;  // one lookup per cycle
+    const uint64_t sector = tags_.sector_of(addr);
+    // The tags never hold a pending sector here (a miss is filled at once), so the tags answer
+    // a hit or a miss, never a reservation fail.
+    if (tags_.read(addr, 0, kind) != CacheOutcome::Hit) return {Lookup::Miss, c, mshr_slot(c, kind) + hit_latency_};
+    InFlightSector* r = in_flight(sector, c);
+    if (!r || r->at <= c + hit_latency_) return {Lookup::Hit, c, c + hit_latency_};
+    if (r->merged + 1 >= cfg_.mshr_merge) {
+        // The MSHR holds its limit of requests: a reservation fail. The read retries when the
+        // sector arrives (then a hit), and the requester's port waits for it.
+        tags_.count_reservation_fail(kind);
+        if (own_port_) port_.hold(c + 1, r->at);
+        Lookup l{Lookup::Retry, c, r->at + hit_latency_};
+        l.retry_at = r->at;
+        return l;
+    }
+    ++r->merged;
+    tags_.count_as_mshr_hit(kind);
+    if (kind == ReqKind::Demand && r->prefetch) {
+        tags_.count_late_prefetch();  // the demand found the prefetch still on its way
+        r->prefetch = false;
+    }
+    return {Lookup::InFlight, c, r->at, r->dram};
+}
+
+// Sectors whose data arrived by the floor are plain hits for every later read: they are
+// forgotten when the map has grown to twice its size after the last pruning (at least 4 entries
+// per cache line), so that pruning costs O(1) per read.
+void CacheBookings::fill(uint64_t addr, const Lookup& miss, uint64_t done, bool dram, ReqKind kind) {
+    const uint64_t sector = tags_.sector_of(addr);
+    mshr_free_.push(done);
+    tags_.fill(sector);
+    sectors_[sector] = {miss.cycle, done, dram, 0, kind == ReqKind::Prefetch};
+    if (sectors_.size() <= std::max(prune_above_, 4 * tags_.lines())) return;
+    for (auto it = sectors_.begin(); it != sectors_.end();) {
+        if (it->second.at <= floor_)
+            sectors_.erase(it++);
+        else
+            ++it;
+    }
+    prune_above_ = 2 * sectors_.size();
+}
+
+}  // namespace rtu
