@@ -62,6 +62,13 @@ public:
     // A preset name (mobile, desktop) or a JSON file path. Throws ConfigError.
     static Config load(const std::string& name_or_file);
     static std::vector<std::string> presets();
+    // Every key: its name, unit and description.
+    struct KeyInfo {
+        std::string name;
+        const char* unit;
+        const char* what;
+    };
+    static std::vector<KeyInfo> keys();
 
     // key=value, e.g. "l1.size_kb=64"; the value is parsed as the key's type. Throws ConfigError.
     void set(const std::string& assignment);

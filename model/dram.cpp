@@ -18,23 +18,6 @@ DramCoord DramAddressMap::map(uint64_t addr) const {
     return d;
 }
 
-void add(DramStats& a, const DramStats& b) {
-    a.reads += b.reads;
-    a.writes += b.writes;
-    a.row_hits += b.row_hits;
-    a.row_misses += b.row_misses;
-    a.row_conflicts += b.row_conflicts;
-    a.bytes += b.bytes;
-    a.data_cycles += b.data_cycles;
-    a.queue_wait += b.queue_wait;
-}
-
-DramStats DramBookings::total() const {
-    DramStats s;
-    for (const DramStats& c : stats_) add(s, c);
-    return s;
-}
-
 DramChannel::DramChannel(const DramConfig& c) : cfg_(c), banks_(c.banks) {}
 
 bool DramChannel::schedule(uint64_t now, DramRequest* out, uint64_t* done) {

@@ -9,6 +9,7 @@
 
 #include "calendar.h"
 #include "config.h"
+#include "stats.h"
 
 namespace rtu {
 
@@ -40,14 +41,22 @@ struct DramRequest {
     DramCoord at{};
 };
 
+// One channel's counters (statistics group "dram", per channel).
 struct DramStats {
     uint64_t reads = 0, writes = 0, row_hits = 0, row_misses = 0, row_conflicts = 0;
     uint64_t bytes = 0, data_cycles = 0;  // data-bus occupancy, for bandwidth utilisation
     uint64_t queue_wait = 0;              // sum of (issue - arrival), memory cycles
+    static constexpr Counter<DramStats> kCounters[] = {
+        {"reads", &DramStats::reads, "requests", "read requests (32 B sectors from L2 misses)"},
+        {"writes", &DramStats::writes, "requests", "write requests"},
+        {"bytes", &DramStats::bytes, "bytes", "bytes read and written"},
+        {"row_hits", &DramStats::row_hits, "requests", "to the bank's open row"},
+        {"row_misses", &DramStats::row_misses, "requests", "to a closed bank (an activation)"},
+        {"row_conflicts", &DramStats::row_conflicts, "requests", "to another row than the open one (a precharge and an activation)"},
+        {"data_cycles", &DramStats::data_cycles, "memory cycles", "cycles the data bus carried data"},
+        {"queue_wait", &DramStats::queue_wait, "memory cycles", "waits beyond the unloaded latency, summed over requests"},
+    };
 };
-
-// a += b, counter by counter.
-void add(DramStats& a, const DramStats& b);
 
 class DramChannel {
 public:
@@ -98,8 +107,7 @@ public:
     // A transfer of `bytes` arriving at memory cycle `now`; returns the memory cycle its data
     // transfer ends. No later call may be timestamped before `horizon` (memory cycles).
     uint64_t access(uint64_t addr, uint32_t bytes, uint64_t now, uint64_t horizon);
-    const DramStats& stats(uint32_t channel) const { return stats_[channel]; }
-    DramStats total() const;  // over the channels
+    const std::vector<DramStats>& stats() const { return stats_; }  // per channel
 
 private:
     struct Bank {

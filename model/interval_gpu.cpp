@@ -17,7 +17,8 @@ IntervalGpu::IntervalGpu(const HwConfig& cfg, const BvhImage& image, TraversalOr
       issue_(cfg.sms),
       drain_(cfg.sms),
       prefetch_queue_(cfg.sms),
-      dram_(cfg.dram, cfg.l2.line) {
+      dram_(cfg.dram, cfg.l2.line),
+      rt_(cfg.sms) {
     if (order == TraversalOrder::Treelet)
         throw std::invalid_argument("the interval fidelity models DFS and BFS traversal, not treelet traversal (use --fidelity at or lt)");
     prefetcher_ = make_prefetcher(cfg.prefetch, order, cfg.lat, nullptr);
@@ -111,8 +112,8 @@ void IntervalGpu::start_trace(uint32_t sm, const std::vector<WarpRay>& rays, uin
             events_.push({start, next_seq_++, id, i});
         }
     }
-    ++rt_.warps;
-    rt_.rays += rays.size();
+    ++rt_[sm].warps;
+    rt_[sm].rays += rays.size();
     if (tr.live == 0) finish(id, finished);  // every ray missed the root box
 }
 
@@ -120,7 +121,7 @@ void IntervalGpu::finish(uint32_t id, std::vector<Finished>& finished) {
     Trace& tr = traces_[id];
     Finished f{tr.sm, tr.end, {}};
     for (const Thread& t : tr.threads) {
-        rt_.thread_cycles[size_t(ThreadStatus::Idle)] += tr.end - (t.rt.trav.nodes_visited() ? t.ready : tr.start);
+        rt_[tr.sm].thread_cycles[ThreadStatus::Idle] += tr.end - (t.rt.trav.nodes_visited() ? t.ready : tr.start);
         f.rays.push_back(t.rt.retired());
     }
     finished.push_back(std::move(f));
@@ -134,9 +135,9 @@ void IntervalGpu::Sink::prefetch(const StackEntry& node, uint64_t) {
     PrefetchQueue& q = gpu.prefetch_queue_[sm].chunks;
     for (uint32_t c = 0; c < chunks_of(node.type); ++c) {
         const uint64_t chunk = chunk_address(node.addr, c);
-        ++gpu.rt_.prefetches_generated;
+        ++gpu.rt_[sm].prefetch_queue.generated;
         if (q.waiting(chunk)) {
-            ++gpu.rt_.prefetch_duplicates;  // still waiting in the queue: dropped, as in AT
+            ++gpu.rt_[sm].prefetch_queue.duplicates_dropped;  // still waiting in the queue: dropped, as in AT
             continue;
         }
         ChunkRequest r;
@@ -155,8 +156,8 @@ void IntervalGpu::send_prefetch(uint32_t sm, uint64_t cycle) {
         const uint64_t chunk = q.chunks.front().addr;
         q.chunks.pop();
         read(sm, chunk, cycle, ReqKind::Prefetch);
-        ++rt_.prefetches_sent;
-        ++rt_.prefetch_responses;
+        ++rt_[sm].prefetch_queue.sent;
+        ++rt_[sm].prefetch_queue.answered;
     }
     if (q.chunks.empty()) {
         q.scheduled = false;
@@ -192,12 +193,12 @@ void IntervalGpu::run_next(std::vector<Finished>& finished) {
         pq.scheduled = true;
         events_.push({t.ready + 1, next_seq_++, sm, kPrefetch});
     }
-    ++rt_.node_fetches;
-    ++rt_.streak_fetches[fetch_class];
+    ++rt_[sm].node_fetches;
+    ++rt_[sm].pop_streak[fetch_class].node_fetches;
     // Threads of one trace that fetch the same node scheduled in the same cycle share one fetch.
     const auto [g, fresh] = coalescer_.add({ev.trace, e.addr});
     if (!fresh) {
-        ++rt_.coalesced;
+        ++rt_[sm].coalesced_fetches;
     } else {
         Fetch f{t.ready, false, false};
         const uint32_t chunks = chunks_of(e.type);
@@ -210,15 +211,15 @@ void IntervalGpu::run_next(std::vector<Finished>& finished) {
             f.l1_miss |= s.l1_miss;
             f.dram |= s.dram;
         }
-        rt_.chunk_requests += chunks;
-        rt_.responses += chunks;
+        rt_[sm].chunk_requests += chunks;
+        rt_[sm].responses += chunks;
         coalesced_.push_back(f);
     }
     const Fetch f = coalesced_[g];
-    const StepInfo info = t.rt.complete_fetch(rt_, fetch_class, f.l1_miss, f.dram, image_, *prefetcher_);
+    const StepInfo info = t.rt.complete_fetch(rt_[sm], fetch_class, f.l1_miss, f.dram, image_, *prefetcher_);
     const uint32_t math = rt_math_latency(cfg_.lat, info);
-    rt_.thread_cycles[size_t(ThreadStatus::WaitMemory)] += f.done - t.ready;
-    rt_.thread_cycles[size_t(ThreadStatus::InMath)] += math;
+    rt_[sm].thread_cycles[ThreadStatus::WaitMemory] += f.done - t.ready;
+    rt_[sm].thread_cycles[ThreadStatus::InMath] += math;
     t.ready = f.done + math;
     if (!t.rt.trav.done()) {
         events_.push({t.ready, next_seq_++, ev.trace, ev.thread});

@@ -70,12 +70,12 @@ public:
     // last thread is done is appended to `finished`.
     void run_next(std::vector<Finished>& finished);
 
-    // RT-unit statistics summed over the SMs (thread_cycles: WaitMemory from a fetch's
-    // scheduling to its data, InMath, and Idle for finished threads waiting for their trace).
-    const RtUnitStats& rt_stats() const { return rt_; }
+    // RT-unit statistics per SM (thread_cycles: WaitMemory from a fetch's scheduling to its
+    // data, InMath, and Idle for finished threads waiting for their trace).
+    const std::vector<RtUnitStats>& rt_stats() const { return rt_; }
     const std::vector<CacheBookings>& l1() const { return l1_; }
     const std::vector<CacheBookings>& l2() const { return l2_; }
-    DramStats dram_stats() const { return dram_.total(); }
+    const std::vector<DramStats>& dram_stats() const { return dram_.stats(); }  // per channel
     uint64_t memory_cycle(uint64_t core_cycle) const;  // the memory-clock cycle at or after a core cycle
     uint64_t core_period_fs() const { return core_fs_; }
 
@@ -113,7 +113,7 @@ private:
     Sink sink_{*this};
     DramBookings dram_;
     uint64_t floor_ = 0, ports_floor_ = 0;
-    RtUnitStats rt_;
+    std::vector<RtUnitStats> rt_;  // per SM
 
     struct Thread {
         RtThread rt;

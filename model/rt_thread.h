@@ -44,8 +44,8 @@ struct RtThread {
     // chunk came from DRAM): counts it under the fetch's class and runs the node's tests.
     StepInfo complete_fetch(RtUnitStats& st, uint8_t fetch_class, bool l1_miss, bool dram, const BvhImage& image,
                             Prefetcher& prefetcher) {
-        st.streak_l1_misses[fetch_class] += l1_miss;
-        st.streak_dram_misses[fetch_class] += dram;
+        st.pop_streak[fetch_class].l1_misses += l1_miss;
+        st.pop_streak[fetch_class].dram_misses += dram;
         l1_miss_nodes += l1_miss;
         dram_nodes += dram;
         const StepInfo info = trav.step(image);

@@ -59,7 +59,7 @@ bool RtUnitCore::stack_contains(uint32_t w, uint32_t t, uint64_t addr) const {
 }
 
 void RtUnitCore::set_status(Thread& t, ThreadStatus s, uint64_t now) {
-    stats_.thread_cycles[size_t(t.status)] += now - t.since;
+    stats_.thread_cycles[t.status] += now - t.since;
     t.status = s;
     t.since = now;
 }
@@ -111,7 +111,7 @@ uint32_t rt_math_latency(const RtLatency& lat, const StepInfo& s) {
 
 uint32_t RtUnitCore::math_latency(const StepInfo& s) const { return rt_math_latency(cfg_.lat, s); }
 
-bool RtUnitCore::has_request(uint64_t now) { return maq_.has_request(now, stats_.prefetches_expired); }
+bool RtUnitCore::has_request(uint64_t now) { return maq_.has_request(now, stats_.prefetch_queue.expired_unsent); }
 
 const ChunkRequest& RtUnitCore::front_request(uint64_t now) {
     if (!has_request(now)) throw std::logic_error("front_request without a request");
@@ -122,16 +122,16 @@ void RtUnitCore::pop_request(uint64_t now) {
     const ChunkRequest r = maq_.pop(now);
     if (!r.prefetch) return;
     prefetch_ids_.insert(r.id);
-    ++stats_.prefetches_sent;
+    ++stats_.prefetch_queue.sent;
 }
 
 void RtUnitCore::Sink::prefetch(const StackEntry& e, uint64_t deadline) {
     PrefetchQueue& q = core.maq_.prefetches();
     for (uint32_t c = 0; c < chunks_of(e.type); ++c) {
         const uint64_t addr = chunk_address(e.addr, c);
-        ++core.stats_.prefetches_generated;
+        ++core.stats_.prefetch_queue.generated;
         if (q.waiting(addr)) {
-            ++core.stats_.prefetch_duplicates;
+            ++core.stats_.prefetch_queue.duplicates_dropped;
             continue;
         }
         ChunkRequest r;
@@ -148,7 +148,7 @@ void RtUnitCore::Sink::prefetch(const StackEntry& e, uint64_t deadline) {
 
 void RtUnitCore::on_response(uint64_t id, bool l1_miss, bool dram, uint64_t now) {
     if (prefetch_ids_.erase(id)) {  // a prefetch filled the caches; the RT unit drops the data
-        ++stats_.prefetch_responses;
+        ++stats_.prefetch_queue.answered;
         return;
     }
     if (fifo_.full()) throw std::logic_error("response into a full response FIFO");
@@ -238,7 +238,7 @@ void RtUnitCore::schedule_warp(uint64_t now) {
         sink_.thread = ti;
         t.fetch_class = t.rt.begin_fetch(*prefetcher_, sink_);
         const bool limit_study = prefetcher_->answered_as_l1_hit(t.fetch_class);
-        ++stats_.streak_fetches[t.fetch_class];
+        ++stats_.pop_streak[t.fetch_class].node_fetches;
         t.fetch_l1_miss = t.fetch_dram = false;
         t.chunks_left = chunks_of(e.type);
         set_status(t, ThreadStatus::WaitMemory, now);
@@ -250,7 +250,7 @@ void RtUnitCore::schedule_warp(uint64_t now) {
             group_type_[g] = e.type;
             group_members_[g].clear();
         } else {
-            ++stats_.coalesced;
+            ++stats_.coalesced_fetches;
         }
         group_members_[g].push_back(ti);
     }
@@ -277,13 +277,13 @@ void RtUnitCore::schedule_warp(uint64_t now) {
             ++stats_.chunk_requests;
             if (limit_study) {
                 limit_study_.push_back({now + std::max<uint64_t>(1, cfg_.l1_hit_latency) + c, r.id});
-                ++stats_.perfect_hits;
+                ++stats_.limit_study_hits;
             } else {
                 maq_.push(r);
             }
         }
     }
-    stats_.max_request_queue = std::max<uint64_t>(stats_.max_request_queue, maq_.depth());
+    stats_.max_memory_access_queue = std::max<uint64_t>(stats_.max_memory_access_queue, maq_.depth());
 }
 
 RtUnitCore::Pending& RtUnitCore::claim_slot(uint64_t id) {

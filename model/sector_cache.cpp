@@ -40,27 +40,8 @@ SectorCache::Way* SectorCache::find(uint64_t line) {
     return it == where_.end() ? nullptr : &ways_[it->second];
 }
 
-CacheStats SectorCache::total() const {
-    CacheStats t;
-    for (const CacheStats& s : stats_) {
-        t.accesses += s.accesses;
-        t.hits += s.hits;
-        t.mshr_hits += s.mshr_hits;
-        t.sector_misses += s.sector_misses;
-        t.line_misses += s.line_misses;
-        t.reservation_fails += s.reservation_fails;
-        t.fills += s.fills;
-        t.evictions += s.evictions;
-        t.prefetch_fills += s.prefetch_fills;
-        t.useful_prefetches += s.useful_prefetches;
-        t.late_prefetches += s.late_prefetches;
-        t.unused_evictions += s.unused_evictions;
-    }
-    return t;
-}
-
 CacheOutcome SectorCache::read(uint64_t addr, uint64_t token, ReqKind kind) {
-    CacheStats& st = stats_[size_t(kind)];
+    CacheAccessCounts& st = counts_.of(kind);
     ++st.accesses;
     const uint64_t line = addr / line_ * line_;
     const uint64_t sector = sector_of(addr);
@@ -71,7 +52,7 @@ CacheOutcome SectorCache::read(uint64_t addr, uint64_t token, ReqKind kind) {
         ++st.hits;
         if (kind == ReqKind::Demand && (w->prefetched & bit)) {
             w->prefetched &= ~bit;
-            ++st.useful_prefetches;
+            ++counts_.prefetched.useful;
         }
         return CacheOutcome::Hit;
     }
@@ -86,8 +67,8 @@ CacheOutcome SectorCache::read(uint64_t addr, uint64_t token, ReqKind kind) {
         ++st.mshr_hits;
         if (kind == ReqKind::Demand && m.prefetch && !m.demanded) {
             m.demanded = true;
-            ++st.useful_prefetches;
-            ++st.late_prefetches;
+            ++counts_.prefetched.useful;
+            ++counts_.prefetched.late;
         }
         return CacheOutcome::MshrHit;
     }
@@ -116,7 +97,7 @@ CacheOutcome SectorCache::read(uint64_t addr, uint64_t token, ReqKind kind) {
 
 // The LRU victim among the set's ways that have no pending sector, emptied and given to `line`;
 // null if every way has a pending sector. Counts the eviction into `st` when given.
-SectorCache::Way* SectorCache::allocate(uint64_t line, CacheStats* st) {
+SectorCache::Way* SectorCache::allocate(uint64_t line, CacheAccessCounts* st) {
     // Ways are taken into use in index order and never invalidated, so an unused way, if any, is
     // the set's next one; else the victim is the least recently used way, from the recency
     // list's tail, that has no pending sector.
@@ -139,7 +120,7 @@ SectorCache::Way* SectorCache::allocate(uint64_t line, CacheStats* st) {
         where_.erase(victim->line);
         if (st) {
             if (victim->valid) ++st->evictions;
-            stats_[size_t(ReqKind::Prefetch)].unused_evictions += uint64_t(__builtin_popcount(victim->prefetched));
+            counts_.prefetched.unused_evictions += uint64_t(__builtin_popcount(victim->prefetched));
         }
     }
     victim->line = line;
@@ -179,8 +160,8 @@ SectorCache::Tokens SectorCache::fill(uint64_t sector_addr) {
     w->pending &= ~bit;
     w->valid |= bit;
     if (unused_prefetch) w->prefetched |= bit;
-    ++stats_[0].fills;
-    if (by_prefetch) ++stats_[size_t(ReqKind::Prefetch)].prefetch_fills;
+    ++counts_.fills;
+    if (by_prefetch) ++counts_.prefetched.fills;
     return tokens;
 }
 

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "config.h"
+#include "stats.h"
 
 namespace rtu {
 
@@ -28,14 +29,48 @@ enum class CacheOutcome : uint8_t {
     ReservationFail,  // no MSHR, merge limit reached, or every way of the set has pending sectors
 };
 
-struct CacheStats {
-    uint64_t accesses = 0, hits = 0, mshr_hits = 0, sector_misses = 0, line_misses = 0, reservation_fails = 0;
-    uint64_t fills = 0, evictions = 0;
-    // Prefetch usefulness (counted under the demand kind that used them / the prefetch kind):
-    uint64_t prefetch_fills = 0;     // sectors brought in by a prefetch (prefetch kind)
-    uint64_t useful_prefetches = 0;  // prefetched sectors a demand read then used (demand kind)
-    uint64_t late_prefetches = 0;    // of those, demand arrived while the prefetch was in flight
-    uint64_t unused_evictions = 0;   // prefetched sectors evicted unused (prefetch kind)
+// Lookups of one requester kind (demand or prefetch).
+struct CacheAccessCounts {
+    uint64_t accesses = 0, hits = 0, mshr_hits = 0, sector_misses = 0, line_misses = 0, reservation_fails = 0, evictions = 0;
+    static constexpr Counter<CacheAccessCounts> kCounters[] = {
+        {"accesses", &CacheAccessCounts::accesses, "lookups", "lookups (a request retried after a reservation fail counts each time)"},
+        {"hits", &CacheAccessCounts::hits, "lookups", "found the sector valid"},
+        {"mshr_hits", &CacheAccessCounts::mshr_hits, "lookups", "found the sector on its way and merged into its MSHR"},
+        {"sector_misses", &CacheAccessCounts::sector_misses, "lookups", "line present, sector absent: fetched from below"},
+        {"line_misses", &CacheAccessCounts::line_misses, "lookups", "line absent: a line allocated (LRU victim evicted) and the sector fetched"},
+        {"reservation_fails", &CacheAccessCounts::reservation_fails, "lookups", "no MSHR, merge limit reached, or every way of the set pending: retried later"},
+        {"evictions", &CacheAccessCounts::evictions, "lines", "lines with valid sectors evicted by this kind's line misses"},
+    };
+};
+
+// Sectors brought in by prefetches, and whether demand reads used them.
+struct PrefetchedSectorCounts {
+    uint64_t fills = 0, useful = 0, late = 0, unused_evictions = 0;
+    static constexpr Counter<PrefetchedSectorCounts> kCounters[] = {
+        {"fills", &PrefetchedSectorCounts::fills, "sectors", "sectors brought in by a prefetch"},
+        {"useful", &PrefetchedSectorCounts::useful, "sectors", "of them, read by a demand request (at most once each)"},
+        {"late", &PrefetchedSectorCounts::late, "sectors", "of the useful ones, the demand read came while the prefetch was on its way"},
+        {"unused_evictions", &PrefetchedSectorCounts::unused_evictions, "sectors", "prefetched sectors evicted before any demand read"},
+    };
+};
+
+// One cache (an SM's L1 or an L2 slice).
+struct CacheCounts {
+    CacheAccessCounts demand, prefetch;
+    uint64_t fills = 0;
+    PrefetchedSectorCounts prefetched;
+    CacheAccessCounts& of(ReqKind k) { return k == ReqKind::Demand ? demand : prefetch; }
+    const CacheAccessCounts& of(ReqKind k) const { return k == ReqKind::Demand ? demand : prefetch; }
+    static constexpr Counter<CacheCounts> kCounters[] = {
+        {"fills", &CacheCounts::fills, "sectors", "sectors filled from below (demand and prefetch)"},
+    };
+    static constexpr bool kParts = true;
+    template <class F>
+    static void parts(F&& f) {
+        f("demand", &CacheCounts::demand, "demand lookups (node reads)");
+        f("prefetch", &CacheCounts::prefetch, "prefetch lookups (the paper's response breakdown: hits, mshr_hits, sector and line misses with an MSHR free, reservation fails)");
+        f("prefetched", &CacheCounts::prefetched, "prefetched sectors and their use");
+    }
 };
 
 class SectorCache {
@@ -62,17 +97,17 @@ public:
     // timestamp counts as an MSHR hit; a read that had to wait for a free MSHR counts one
     // reservation fail (as the retried access would in AT).
     void count_as_mshr_hit(ReqKind k) {
-        --stats_[size_t(k)].hits;
-        ++stats_[size_t(k)].mshr_hits;
+        --counts_.of(k).hits;
+        ++counts_.of(k).mshr_hits;
     }
     // LT and interval (CacheBookings): a demand read found a prefetched sector still on its way.
-    void count_late_prefetch() { ++stats_[size_t(ReqKind::Demand)].late_prefetches; }
+    void count_late_prefetch() { ++counts_.prefetched.late; }
     void count_reservation_fail(ReqKind k) {
-        ++stats_[size_t(k)].accesses;
-        ++stats_[size_t(k)].reservation_fails;
+        ++counts_.of(k).accesses;
+        ++counts_.of(k).reservation_fails;
     }
-    const CacheStats& stats(ReqKind k) const { return stats_[size_t(k)]; }
-    CacheStats total() const;
+    const CacheCounts& counts() const { return counts_; }
+    const CacheAccessCounts& stats(ReqKind k) const { return counts_.of(k); }
     uint64_t lines() const { return ways_.size(); }
 
 private:
@@ -95,14 +130,14 @@ private:
         bool demanded = false;   // a demand read merged into it
     };
     Way* find(uint64_t line);
-    Way* allocate(uint64_t line, CacheStats* st);
+    Way* allocate(uint64_t line, CacheAccessCounts* st);
 
     uint32_t line_, sector_, assoc_, sets_, mshrs_, merge_;
     std::vector<Way> ways_;  // set-major: set s owns ways [s*assoc, (s+1)*assoc)
     std::vector<Set> set_;
     absl::flat_hash_map<uint64_t, uint32_t> where_;  // line address -> way index
     absl::flat_hash_map<uint64_t, Mshr> mshr_;       // sector address -> waiting tokens
-    std::array<CacheStats, kReqKinds> stats_{};
+    CacheCounts counts_;
 };
 
 }  // namespace rtu

@@ -83,7 +83,7 @@ struct GpuPlatform::Impl {
     std::vector<RtTrace> rt_trace;
     std::vector<int> l1_mshr, l2_mshr;
     std::vector<double> l1_missrate, l2_missrate;
-    std::vector<CacheStats> l1_prev, l2_prev;
+    std::vector<CacheAccessCounts> l1_prev, l2_prev;
     int dram_queue = 0;
     double dram_bw = 0;
     uint64_t dram_prev_busy = 0;
@@ -176,10 +176,10 @@ GpuPlatform::GpuPlatform(const HwConfig& cfg, const BvhImage& image, Workload& w
             };
         }
         auto trace_caches = [&](const std::vector<std::unique_ptr<Cache>>& caches, std::vector<int>& mshr,
-                                std::vector<double>& rate, std::vector<CacheStats>& prev, const std::string& prefix) {
+                                std::vector<double>& rate, std::vector<CacheAccessCounts>& prev, const std::string& prefix) {
             mshr.assign(caches.size(), 0);
             rate.assign(caches.size(), 0.0);
-            prev.assign(caches.size(), CacheStats{});
+            prev.assign(caches.size(), CacheAccessCounts{});
             for (size_t i = 0; i < caches.size(); ++i) {
                 sc_trace(m.tf, mshr[i], prefix + std::to_string(i) + ".mshr_occupancy");
                 sc_trace(m.tf, rate[i], prefix + std::to_string(i) + ".miss_rate_window");
@@ -192,9 +192,10 @@ GpuPlatform::GpuPlatform(const HwConfig& cfg, const BvhImage& image, Workload& w
         Impl* impl = &m;
         sample = [impl](uint64_t) {
             auto upd = [](const std::vector<std::unique_ptr<Cache>>& caches, std::vector<int>& mshr, std::vector<double>& rate,
-                          std::vector<CacheStats>& prev) {
+                          std::vector<CacheAccessCounts>& prev) {
                 for (size_t i = 0; i < caches.size(); ++i) {
-                    const CacheStats now = caches[i]->tags().total();
+                    CacheAccessCounts now = caches[i]->tags().counts().demand;
+                    add(now, caches[i]->tags().counts().prefetch);
                     const uint64_t acc = now.accesses - prev[i].accesses;
                     const uint64_t miss = (now.sector_misses + now.line_misses + now.mshr_hits) -
                                           (prev[i].sector_misses + prev[i].line_misses + prev[i].mshr_hits);
@@ -206,7 +207,7 @@ GpuPlatform::GpuPlatform(const HwConfig& cfg, const BvhImage& image, Workload& w
             upd(impl->l1, impl->l1_mshr, impl->l1_missrate, impl->l1_prev);
             upd(impl->l2, impl->l2_mshr, impl->l2_missrate, impl->l2_prev);
             impl->dram_queue = int(impl->dram->queue_depth());
-            const uint64_t busy = impl->dram->stats().data_cycles;
+            const uint64_t busy = total(impl->dram->stats()).data_cycles;
             const double window_mem = double(impl->opt.trace_window) * impl->core.period_fs() / double(impl->mem.period_fs());
             impl->dram_bw = double(busy - impl->dram_prev_busy) / (window_mem * impl->cfg.dram.channels);
             impl->dram_prev_busy = busy;
@@ -248,43 +249,30 @@ TimingResult GpuPlatform::run() {
     r.rays = m.driver.results();
     r.summary = m.driver.summary();
 
-    // Invariants.
-    auto fail = [&](const std::string& s) { r.invariant_failures.push_back(s); };
-    if (!r.stuck) {
-        if (m.pool.outstanding() != 0) fail(std::to_string(m.pool.outstanding()) + " requests never got their response");
-        if (m.driver.rays_retired() != m.driver.rays_issued()) fail("not every ray retired");
-    }
-    CacheStats l1[kReqKinds], l2[kReqKinds];
-    for (int k = 0; k < kReqKinds; ++k) {
-        for (const auto& c : m.l1) add(l1[k], c->tags().stats(ReqKind(k)));
-        for (const auto& c : m.l2) add(l2[k], c->tags().stats(ReqKind(k)));
-        for (const CacheStats* s : {&l1[k], &l2[k]})
-            if (s->accesses != s->hits + s->mshr_hits + s->sector_misses + s->line_misses + s->reservation_fails)
-                fail("cache counters do not add up");
-    }
-    RtUnitStats rs;
+    r.counts.cycles_simulated = r.cycles_simulated;
+    r.counts.core_period_fs = double(m.core.period_fs());
+    r.counts.memory_cycles = double(r.cycles_simulated) * double(m.core.period_fs()) / double(m.mem.period_fs());
     for (const auto& u : m.rt) {
         u->core().account(r.cycles_simulated);
-        add(rs, u->core().stats());
+        r.counts.rt.push_back(u->core().stats());
     }
+    for (const auto& c : m.l1) r.counts.l1.push_back(c->tags().counts());
+    for (const auto& c : m.l2) r.counts.l2.push_back(c->tags().counts());
+    r.counts.dram = m.dram->stats();
+    r.sampled = m.driver.sampled();
+    r.estimate = est;
+    r.payloads_allocated = m.pool.allocated();
     for (const auto& c : m.checkers) {
         r.protocol_transactions += c->transactions();
         r.protocol_violations.insert(r.protocol_violations.end(), c->violations().begin(), c->violations().end());
         if (!r.stuck && c->open()) r.protocol_violations.push_back(std::string(c->name()) + ": " + std::to_string(c->open()) + " transactions left open");
     }
-    if (!r.stuck && rs.prefetches_sent != rs.prefetch_responses)
-        fail(std::to_string(rs.prefetches_sent) + " prefetches sent but " + std::to_string(rs.prefetch_responses) + " answered");
-    if (!r.stuck && rs.chunk_requests != rs.responses) fail("RT units sent " + std::to_string(rs.chunk_requests) + " requests but drained " + std::to_string(rs.responses) + " responses");
-
-    const DramStats ds = m.dram->stats();
-    const double mem_cycles = double(r.cycles_simulated) * double(m.core.period_fs()) / double(m.mem.period_fs());
-    nlohmann::ordered_json j;
-    j["cycles"] = r.cycles;
-    if (m.driver.sampled()) sampling_json(j, est, m.opt.sample_rate, r.cycles, r.cycles_simulated);
-    HierarchyCounts h{rs, {l1[0], l1[1]}, {l2[0], l2[1]}, ds, r.cycles_simulated, double(m.core.period_fs()), mem_cycles};
-    hierarchy_json(j, m.cfg, h, m.driver.summary(), est.scale());
-    j["payloads_allocated"] = m.pool.allocated();
-    r.stats = j;
+    // Invariants.
+    if (!r.stuck) {
+        if (m.pool.outstanding() != 0) r.invariant_failures.push_back(std::to_string(m.pool.outstanding()) + " requests never got their response");
+        if (m.driver.rays_retired() != m.driver.rays_issued()) r.invariant_failures.push_back("not every ray retired");
+        for (const std::string& f : counter_invariants(r.counts, r.summary)) r.invariant_failures.push_back(f);
+    }
     return r;
 }
 

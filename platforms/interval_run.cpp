@@ -66,17 +66,17 @@ TimingResult run_interval(const HwConfig& cfg, const BvhImage& image, Workload& 
     if (driver.sampled()) r.cycles = uint64_t(std::llround(est.cycles_estimate(double(end))));
     r.rays = driver.results();
     r.summary = driver.summary();
+    r.counts.rt = gpu.rt_stats();
+    for (const CacheBookings& c : gpu.l1()) r.counts.l1.push_back(c.tags().counts());
+    for (const CacheBookings& c : gpu.l2()) r.counts.l2.push_back(c.tags().counts());
+    r.counts.dram = gpu.dram_stats();
+    r.counts.cycles_simulated = end;
+    r.counts.core_period_fs = double(gpu.core_period_fs());
+    r.counts.memory_cycles = double(gpu.memory_cycle(end));
+    r.sampled = driver.sampled();
+    r.estimate = est;
     if (!driver.finished() || driver.rays_retired() != driver.rays_issued()) r.invariant_failures.push_back("not every ray retired");
-    HierarchyCounts h{gpu.rt_stats(), {}, {}, gpu.dram_stats(), end, double(gpu.core_period_fs()), double(gpu.memory_cycle(end))};
-    for (int k = 0; k < kReqKinds; ++k) {
-        for (const CacheBookings& c : gpu.l1()) add(h.l1[k], c.tags().stats(ReqKind(k)));
-        for (const CacheBookings& c : gpu.l2()) add(h.l2[k], c.tags().stats(ReqKind(k)));
-    }
-    nlohmann::ordered_json j;
-    j["cycles"] = r.cycles;
-    if (driver.sampled()) sampling_json(j, est, opt.sample_rate, r.cycles, end);
-    hierarchy_json(j, cfg, h, driver.summary(), est.scale());
-    r.stats = j;
+    for (const std::string& f : counter_invariants(r.counts, r.summary)) r.invariant_failures.push_back(f);
     return r;
 }
 

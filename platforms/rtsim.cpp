@@ -191,6 +191,7 @@ int sc_main(int argc, char** argv) {
         "exit status: 0 ok, 1 a check failed (--verify mismatches), 2 bad input, 3 internal error\noptions");
     desc.add_options()
         ("help,h", "this help")
+        ("stats-schema", "print every key --stats can write (key, unit, description; tab-separated) and exit")
         ("scene", po::value(&a.scene)->default_value(a.scene), "wknd, cornell, ship, bunny, ref, bath, sprng, a mesh file or a folder")
         ("assets", po::value(&a.assets), "asset folder of a LumiBench scene (e.g. ../shared/scenes/bunny)")
         ("workload", po::value(&a.workload)->default_value(a.workload), "primary, pt (path tracing), ao (ambient occlusion), sh (shadow)")
@@ -224,6 +225,11 @@ int sc_main(int argc, char** argv) {
         po::store(po::command_line_parser(argc, argv).options(desc).run(), vm);
         if (vm.count("help")) {
             std::cout << desc << "\n";
+            return 0;
+        }
+        if (vm.count("stats-schema")) {
+            std::cout << "key\tunit\tdescription\n";
+            for (const StatKey& k : stats_schema()) std::cout << k.key << "\t" << k.unit << "\t" << k.what << "\n";
             return 0;
         }
         po::notify(vm);

@@ -3,11 +3,14 @@
 #include <algorithm>
 #include <chrono>
 #include <memory>
+#include <set>
 #include <iostream>
 
 #include <sys/resource.h>
 
 #include "functional_run.h"
+#include "model/stats.h"
+#include "timing_stats.h"
 #include "gpu_platform.h"
 #include "interval_run.h"
 #include "model/treelet.h"
@@ -38,7 +41,143 @@ const char* traversal_name(TraversalOrder o) {
     return "?";
 }
 
+// What a run measured, for its statistics.
+struct RunRecord {
+    std::string scene, workload;
+    Fidelity fidelity = Fidelity::Functional;
+    TraversalOrder order = TraversalOrder::DFS;
+    bool has_params = false;
+    WorkloadParams params;
+    uint64_t rays = 0, invalid = 0, hits = 0, nodes_visited = 0;
+    uint32_t max_nodes = 0;
+    BvhStats bvh;
+    bool two_level = false;
+    double load_s = 0, build_s = 0, run_s = 0;
+    double scene_mb = 0, image_mb = 0, decoded_mb = 0, peak_mb = 0;
+    const TimingResult* timing = nullptr;  // timing runs
+    const HwConfig* hw = nullptr;
+    const Config* config = nullptr;
+    double sample_rate = 1.0;
+    const VerifyCounts* verify = nullptr;  // --verify
+    const std::vector<uint64_t>* mismatch_rays = nullptr;
+    bool has_speed = false;  // functional --verify: our traversal and Embree's on the same rays
+    uint64_t speed_rays = 0;
+    double ours_s = 0, embree_s = 0;
+};
+
+// Every statistic of a run: the one place that writes them, and (with a schema) lists them.
+void write_stats(StatsOut& out, const RunRecord& r) {
+    out.value("scene", r.scene, "", "the scene's name");
+    out.value("workload", r.workload, "", "primary, pt, ao, sh, or rays (a ray file)");
+    out.value("fidelity", fidelity_name(r.fidelity), "", "functional, at, lt or interval");
+    out.value("traversal", traversal_name(r.order), "", "dfs, bfs or treelet");
+    if (r.has_params) {
+        StatsOut p = out.child("params", "the scene workload's parameters");
+        p.value("width", r.params.width, "pixels", "frame width");
+        p.value("height", r.params.height, "pixels", "frame height");
+        p.value("spp", r.params.spp, "samples", "samples per pixel");
+        p.value("bounces", r.params.bounces, "rays", "path tracing: at most this many rays per path");
+        p.value("seed", r.params.seed, "", "random seed of the rays");
+    }
+    out.value("nodes_visited", r.nodes_visited, "node reads", "nodes the rays' traversals read (simulated rays of a sampled run)");
+    out.value("max_nodes_per_ray", r.max_nodes, "node reads", "the most one ray read");
+    out.value("rays", r.rays, "rays", "rays traced (simulated rays of a sampled run), invalid ones included");
+    out.value("invalid_rays", r.invalid, "rays", "rays that do not parse or are not valid (misses; never sent to the RT unit)");
+    out.value("hits", r.hits, "rays", "rays that hit");
+    out.value("nodes_per_ray", r.rays > r.invalid ? double(r.nodes_visited) / double(r.rays - r.invalid) : 0.0, "node reads / ray",
+              "nodes_visited per valid ray");
+    {
+        StatsOut b = out.child("bvh", "the BVH image (DESIGN.md section 6)");
+        b.value("two_level", r.two_level, "", "a TLAS over instanced BLASes (false: one single-level BVH)");
+        b.value("image_bytes", r.bvh.image_bytes, "bytes", "the BVH image in simulated memory");
+        b.value("internal_nodes", r.bvh.internal_nodes, "nodes", "64 B internal nodes");
+        b.value("triangle_leaves", r.bvh.triangle_leaves, "nodes", "64 B triangle leaves");
+        b.value("procedural_leaves", r.bvh.procedural_leaves, "nodes", "64 B procedural (sphere) leaves");
+        b.value("instance_leaves", r.bvh.instance_leaves, "nodes", "128 B instance leaves");
+        b.value("blas", r.bvh.blas_count, "BVHs", "bottom-level BVHs");
+        b.value("depth", r.bvh.depth, "nodes", "nodes on the longest root-to-leaf path, leaves included (the paper's Table 2)");
+        b.value("tlas_depth", r.bvh.tlas_depth, "nodes", "internal levels of the TLAS (0: single-level)");
+    }
+    {
+        StatsOut t = out.child("time_s", "wall-clock time of this run's phases");
+        t.value("load", r.load_s, "s", "loading the scene");
+        t.value("build", r.build_s, "s", "building the BVH image with Embree");
+        t.value("run", r.run_s, "s", "tracing or simulating (the sampling pre-pass included)");
+    }
+    {
+        StatsOut m = out.child("memory_mb", "host memory");
+        m.value("scene", r.scene_mb, "MiB", "the scene's vertices, triangles, spheres and materials");
+        m.value("bvh_image", r.image_mb, "MiB", "the BVH image");
+        m.value("decoded_nodes", r.decoded_mb, "MiB", "internal nodes decoded up front for traversal (within the peak)");
+        m.value("peak_resident", r.peak_mb, "MiB", "the process's peak resident memory");
+        m.value("target_1_5x_plus_200", 1.5 * (r.scene_mb + r.image_mb) + 200.0, "MiB", "1.5 x (scene + BVH image) + 200: the resident-memory target");
+    }
+    if (r.timing) {
+        const TimingResult& t = *r.timing;
+        out.value("cycles", t.cycles, "core cycles", "the frame's cycles (a sampled run's estimate; simulated cycles under timing.sampling)");
+        StatsOut tm = out.child("timing", "the timing model's statistics");
+        if (t.sampled) write_sampling(tm, t.estimate, r.sample_rate, t.cycles, t.cycles_simulated);
+        write_hierarchy(tm, *r.hw, t.counts, t.summary, t.estimate.scale());
+        if (r.fidelity != Fidelity::Interval)
+            tm.value("payloads_allocated", t.payloads_allocated, "payloads", "TLM payloads the pool made (AT, LT)");
+        StatsOut rate = out.child("simulation_rate", "the simulator's speed");
+        rate.value("rays_per_s", r.run_s > 0 ? double(r.rays) / r.run_s : 0.0, "rays / s", "rays over time_s.run");
+        rate.value("cycles_per_s", r.run_s > 0 ? double(t.cycles) / r.run_s : 0.0, "cycles / s", "cycles over time_s.run");
+        out.json()["config"] = r.config->to_json();
+        out.note("config", "", "the effective configuration (platforms/configs/*.json keys)");
+        std::set<std::string> groups;
+        for (const Config::KeyInfo& k : Config::keys()) {
+            for (size_t dot = k.name.find('.'); dot != std::string::npos; dot = k.name.find('.', dot + 1))
+                if (groups.insert(k.name.substr(0, dot)).second) out.note(("config." + k.name.substr(0, dot)).c_str(), "", "configuration keys");
+            out.note(("config." + k.name).c_str(), k.unit, k.what);
+        }
+    }
+    if (r.verify) {
+        const VerifyCounts& v = *r.verify;
+        StatsOut vo = out.child("verify", "every valid ray against Embree's robust mode (README: Verification)");
+        vo.value("rays", v.rays, "rays", "compared");
+        vo.value("skipped", v.skipped, "rays", "not handed to Embree (|component| > 1.8e18)");
+        vo.value("mismatches", v.mismatches(), "rays", "outside the documented classes (exit status 1)");
+        StatsOut classes = vo.child("classes", "rays per agreement class");
+        for (size_t c = 0; c < size_t(Agreement::Count); ++c) classes.value(agreement_name(Agreement(c)), v.by_class[c], "rays", "README: Verification");
+        vo.value("mismatch_rays", *r.mismatch_rays, "ray indices", "the first 100 mismatching rays");
+    }
+    if (r.has_speed) {
+        StatsOut sp = out.child("speed", "our traversal and Embree's on the same rays, timed after the run");
+        sp.value("rays", r.speed_rays, "rays", "traced by each");
+        sp.value("ours_s", r.ours_s, "s", "our traversal");
+        sp.value("embree_s", r.embree_s, "s", "Embree");
+        sp.value("ours_rays_per_s", r.ours_s > 0 ? double(r.speed_rays) / r.ours_s : 0.0, "rays / s", "rays over ours_s");
+        sp.value("embree_rays_per_s", r.embree_s > 0 ? double(r.speed_rays) / r.embree_s : 0.0, "rays / s", "rays over embree_s");
+        sp.value("embree_over_ours", r.ours_s > 0 && r.embree_s > 0 ? r.ours_s / r.embree_s : 0.0, "ratio", "our time / Embree's");
+    }
+}
+
 }  // namespace
+
+std::vector<StatKey> stats_schema() {
+    // A record with every section present: what a sampled timing run with --verify writes, and
+    // the functional run's speed.
+    std::vector<StatKey> schema;
+    RunRecord r;
+    r.has_params = true;
+    TimingResult t;
+    t.sampled = true;
+    const Config config = Config::load("mobile");
+    const HwConfig hw = config.resolve();
+    r.timing = &t;
+    r.hw = &hw;
+    r.config = &config;
+    const VerifyCounts v;
+    const std::vector<uint64_t> none;
+    r.verify = &v;
+    r.mismatch_rays = &none;
+    r.has_speed = true;
+    nlohmann::ordered_json j;
+    StatsOut out(j, &schema);
+    write_stats(out, r);
+    return schema;
+}
 
 RunResult run_simulation(const RunSpec& spec, std::ostream* log) {
     const bool timing = is_timing(spec.fidelity);
@@ -75,19 +214,21 @@ RunResult run_simulation(const RunSpec& spec, std::ostream* log) {
     std::unique_ptr<EmbreeReference> reference;
     if (spec.verify) reference = std::make_unique<EmbreeReference>(scene);
     RunResult out;
-    nlohmann::ordered_json& j = out.stats;
-    j["scene"] = scene.name;
-    j["workload"] = kind == WorkloadKind::RayFile ? "rays" : spec.workload;
-    j["fidelity"] = fidelity_name(spec.fidelity);
-    j["traversal"] = traversal_name(spec.order);
-    if (kind != WorkloadKind::RayFile)
-        j["params"] = {{"width", spec.params.width}, {"height", spec.params.height}, {"spp", spec.params.spp},
-                       {"bounces", spec.params.bounces}, {"seed", spec.params.seed}};
+    RunRecord rec;
+    rec.scene = scene.name;
+    rec.workload = kind == WorkloadKind::RayFile ? "rays" : spec.workload;
+    rec.fidelity = spec.fidelity;
+    rec.order = spec.order;
+    rec.has_params = kind != WorkloadKind::RayFile;
+    rec.params = spec.params;
+    rec.bvh = bs;
+    rec.two_level = scene.two_level();
+    rec.load_s = load_s;
+    rec.build_s = build_s;
 
     std::vector<TracedRay>& rays = out.rays;
     VerifyCounts verify;
     std::vector<uint64_t> mismatch_rays;
-    double speed_ours = 0, speed_embree = 0;
     TimingResult timing_result;
     t0 = Clock::now();
     if (!timing) {
@@ -104,10 +245,12 @@ RunResult run_simulation(const RunSpec& spec, std::ostream* log) {
         rays = traced_from(r);
         verify = r.verify;
         mismatch_rays = r.mismatch_rays;
-        speed_ours = r.trace_seconds;
-        speed_embree = r.embree_seconds;
-        j["nodes_visited"] = r.nodes_visited;
-        j["max_nodes_per_ray"] = r.max_nodes_per_ray;
+        rec.has_speed = spec.verify;
+        rec.speed_rays = rays.size();
+        rec.ours_s = r.trace_seconds;
+        rec.embree_s = r.embree_seconds;
+        rec.nodes_visited = r.nodes_visited;
+        rec.max_nodes = r.max_nodes_per_ray;
     } else {
         TimingOptions to;
         to.fidelity = spec.fidelity;
@@ -138,8 +281,12 @@ RunResult run_simulation(const RunSpec& spec, std::ostream* log) {
             timing_result = platform.run();
         }
         rays = std::move(timing_result.rays);
-        j["nodes_visited"] = timing_result.summary.nodes_visited;
-        j["max_nodes_per_ray"] = timing_result.summary.max_nodes;
+        rec.nodes_visited = timing_result.summary.nodes_visited;
+        rec.max_nodes = timing_result.summary.max_nodes;
+        rec.timing = &timing_result;
+        rec.hw = &spec.hw;
+        rec.config = &spec.config;
+        rec.sample_rate = spec.sample_rate;
         if (reference) {
             for (size_t i = 0; i < rays.size(); ++i) {
                 if (!rays[i].valid) continue;
@@ -154,64 +301,38 @@ RunResult run_simulation(const RunSpec& spec, std::ostream* log) {
             }
         }
     }
-    const double run_s = seconds_since(t0);
-    uint64_t invalid = 0, hits = 0, n_rays = rays.size();
+    rec.run_s = seconds_since(t0);
     if (timing) {
-        invalid = timing_result.summary.invalid;
-        hits = timing_result.summary.hits;
-        n_rays = timing_result.summary.rays;
+        rec.invalid = timing_result.summary.invalid;
+        rec.hits = timing_result.summary.hits;
+        rec.rays = timing_result.summary.rays;
     } else {
+        rec.rays = rays.size();
         for (const TracedRay& r : rays) {
-            invalid += !r.valid;
-            hits += r.hit.hit;
+            rec.invalid += !r.valid;
+            rec.hits += r.hit.hit;
         }
     }
-    const uint64_t valid_rays = n_rays - invalid;
-    j["rays"] = n_rays;
-    j["invalid_rays"] = invalid;
-    j["hits"] = hits;
-    j["nodes_per_ray"] = valid_rays ? double(j["nodes_visited"].get<uint64_t>()) / double(valid_rays) : 0.0;
-    j["bvh"] = {{"two_level", scene.two_level()}, {"image_bytes", bs.image_bytes}, {"internal_nodes", bs.internal_nodes},
-                {"triangle_leaves", bs.triangle_leaves}, {"procedural_leaves", bs.procedural_leaves},
-                {"instance_leaves", bs.instance_leaves}, {"blas", bs.blas_count}, {"depth", bs.depth}, {"tlas_depth", bs.tlas_depth}};
-    j["time_s"] = {{"load", load_s}, {"build", build_s}, {"run", run_s}};
-    {
-        // What the scene needs in memory against what the process holds at its peak.
-        uint64_t scene_bytes = 0;
-        for (const Mesh& m : scene.meshes)
-            scene_bytes += m.vertices.size() * sizeof(glm::vec3) + m.triangles.size() * sizeof(glm::uvec3) +
-                           m.spheres.size() * sizeof(Sphere) + m.material.size() * sizeof(uint32_t);
-        struct rusage ru {};
-        getrusage(RUSAGE_SELF, &ru);
-        const double mb = 1.0 / (1024.0 * 1024.0);
-        j["memory_mb"] = {{"scene", double(scene_bytes) * mb},
-                          {"bvh_image", double(bs.image_bytes) * mb},
-                          {"decoded_nodes", double(image.decoded_bytes()) * mb},  // host-side, within the peak
-                          {"peak_resident", double(ru.ru_maxrss) / 1024.0},
-                          {"target_1_5x_plus_200", 1.5 * double(scene_bytes + bs.image_bytes) * mb + 200.0}};
-    }
-    if (timing) {
-        j["cycles"] = timing_result.cycles;
-        j["timing"] = timing_result.stats;
-        j["simulation_rate"] = {{"rays_per_s", run_s > 0 ? double(n_rays) / run_s : 0.0},
-                                {"cycles_per_s", run_s > 0 ? double(timing_result.cycles) / run_s : 0.0}};
-        j["config"] = spec.config.to_json();
-    }
+    // What the scene needs in memory against what the process holds at its peak.
+    uint64_t scene_bytes = 0;
+    for (const Mesh& m : scene.meshes)
+        scene_bytes += m.vertices.size() * sizeof(glm::vec3) + m.triangles.size() * sizeof(glm::uvec3) +
+                       m.spheres.size() * sizeof(Sphere) + m.material.size() * sizeof(uint32_t);
+    struct rusage ru {};
+    getrusage(RUSAGE_SELF, &ru);
+    const double mb = 1.0 / (1024.0 * 1024.0);
+    rec.scene_mb = double(scene_bytes) * mb;
+    rec.image_mb = double(bs.image_bytes) * mb;
+    rec.decoded_mb = double(image.decoded_bytes()) * mb;
+    rec.peak_mb = double(ru.ru_maxrss) / 1024.0;
     if (spec.verify) {
-        nlohmann::ordered_json classes;
-        for (size_t c = 0; c < size_t(Agreement::Count); ++c) classes[agreement_name(Agreement(c))] = verify.by_class[c];
-        j["verify"] = {{"rays", verify.rays}, {"skipped", verify.skipped}, {"mismatches", verify.mismatches()},
-                       {"classes", classes}, {"mismatch_rays", mismatch_rays}};
-        if (!timing)
-            j["speed"] = {{"rays", rays.size()},
-                          {"ours_s", speed_ours},
-                          {"embree_s", speed_embree},
-                          {"ours_rays_per_s", speed_ours > 0 ? double(rays.size()) / speed_ours : 0.0},
-                          {"embree_rays_per_s", speed_embree > 0 ? double(rays.size()) / speed_embree : 0.0},
-                          {"embree_over_ours", speed_ours > 0 && speed_embree > 0 ? speed_ours / speed_embree : 0.0}};
+        rec.verify = &verify;
+        rec.mismatch_rays = &mismatch_rays;
         out.mismatches = verify.mismatches();
         if (!mismatch_rays.empty()) out.first_mismatch = mismatch_rays.front();
     }
+    StatsOut stats(out.stats);
+    write_stats(stats, rec);
     if (timing && timing_result.stuck) out.stuck = timing_result.stuck_report;
     out.invariant_failures = timing_result.invariant_failures;
     if (kind != WorkloadKind::RayFile) {

@@ -13,6 +13,7 @@
 
 #include "model/config.h"
 #include "model/fidelity.h"
+#include "model/stats.h"
 #include "model/traversal.h"
 #include "workloads/rays.h"
 #include "workloads/workload_driver.h"
@@ -56,5 +57,9 @@ struct RunResult {
 // `log` (may be null) receives the scene and BVH lines as the run reaches them. Throws
 // InputError for bad input and std::exception for internal errors.
 RunResult run_simulation(const RunSpec& spec, std::ostream* log);
+
+// Every key a run's statistics can have (RunResult::stats, rtsim --stats): dotted path, list
+// items as "[]", unit and description; from the code that writes them (model/stats.h).
+std::vector<StatKey> stats_schema();
 
 }  // namespace rtu

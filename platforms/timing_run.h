@@ -8,12 +8,11 @@
 #include <string>
 #include <vector>
 
-#include <nlohmann/json.hpp>
-
 #include "model/bvh_image.h"
 #include "model/config.h"
 #include "model/fidelity.h"
 #include "model/traversal.h"
+#include "timing_stats.h"
 #include "workloads/sampling.h"
 #include "workloads/workload_driver.h"
 
@@ -50,7 +49,10 @@ struct TimingResult {
     std::vector<std::string> invariant_failures;
     std::vector<std::string> protocol_violations;  // with check_protocol
     uint64_t protocol_transactions = 0;
-    nlohmann::ordered_json stats;  // hierarchy statistics (no wall time)
+    HierarchyCounts counts;         // per instance (platforms/timing_stats.h writes them)
+    bool sampled = false;
+    SampleEstimate estimate;        // sampled runs
+    uint64_t payloads_allocated = 0;  // AT and LT: transaction payloads the pool made
 };
 
 // The workload driver's sampling options for a timing run (docs/sampling.md): clusters of as

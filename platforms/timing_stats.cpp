@@ -3,146 +3,121 @@
 #include <algorithm>
 #include <iostream>
 
-namespace rtu {
+#include "model/prefetcher.h"
 
+namespace rtu {
 namespace {
 
-nlohmann::ordered_json cache_json(const CacheStats& s) {
-    const uint64_t misses = s.sector_misses + s.line_misses;
-    return {{"accesses", s.accesses},
-            {"hits", s.hits},
-            {"mshr_hits", s.mshr_hits},
-            {"sector_misses", s.sector_misses},
-            {"line_misses", s.line_misses},
-            {"reservation_fails", s.reservation_fails},
-            {"miss_rate", s.accesses ? double(misses + s.mshr_hits) / double(s.accesses - s.reservation_fails + (s.accesses == s.reservation_fails)) : 0.0},
-            {"evictions", s.evictions},
-            {"prefetch_fills", s.prefetch_fills},
-            {"useful_prefetches", s.useful_prefetches},
-            {"late_prefetches", s.late_prefetches},
-            {"unused_prefetch_evictions", s.unused_evictions}};
-}
+double ratio(double a, double b) { return b > 0 ? a / b : 0.0; }
 
-// Prefetch figures of one cache level (paper section 6): accuracy = prefetched sectors later
-// used by a demand read / sectors prefetched; efficiency = prefetches that missed both the
-// cache and its MSHRs with an MSHR free / all prefetches; the full response breakdown.
-nlohmann::ordered_json prefetch_json(const CacheStats& demand, const CacheStats& pf) {
-    const uint64_t missed = pf.sector_misses + pf.line_misses;
-    return {{"issued", pf.accesses},
-            {"response", {{"hit", pf.hits}, {"mshr_hit", pf.mshr_hits}, {"mshr_miss_free_entry", missed},
-                          {"reservation_fail", pf.reservation_fails}}},
-            {"accuracy", pf.prefetch_fills ? double(demand.useful_prefetches) / double(pf.prefetch_fills) : 0.0},
-            {"efficiency", pf.accesses ? double(missed) / double(pf.accesses) : 0.0},
-            {"useful", demand.useful_prefetches},
-            {"late", demand.late_prefetches},
-            {"unused_evictions", pf.unused_evictions}};
+// A cache's totals and derived figures, with the per-instance counters beside them.
+void write_cache(StatsOut out, const std::vector<CacheCounts>& per, const char* per_name, const char* per_what,
+                 uint64_t node_fetches) {
+    const CacheCounts t = total(per);
+    out.counters(t);
+    auto miss_rate = [](const CacheAccessCounts& s) {
+        const uint64_t misses = s.sector_misses + s.line_misses;
+        return s.accesses ? double(misses + s.mshr_hits) / double(s.accesses - s.reservation_fails + (s.accesses == s.reservation_fails)) : 0.0;
+    };
+    out.child("demand").value("miss_rate", miss_rate(t.demand), "ratio",
+                              "(sector and line misses + MSHR hits) / lookups that were not reservation fails");
+    out.child("prefetch").value("miss_rate", miss_rate(t.prefetch), "ratio",
+                                "(sector and line misses + MSHR hits) / lookups that were not reservation fails");
+    // RT-read misses per kilo node fetch: the paper's MPKI with node fetches for instructions.
+    out.value("rt_misses_per_kilo_node_fetch",
+              ratio(1000.0 * double(t.demand.sector_misses + t.demand.line_misses + t.demand.mshr_hits), double(node_fetches)),
+              "misses / 1000 node reads", "demand misses (sector, line, MSHR hits) per 1000 node reads (the paper's MPKI)");
+    out.instances(per_name, per, per_what);
 }
 
 }  // namespace
 
-void add(CacheStats& a, const CacheStats& b) {
-    a.accesses += b.accesses;
-    a.hits += b.hits;
-    a.mshr_hits += b.mshr_hits;
-    a.sector_misses += b.sector_misses;
-    a.line_misses += b.line_misses;
-    a.reservation_fails += b.reservation_fails;
-    a.fills += b.fills;
-    a.evictions += b.evictions;
-    a.prefetch_fills += b.prefetch_fills;
-    a.useful_prefetches += b.useful_prefetches;
-    a.late_prefetches += b.late_prefetches;
-    a.unused_evictions += b.unused_evictions;
+std::vector<std::string> counter_invariants(const HierarchyCounts& h, const WorkloadDriver::RaySummary& sum) {
+    std::vector<std::string> fail;
+    for (const std::vector<CacheCounts>* caches : {&h.l1, &h.l2})
+        for (const CacheCounts& c : *caches)
+            for (const CacheAccessCounts* s : {&c.demand, &c.prefetch})
+                if (s->accesses != s->hits + s->mshr_hits + s->sector_misses + s->line_misses + s->reservation_fails) {
+                    fail.push_back("cache counters do not add up");
+                    return fail;
+                }
+    const RtUnitStats rt = total(h.rt);
+    if (rt.prefetch_queue.sent != rt.prefetch_queue.answered)
+        fail.push_back(std::to_string(rt.prefetch_queue.sent) + " prefetches sent but " + std::to_string(rt.prefetch_queue.answered) + " answered");
+    if (rt.chunk_requests != rt.responses)
+        fail.push_back("RT units sent " + std::to_string(rt.chunk_requests) + " requests but drained " + std::to_string(rt.responses) + " responses");
+    if (rt.node_fetches != sum.nodes_visited)
+        fail.push_back("RT units read " + std::to_string(rt.node_fetches) + " nodes but the rays visited " + std::to_string(sum.nodes_visited));
+    return fail;
 }
 
-void add(RtUnitStats& a, const RtUnitStats& b) {
-    a.warps += b.warps;
-    a.rays += b.rays;
-    a.node_fetches += b.node_fetches;
-    a.chunk_requests += b.chunk_requests;
-    a.coalesced += b.coalesced;
-    a.responses += b.responses;
-    for (size_t i = 0; i < a.thread_cycles.size(); ++i) a.thread_cycles[i] += b.thread_cycles[i];
-    for (size_t i = 0; i < 5; ++i) {
-        a.streak_fetches[i] += b.streak_fetches[i];
-        a.streak_l1_misses[i] += b.streak_l1_misses[i];
-        a.streak_dram_misses[i] += b.streak_dram_misses[i];
-    }
-    a.max_response_fifo = std::max(a.max_response_fifo, b.max_response_fifo);
-    a.max_request_queue = std::max(a.max_request_queue, b.max_request_queue);
-    a.prefetches_generated += b.prefetches_generated;
-    a.prefetch_duplicates += b.prefetch_duplicates;
-    a.prefetches_sent += b.prefetches_sent;
-    a.prefetch_responses += b.prefetch_responses;
-    a.perfect_hits += b.perfect_hits;
-    a.prefetches_expired += b.prefetches_expired;
-}
-
-void hierarchy_json(nlohmann::ordered_json& j, const HwConfig& cfg, const HierarchyCounts& h,
-                    const WorkloadDriver::RaySummary& sum, double energy_scale) {
-    j["rt_unit"] = {{"warps", h.rt.warps}, {"rays", h.rt.rays}, {"node_fetches", h.rt.node_fetches},
-                    {"chunk_requests", h.rt.chunk_requests}, {"coalesced_fetches", h.rt.coalesced},
-                    {"max_response_fifo", h.rt.max_response_fifo}, {"max_request_queue", h.rt.max_request_queue}};
+void write_hierarchy(StatsOut& out, const HwConfig& cfg, const HierarchyCounts& h, const WorkloadDriver::RaySummary& sum,
+                     double energy_scale) {
+    const RtUnitStats rt = total(h.rt);
     {
+        StatsOut u = out.child("rt_unit", "the RT units (paper section 2.3), summed over the SMs");
+        u.counters(rt);
         // Of the simulated rays' node fetches (a sampled run's frame estimate is under sampling).
         const double nodes = double(std::max<uint64_t>(1, sum.nodes_visited));
-        j["rt_unit"]["node_fetch_l1_miss_share"] = double(sum.l1_miss_nodes) / nodes;
-        j["rt_unit"]["node_fetch_dram_share"] = double(sum.dram_nodes) / nodes;
+        u.value("node_fetch_l1_miss_share", double(sum.l1_miss_nodes) / nodes, "ratio", "share of node reads not served by L1");
+        u.value("node_fetch_dram_share", double(sum.dram_nodes) / nodes, "ratio", "share of node reads served by DRAM");
+        const double threads = double(rt.thread_cycles.total());
+        StatsOut s = u.child("thread_status", "shares of the thread slots' resident cycles (paper Figure 1)");
+        for (const Counter<ThreadCycles>& c : ThreadCycles::kCounters)
+            s.value(c.name, ratio(double(rt.thread_cycles.*c.member), threads), "ratio", c.what);
+        u.instances("per_sm", h.rt, "the same counters per SM");
     }
-    const double thread_total = double(h.rt.thread_cycles[0] + h.rt.thread_cycles[1] + h.rt.thread_cycles[2] + h.rt.thread_cycles[3]);
-    auto frac = [&](ThreadStatus s) { return thread_total > 0 ? double(h.rt.thread_cycles[size_t(s)]) / thread_total : 0.0; };
-    j["rt_unit"]["thread_status"] = {{"unit", "share of resident thread-cycles"},
-                                     {"waiting_to_be_scheduled", frac(ThreadStatus::WaitSchedule)},
-                                     {"waiting_on_memory", frac(ThreadStatus::WaitMemory)},
-                                     {"in_math", frac(ThreadStatus::InMath)},
-                                     {"done_waiting_for_warp", frac(ThreadStatus::Idle)}};
-    nlohmann::ordered_json streak = nlohmann::ordered_json::array();
-    const char* names[5] = {"not_a_pop", "pop_1", "pop_2", "pop_3", "pop_4_or_more"};
-    for (int i = 0; i < 5; ++i)
-        streak.push_back({{"class", names[i]}, {"node_fetches", h.rt.streak_fetches[i]}, {"l1_misses", h.rt.streak_l1_misses[i]},
-                          {"dram_misses", h.rt.streak_dram_misses[i]}});
-    j["pop_streak"] = streak;
-    j["l1"] = {{"demand", cache_json(h.l1[0])}, {"prefetch", cache_json(h.l1[1])}};
-    j["l2"] = {{"demand", cache_json(h.l2[0])}, {"prefetch", cache_json(h.l2[1])}};
-    // RT-read misses per kilo node fetch: the paper's MPKI with node fetches for instructions.
-    auto mpkf = [&](const CacheStats& d) {
-        return h.rt.node_fetches ? 1000.0 * double(d.sector_misses + d.line_misses + d.mshr_hits) / double(h.rt.node_fetches) : 0.0;
-    };
-    j["l1"]["rt_misses_per_kilo_node_fetch"] = mpkf(h.l1[0]);
-    j["l2"]["rt_misses_per_kilo_node_fetch"] = mpkf(h.l2[0]);
-    j["prefetch"] = {{"prefetcher", prefetcher_name(cfg.prefetch.kind)},
-                     {"generated", h.rt.prefetches_generated},
-                     {"duplicates_dropped", h.rt.prefetch_duplicates},
-                     {"sent", h.rt.prefetches_sent},
-                     {"expired_unsent", h.rt.prefetches_expired},
-                     {"perfect_hits", h.rt.perfect_hits},
-                     {"l1", prefetch_json(h.l1[0], h.l1[1])},
-                     {"l2", prefetch_json(h.l2[0], h.l2[1])}};
-    j["dram"] = {{"reads", h.dram.reads}, {"writes", h.dram.writes}, {"bytes", h.dram.bytes}, {"row_hits", h.dram.row_hits},
-                 {"row_misses", h.dram.row_misses}, {"row_conflicts", h.dram.row_conflicts},
-                 {"bandwidth_utilisation", h.memory_cycles > 0 ? double(h.dram.data_cycles) / (h.memory_cycles * cfg.dram.channels) : 0.0},
-                 {"avg_queue_wait_mem_cycles", h.dram.reads + h.dram.writes ? double(h.dram.queue_wait) / double(h.dram.reads + h.dram.writes) : 0.0}};
+    write_cache(out.child("l1", "the SMs' L1 data caches, summed"), h.l1, "per_sm", "the same counters per SM", rt.node_fetches);
+    write_cache(out.child("l2", "the L2 slices, summed"), h.l2, "per_slice", "the same counters per L2 slice", rt.node_fetches);
+    {
+        // The paper's prefetch figures (section 6): accuracy = prefetched sectors later used by a
+        // demand read / sectors prefetched; efficiency = prefetches that missed both the cache
+        // and its MSHRs with an MSHR free / all prefetches.
+        StatsOut p = out.child("prefetch", "the prefetcher's effect on the caches (paper section 6)");
+        p.value("prefetcher", prefetcher_name(cfg.prefetch.kind), "", "none, ttp, park, treelet, perfect-up or perfect-down");
+        for (const auto& [name, per] : {std::pair<const char*, const std::vector<CacheCounts>*>{"l1", &h.l1}, {"l2", &h.l2}}) {
+            const CacheCounts c = total(*per);
+            StatsOut lv = p.child(name, name[1] == '1' ? "at the L1s" : "at the L2 slices");
+            lv.value("accuracy", ratio(double(c.prefetched.useful), double(c.prefetched.fills)), "ratio",
+                     "prefetched sectors later read by a demand request / sectors brought in by prefetches");
+            lv.value("efficiency", ratio(double(c.prefetch.sector_misses + c.prefetch.line_misses), double(c.prefetch.accesses)), "ratio",
+                     "prefetch lookups that missed cache and MSHRs with an MSHR free / prefetch lookups");
+        }
+    }
+    const DramStats dram = total(h.dram);
+    {
+        StatsOut d = out.child("dram", "the DRAM channels, summed");
+        d.counters(dram);
+        d.value("bandwidth_utilisation", ratio(double(dram.data_cycles), h.memory_cycles * cfg.dram.channels), "ratio",
+                "data-bus cycles / (simulated memory cycles x channels)");
+        d.value("average_queue_wait", ratio(double(dram.queue_wait), double(dram.reads + dram.writes)), "memory cycles",
+                "queue_wait per request");
+        d.instances("per_channel", h.dram, "the same counters per channel");
+    }
     // Energy from per-event energies: every L1 and L2 access (demand and prefetch, retries
     // included), DRAM bursts and activations, and static power over the frame's time.
     {
         const EnergyTable& e = cfg.energy;
+        const CacheCounts l1 = total(h.l1), l2 = total(h.l2);
         // Of the simulated part; a sampled run's frame energy is total_j x the work scale.
         const double seconds = double(h.cycles_simulated) * h.core_period_fs * 1e-15;
-        const uint64_t l1_acc = h.l1[0].accesses + h.l1[1].accesses, l2_acc = h.l2[0].accesses + h.l2[1].accesses;
-        const uint64_t activates = h.dram.row_misses + h.dram.row_conflicts;
-        const double dyn_pj = double(l1_acc) * e.l1_access_pj + double(l2_acc) * e.l2_access_pj +
-                              double(h.dram.reads) * e.dram_read_pj + double(h.dram.writes) * e.dram_write_pj +
-                              double(activates) * e.dram_activate_pj;
+        const uint64_t l1_acc = l1.demand.accesses + l1.prefetch.accesses, l2_acc = l2.demand.accesses + l2.prefetch.accesses;
+        const uint64_t activates = dram.row_misses + dram.row_conflicts;
+        const double dyn_pj = double(l1_acc) * e.l1_access_pj + double(l2_acc) * e.l2_access_pj + double(dram.reads) * e.dram_read_pj +
+                              double(dram.writes) * e.dram_write_pj + double(activates) * e.dram_activate_pj;
         const double static_j = e.static_w * seconds;
         const double total_j = dyn_pj * 1e-12 + static_j;
-        j["energy"] = {{"l1_j", double(l1_acc) * e.l1_access_pj * 1e-12},
-                       {"l2_j", double(l2_acc) * e.l2_access_pj * 1e-12},
-                       {"dram_j", (double(h.dram.reads) * e.dram_read_pj + double(h.dram.writes) * e.dram_write_pj + double(activates) * e.dram_activate_pj) * 1e-12},
-                       {"static_j", static_j},
-                       {"total_j", total_j},
-                       {"seconds", seconds},
-                       {"average_power_w", seconds > 0 ? total_j / seconds : 0.0},
-                       {"frame_total_j_estimate", total_j * energy_scale}};
+        StatsOut en = out.child("energy", "from the per-event energies of docs/energy.md (the energy.* keys)");
+        en.value("l1_j", double(l1_acc) * e.l1_access_pj * 1e-12, "J", "L1 lookups");
+        en.value("l2_j", double(l2_acc) * e.l2_access_pj * 1e-12, "J", "L2 lookups, crossbar included");
+        en.value("dram_j",
+                 (double(dram.reads) * e.dram_read_pj + double(dram.writes) * e.dram_write_pj + double(activates) * e.dram_activate_pj) * 1e-12,
+                 "J", "DRAM bursts and activations");
+        en.value("static_j", static_j, "J", "static power over the simulated time");
+        en.value("total_j", total_j, "J", "of the simulated part");
+        en.value("seconds", seconds, "s", "simulated time");
+        en.value("average_power_w", seconds > 0 ? total_j / seconds : 0.0, "W", "total_j / seconds");
+        en.value("frame_total_j_estimate", total_j * energy_scale, "J", "total_j scaled to the frame's work (sampled runs; else total_j)");
     }
 }
 
@@ -165,31 +140,44 @@ void TimingProgress::finish() {
     printed_ = false;
 }
 
-void sampling_json(nlohmann::ordered_json& j, const WorkloadDriver::Estimate& est, double rate, uint64_t cycles,
-                   uint64_t cycles_simulated) {
-    // Cycles and their 95 % interval: WorkloadDriver::Estimate (docs/sampling.md).
+void write_sampling(StatsOut& out, const SampleEstimate& est, double rate, uint64_t cycles, uint64_t cycles_simulated) {
+    // Cycles and their 95 % interval: SampleEstimate (docs/sampling.md).
     const double c = double(cycles), h = c * est.relative_half_width(double(cycles_simulated));
-    j["sampling"] = {{"rate", rate},
-                     {"warps_total", est.warps_total},
-                     {"warps_simulated", est.warps_simulated},
-                     {"cycles_simulated", cycles_simulated},
-                     {"work_simulated_residence_cycles", est.work_simulated},
-                     {"estimator", est.schedule ? "schedule (functional pre-pass)" : "stratified"},
-                     {"work_estimate_residence_cycles", est.work_estimate},
-                     {"work_estimate_stratified_residence_cycles", est.work_estimate_stratified},
-                     {"critical_path_node_fetches_frame", est.critical_nodes_total},
-                     {"prepass_threads", est.prepass_threads},
-                     {"residence_fit", {{"a", est.fit_a}, {"b_per_node", est.fit_b}, {"traces", est.fit_traces}}},
-                     {"schedule_model_cycles", {{"frame", est.model_frame}, {"sample", est.model_sample}}},
-                     {"cycles_estimate", cycles},
-                     {"saturated_until_cycle", est.saturated_until},
-                     {"work_done_saturated", est.work_saturated},
-                     {"cycles_ci95", {c - h, c + h}},
-                     {"relative_se", est.relative_se},
-                     {"variance_pairs", est.variance_pairs},
-                     {"node_fetch_l1_miss_share", {{"estimate", est.l1_miss_nodes.estimate}, {"ci95", {est.l1_miss_nodes.lo, est.l1_miss_nodes.hi}}}},
-                     {"node_fetch_dram_share", {{"estimate", est.dram_nodes.estimate}, {"ci95", {est.dram_nodes.lo, est.dram_nodes.hi}}}},
-                     {"schedule_model_misfit", est.model_misfit(double(cycles_simulated))}};
+    StatsOut s = out.child("sampling", "a sampled run's estimate of the frame (docs/sampling.md)");
+    s.value("rate", rate, "ratio", "the share of the frame asked for (--sample)");
+    s.value("warps_total", est.warps_total, "shader warps", "of the frame");
+    s.value("warps_simulated", est.warps_simulated, "shader warps", "simulated");
+    s.value("cycles_simulated", cycles_simulated, "cycles", "of the simulated sample");
+    s.value("work_simulated_residence_cycles", est.work_simulated, "slot-cycles", "warp-buffer residence of the simulated traces");
+    s.value("estimator", est.schedule ? "schedule (functional pre-pass)" : "stratified", "", "which estimator made `cycles`");
+    s.value("work_estimate_residence_cycles", est.work_estimate, "slot-cycles", "the frame's residence, estimated");
+    s.value("work_estimate_stratified_residence_cycles", est.work_estimate_stratified, "slot-cycles", "the same by the stratified estimate alone");
+    s.value("critical_path_node_fetches_frame", est.critical_nodes_total, "node reads", "sum over the frame's traces of their longest ray (pre-pass)");
+    s.value("prepass_threads", est.prepass_threads, "threads", "the pre-pass's threads");
+    {
+        StatsOut f = s.child("residence_fit", "a trace's residence = a + b x its critical path, fitted on the simulated traces");
+        f.value("a", est.fit_a, "slot-cycles", "intercept");
+        f.value("b_per_node", est.fit_b, "slot-cycles / node read", "slope");
+        f.value("traces", est.fit_traces, "traces", "fitted on");
+    }
+    {
+        StatsOut m = s.child("schedule_model_cycles", "the schedule model (model/trace_schedule.h) on the fitted durations");
+        m.value("frame", est.model_frame, "cycles", "of the whole frame");
+        m.value("sample", est.model_sample, "cycles", "of the simulated sample");
+    }
+    s.value("saturated_until_cycle", est.saturated_until, "cycles", "while at least as many shader warps as the GPU holds were unfinished");
+    s.value("work_done_saturated", est.work_saturated, "slot-cycles", "residence done by then");
+    s.value("cycles_ci95", nlohmann::ordered_json{c - h, c + h}, "cycles", "95 % interval of the frame's cycles [low, high]");
+    s.value("relative_se", est.relative_se, "ratio", "standard error of the work estimate / the estimate");
+    s.value("variance_pairs", est.variance_pairs, "pairs", "collapsed stratum pairs behind relative_se");
+    for (const auto& [name, share, what] :
+         {std::tuple<const char*, const SampleEstimate::Share*, const char*>{"node_fetch_l1_miss_share", &est.l1_miss_nodes, "the frame's share of node reads not served by L1"},
+          {"node_fetch_dram_share", &est.dram_nodes, "the frame's share of node reads served by DRAM"}}) {
+        StatsOut sh = s.child(name, what);
+        sh.value("estimate", share->estimate, "ratio", "stratified ratio estimate");
+        sh.value("ci95", nlohmann::ordered_json{share->lo, share->hi}, "ratio", "its 95 % interval [low, high]");
+    }
+    s.value("schedule_model_misfit", est.model_misfit(double(cycles_simulated)), "ratio", "|simulated cycles / schedule model of the sample - 1|");
 }
 
 }  // namespace rtu

@@ -1,39 +1,45 @@
 // The statistics every timing fidelity reports (RT unit, pop streaks, L1, L2, prefetch, DRAM,
-// energy), from counters summed over the hierarchy's modules.
+// energy, sampling), written from the counter groups (model/stats.h) with per-instance values
+// beside the totals, and derived figures with their units.
 #pragma once
 #include <chrono>
-
-#include <nlohmann/json.hpp>
+#include <cstdint>
+#include <string>
+#include <vector>
 
 #include "model/config.h"
 #include "model/dram.h"
-#include "model/rt_unit_core.h"
+#include "model/rt_unit_stats.h"
 #include "model/sector_cache.h"
+#include "model/stats.h"
+#include "workloads/sampling.h"
 #include "workloads/workload_driver.h"
 
 namespace rtu {
 
-void add(CacheStats& a, const CacheStats& b);
-void add(RtUnitStats& a, const RtUnitStats& b);
-
+// Counters of a timing run, per instance.
 struct HierarchyCounts {
-    RtUnitStats rt;
-    CacheStats l1[kReqKinds], l2[kReqKinds];  // summed over the SMs' L1s / the L2 slices
-    DramStats dram;
-    uint64_t cycles_simulated;
-    double core_period_fs;
-    double memory_cycles;  // of the simulated time
+    std::vector<RtUnitStats> rt;  // per SM
+    std::vector<CacheCounts> l1;  // per SM
+    std::vector<CacheCounts> l2;  // per L2 slice
+    std::vector<DramStats> dram;  // per DRAM channel
+    uint64_t cycles_simulated = 0;
+    double core_period_fs = 0;
+    double memory_cycles = 0;  // of the simulated time
 };
 
-// Adds rt_unit, pop_streak, l1, l2, prefetch, dram and energy to `j`. `energy_scale`: the frame's
-// work over the simulated work (1 unless sampled).
-void hierarchy_json(nlohmann::ordered_json& j, const HwConfig& cfg, const HierarchyCounts& h,
-                    const WorkloadDriver::RaySummary& sum, double energy_scale);
+// Checks that must hold of any finished run's counters (cache lookups add up, every request was
+// answered, node reads agree with the rays' traversal); returns what does not.
+std::vector<std::string> counter_invariants(const HierarchyCounts& h, const WorkloadDriver::RaySummary& sum);
 
-// Adds `sampling` to `j` for a sampled run: the estimate of the frame's `cycles` with its 95 %
-// interval and every ingredient of the estimate (docs/sampling.md).
-void sampling_json(nlohmann::ordered_json& j, const WorkloadDriver::Estimate& est, double rate, uint64_t cycles,
-                   uint64_t cycles_simulated);
+// rt_unit, l1, l2, prefetch, dram and energy. `energy_scale`: the frame's work over the
+// simulated work (1 unless sampled).
+void write_hierarchy(StatsOut& out, const HwConfig& cfg, const HierarchyCounts& h, const WorkloadDriver::RaySummary& sum,
+                     double energy_scale);
+
+// A sampled run's estimate of the frame's `cycles` with its 95 % interval and every ingredient of
+// the estimate (docs/sampling.md).
+void write_sampling(StatsOut& out, const SampleEstimate& est, double rate, uint64_t cycles, uint64_t cycles_simulated);
 
 // A timing run's progress on stderr, at most every 2 s: cycle, rays retired, share of pixel warps
 // done, rays/s and an estimate of the time left.

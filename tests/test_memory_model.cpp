@@ -46,7 +46,7 @@ TEST(SectorCache, HandWorkedSequence) {
     EXPECT_EQ(c.read(0x200, 13, ReqKind::Demand), CacheOutcome::LineMiss);    // evicts line 0 (LRU)
     EXPECT_EQ(c.read(0x080, 14, ReqKind::Demand), CacheOutcome::LineMiss);    // set 1 unaffected
 
-    const CacheStats d = c.stats(ReqKind::Demand), p = c.stats(ReqKind::Prefetch);
+    const CacheAccessCounts d = c.stats(ReqKind::Demand), p = c.stats(ReqKind::Prefetch);
     EXPECT_EQ(d.accesses, 13u);  // tokens 1-3 and 5-14
     EXPECT_EQ(p.accesses, 1u);
     EXPECT_EQ(p.sector_misses, 1u);
@@ -55,9 +55,9 @@ TEST(SectorCache, HandWorkedSequence) {
     EXPECT_EQ(d.reservation_fails, 3u);
     EXPECT_EQ(d.line_misses, 6u);  // tokens 1, 7, 10, 12, 13, 14
     // Conservation: every access has exactly one outcome.
-    for (const CacheStats& s : {d, p})
+    for (const CacheAccessCounts& s : {d, p})
         EXPECT_EQ(s.accesses, s.hits + s.mshr_hits + s.sector_misses + s.line_misses + s.reservation_fails);
-    EXPECT_EQ(c.total().evictions, 3u);
+    EXPECT_EQ(d.evictions + p.evictions, 3u);
 }
 
 TEST(SectorCache, FullyAssociativeLru) {
@@ -295,12 +295,12 @@ TEST(DramBookings, HandWorkedCommandSequence) {
     EXPECT_EQ(d.access(131072, 32, 0, 0), 96u);  // C
     EXPECT_EQ(d.access(128, 32, 0, 0), 48u);     // D
     EXPECT_EQ(d.access(8192, 32, 0, 0), 64u);    // E
-    const DramStats& s0 = d.stats(0);
+    const DramStats& s0 = d.stats()[0];
     EXPECT_EQ(s0.reads, 4u);
     EXPECT_EQ(s0.row_hits, 1u);
     EXPECT_EQ(s0.row_misses, 2u);
     EXPECT_EQ(s0.row_conflicts, 1u);
-    EXPECT_EQ(d.stats(1).reads, 1u);
+    EXPECT_EQ(d.stats()[1].reads, 1u);
 }
 
 // Calendar against a plain set of busy cycles: each booking gets the earliest run of `len` free
@@ -384,13 +384,14 @@ TEST(CacheBookings, HandWorkedSequence) {
     EXPECT_EQ(k.outcome, L::Hit);
     EXPECT_EQ(k.ready, 155u);
 
-    const CacheStats s = c.tags().stats(ReqKind::Demand), p = c.tags().stats(ReqKind::Prefetch);
+    const CacheAccessCounts s = c.tags().stats(ReqKind::Demand), p = c.tags().stats(ReqKind::Prefetch);
+    const PrefetchedSectorCounts pf = c.tags().counts().prefetched;
     EXPECT_EQ(s.mshr_hits, 4u);          // B, C, I, J
     EXPECT_EQ(s.reservation_fails, 2u);  // D, G
     EXPECT_EQ(s.hits, 2u);               // D's lookup, K
     EXPECT_EQ(s.sector_misses + s.line_misses, 4u);  // A, E, F, G
     EXPECT_EQ(s.accesses, s.hits + s.mshr_hits + s.sector_misses + s.line_misses + s.reservation_fails);
     EXPECT_EQ(p.reservation_fails, 1u);  // H
-    EXPECT_EQ(s.useful_prefetches, 1u);
-    EXPECT_EQ(s.late_prefetches, 1u);
+    EXPECT_EQ(pf.useful, 1u);
+    EXPECT_EQ(pf.late, 1u);
 }

@@ -98,13 +98,13 @@ TEST(PrefetchAccounting, UsefulLateAndUnusedOnAHandBuiltSequence) {
     c.fill(0x080);
     EXPECT_EQ(c.read(0x000, 7, ReqKind::Demand), CacheOutcome::Hit);         // line 0 most recent
     EXPECT_EQ(c.read(0x100, 8, ReqKind::Demand), CacheOutcome::LineMiss);    // evicts C's line unread
-    const CacheStats d = c.stats(ReqKind::Demand), p = c.stats(ReqKind::Prefetch);
-    EXPECT_EQ(p.prefetch_fills, 3u);
-    EXPECT_EQ(d.useful_prefetches, 2u);
-    EXPECT_EQ(d.late_prefetches, 1u);
+    const PrefetchedSectorCounts p = c.counts().prefetched;
+    EXPECT_EQ(p.fills, 3u);
+    EXPECT_EQ(p.useful, 2u);
+    EXPECT_EQ(p.late, 1u);
     EXPECT_EQ(p.unused_evictions, 1u);
     // Accuracy = useful / prefetched = 2 / 3.
-    EXPECT_DOUBLE_EQ(double(d.useful_prefetches) / double(p.prefetch_fills), 2.0 / 3.0);
+    EXPECT_DOUBLE_EQ(double(p.useful) / double(p.fills), 2.0 / 3.0);
 }
 
 namespace {
@@ -153,8 +153,8 @@ void prefetches_only_current_entries(TraversalOrder order) {
     EXPECT_TRUE(core.idle());
     EXPECT_GT(prefetches, 10u);
     EXPECT_EQ(generated, prefetches);  // every generated (non-duplicate) prefetch left the unit
-    EXPECT_EQ(core.stats().prefetches_generated, generated + core.stats().prefetch_duplicates);
-    EXPECT_EQ(core.stats().prefetches_sent, prefetches);
+    EXPECT_EQ(core.stats().prefetch_queue.generated, generated + core.stats().prefetch_queue.duplicates_dropped);
+    EXPECT_EQ(core.stats().prefetch_queue.sent, prefetches);
 }
 }  // namespace
 

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <set>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
@@ -225,7 +226,7 @@ TEST(RtsimTiming, AtIsDeterministicAndWritesItsConfiguration) {
     EXPECT_GT(ja["cycles"].get<uint64_t>(), 0u);
     for (const char* k : {"accesses", "hits", "sector_misses", "line_misses", "mshr_hits", "reservation_fails"})
         EXPECT_TRUE(ja["timing"]["l1"]["demand"].contains(k)) << k;
-    EXPECT_EQ(ja["timing"]["pop_streak"].size(), 5u);
+    EXPECT_EQ(ja["timing"]["rt_unit"]["pop_streak"].size(), 5u);
     const auto& ts = ja["timing"]["rt_unit"]["thread_status"];
     const double sum = ts["waiting_to_be_scheduled"].get<double>() + ts["waiting_on_memory"].get<double>() +
                        ts["in_math"].get<double>() + ts["done_waiting_for_warp"].get<double>();
@@ -295,7 +296,7 @@ TEST(RtsimPrefetch, HitsIdenticalUnderEveryPrefetcherAndNoneIsTheBaseline) {
     const auto jz = nlohmann::json::parse(read_text(dir.file("zero.json")));
     EXPECT_EQ(jn["cycles"], jr["cycles"]);
     EXPECT_EQ(jz["cycles"], jr["cycles"]);
-    EXPECT_EQ(jz["timing"]["prefetch"]["sent"], 0);
+    EXPECT_EQ(jz["timing"]["rt_unit"]["prefetch_queue"]["sent"], 0);
     EXPECT_EQ(jn["timing"]["l1"], jr["timing"]["l1"]);
 }
 
@@ -321,7 +322,7 @@ TEST(RtsimPrefetch, IntervalHitsIdenticalAndZeroDepthTtpIsTheBaseline) {
     const auto jn = nlohmann::json::parse(read_text(dir.file("none.json")));
     const auto jz = nlohmann::json::parse(read_text(dir.file("zero.json")));
     EXPECT_EQ(jz["cycles"], jn["cycles"]);
-    EXPECT_EQ(jz["timing"]["prefetch"]["generated"], 0);
+    EXPECT_EQ(jz["timing"]["rt_unit"]["prefetch_queue"]["generated"], 0);
     EXPECT_EQ(jz["timing"]["l1"]["demand"], jn["timing"]["l1"]["demand"]);
 }
 
@@ -341,7 +342,7 @@ TEST(RtsimPrefetch, TreeletTraversalAndPrefetcher) {
         EXPECT_EQ(cut(a[i]), cut(b[i])) << "line " << i;  // ray, hit, t (ties may pick another primitive)
     }
     const auto j = nlohmann::json::parse(read_text(dir.file("t.json")));
-    EXPECT_GT(j["timing"]["prefetch"]["sent"].get<uint64_t>(), 0u);
+    EXPECT_GT(j["timing"]["rt_unit"]["prefetch_queue"]["sent"].get<uint64_t>(), 0u);
     const Result bad = rtsim(dir, base + "--fidelity at --prefetcher treelet");
     EXPECT_EQ(bad.status, 2);
     EXPECT_NE(bad.err.find("--traversal treelet"), std::string::npos) << bad.err;
@@ -469,7 +470,7 @@ TEST(RtsimSampling, IntervalCoversTheFullRun) {
         // The full run's shares are the pop-streak table's misses over its node fetches.
         const auto& rt = f["timing"]["rt_unit"];
         double l1 = 0, dram = 0, fetches = 0;
-        for (const auto& c : f["timing"]["pop_streak"]) {
+        for (const auto& c : f["timing"]["rt_unit"]["pop_streak"]) {
             l1 += c["l1_misses"].get<double>();
             dram += c["dram_misses"].get<double>();
             fetches += c["node_fetches"].get<double>();
@@ -555,11 +556,11 @@ TEST(RtsimTiming, IntervalIsWithinTheStatedBoundOfAt) {
         EXPECT_EQ(iv["hits"], at["hits"]);
         // Every prefetch chunk generated is sent or dropped as a duplicate; every one sent reads L1
         // once, and once more after a reservation fail.
-        const auto& pf = iv_ttp["timing"]["prefetch"];
+        const auto& pf = iv_ttp["timing"]["rt_unit"]["prefetch_queue"];
+        const auto& l1 = iv_ttp["timing"]["l1"];
         EXPECT_EQ(pf["sent"].get<uint64_t>() + pf["duplicates_dropped"].get<uint64_t>(), pf["generated"].get<uint64_t>());
-        EXPECT_EQ(pf["l1"]["issued"].get<uint64_t>(),
-                  pf["sent"].get<uint64_t>() + pf["l1"]["response"]["reservation_fail"].get<uint64_t>());
-        EXPECT_GT(iv_ttp["timing"]["prefetch"]["l1"]["useful"].get<uint64_t>(), 0u) << scene;
+        EXPECT_EQ(l1["prefetch"]["accesses"].get<uint64_t>(), pf["sent"].get<uint64_t>() + l1["prefetch"]["reservation_fails"].get<uint64_t>());
+        EXPECT_GT(l1["prefetched"]["useful"].get<uint64_t>(), 0u) << scene;
         EXPECT_EQ(run("iv2.json", "--fidelity interval"), iv) << scene;
     }
 }
@@ -578,9 +579,52 @@ TEST(RtsimTiming, LtCountsLatePrefetchesAndDramFetchesAsAtDoes) {
     ASSERT_EQ(rtsim(dir, base + dir.file("lt.json") + " --fidelity lt").status, 0);
     const auto at = nlohmann::json::parse(read_text(dir.file("at.json")))["timing"];
     const auto lt = nlohmann::json::parse(read_text(dir.file("lt.json")))["timing"];
-    const double late_at = at["prefetch"]["l1"]["late"].get<double>(), late_lt = lt["prefetch"]["l1"]["late"].get<double>();
+    const double late_at = at["l1"]["prefetched"]["late"].get<double>(), late_lt = lt["l1"]["prefetched"]["late"].get<double>();
     ASSERT_GT(late_at, 0);
     EXPECT_LE(std::fabs(late_lt / late_at - 1.0), 0.25) << "AT " << late_at << " LT " << late_lt;
     const double dram_at = at["rt_unit"]["node_fetch_dram_share"].get<double>(), dram_lt = lt["rt_unit"]["node_fetch_dram_share"].get<double>();
     EXPECT_LE(std::fabs(dram_lt - dram_at), 0.02) << "AT " << dram_at << " LT " << dram_lt;
+}
+
+namespace {
+// The keys of a stats file as the schema writes them: dotted, list items of objects as "[]".
+void flatten_keys(const nlohmann::json& j, const std::string& path, std::set<std::string>& out) {
+    if (!path.empty()) out.insert(path);
+    if (j.is_object()) {
+        for (auto it = j.begin(); it != j.end(); ++it) flatten_keys(it.value(), path.empty() ? it.key() : path + "." + it.key(), out);
+    } else if (j.is_array()) {
+        for (const auto& item : j)
+            if (item.is_object())
+                for (auto it = item.begin(); it != item.end(); ++it) flatten_keys(it.value(), path + "[]." + it.key(), out);
+    }
+}
+}  // namespace
+
+// `rtsim --stats-schema` lists every key a stats file can hold, once, with a unit column and a
+// description, and nothing that no run writes: a functional run with --verify, a sampled AT run
+// with TTP and --verify, and an interval run together write every key of the schema.
+TEST(RtsimStats, SchemaListsEveryKeyWrittenAndNothingElse) {
+    TempDir dir;
+    const Result schema = rtsim(dir, "--stats-schema");
+    ASSERT_EQ(schema.status, 0);
+    std::set<std::string> declared;
+    const auto rows = lines(schema.out);
+    ASSERT_FALSE(rows.empty());
+    EXPECT_EQ(rows[0], "key\tunit\tdescription");
+    for (size_t i = 1; i < rows.size(); ++i) {
+        const auto tab = rows[i].find('\t'), tab2 = rows[i].find('\t', tab + 1);
+        ASSERT_NE(tab2, std::string::npos) << rows[i];
+        EXPECT_TRUE(declared.insert(rows[i].substr(0, tab)).second) << "declared twice: " << rows[i];
+        EXPECT_GT(rows[i].size(), tab2 + 1) << "no description: " << rows[i];
+    }
+    std::set<std::string> written;
+    const std::string scene = "--scene bunny --assets " + rtu::test::shared_dir() + "/scenes/bunny --width 32 --height 32 ";
+    for (const std::string args : {"--verify", "--fidelity at --prefetcher ttp --sample 0.5 --verify", "--fidelity interval"}) {
+        ASSERT_EQ(rtsim(dir, scene + args + " --stats " + dir.file("s.json")).status, 0) << args;
+        std::set<std::string> keys;
+        flatten_keys(nlohmann::json::parse(read_text(dir.file("s.json"))), "", keys);
+        for (const std::string& k : keys) EXPECT_TRUE(declared.count(k)) << args << ": '" << k << "' is not in the schema";
+        written.insert(keys.begin(), keys.end());
+    }
+    for (const std::string& k : declared) EXPECT_TRUE(written.count(k)) << "'" << k << "' is declared but no run wrote it";
 }

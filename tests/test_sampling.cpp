@@ -50,7 +50,7 @@ TEST(SectorCacheWarm, ValidatesWithoutStatisticsAndRespectsPending) {
     SectorCache c(CacheConfig{512, 2, 128, 32, 2, 2, 0});  // 2 sets x 2 ways, 2 MSHRs
     EXPECT_FALSE(c.warm(0x000));
     EXPECT_TRUE(c.warm(0x010));  // same sector
-    EXPECT_EQ(c.total().accesses, 0u);
+    EXPECT_EQ(c.stats(ReqKind::Demand).accesses + c.stats(ReqKind::Prefetch).accesses, 0u);
     EXPECT_EQ(c.read(0x000, 1, ReqKind::Demand), CacheOutcome::Hit);
     EXPECT_EQ(c.read(0x020, 2, ReqKind::Demand), CacheOutcome::SectorMiss);  // line 0 there, sector 1 not
     EXPECT_FALSE(c.warm(0x020));  // pending: left to its fetch
@@ -66,5 +66,5 @@ TEST(SectorCacheWarm, ValidatesWithoutStatisticsAndRespectsPending) {
     EXPECT_FALSE(c.warm(0x100));
     EXPECT_EQ(c.fill(0x000), (SectorCache::Tokens{5}));
     EXPECT_EQ(c.read(0x100, 7, ReqKind::Demand), CacheOutcome::LineMiss);
-    EXPECT_EQ(c.total().evictions, 3u);  // the reads' (0x100, 0x200, line 0), not the warming's
+    EXPECT_EQ(c.stats(ReqKind::Demand).evictions + c.stats(ReqKind::Prefetch).evictions, 3u);  // the reads' (0x100, 0x200, line 0), not the warming's
 }

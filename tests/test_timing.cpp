@@ -77,8 +77,7 @@ void timing_equals_functional(const std::string& name, Model model, WorkloadKind
         EXPECT_TRUE(r.protocol_violations.empty()) << r.protocol_violations.front();
     }
     // Cache accounting: L1 sees every chunk request (plus retries), L2 every L1 miss.
-    const auto& l1 = r.stats["l1"]["demand"];
-    EXPECT_GE(l1["accesses"].get<uint64_t>(), r.stats["rt_unit"]["chunk_requests"].get<uint64_t>());
+    EXPECT_GE(total(r.counts.l1).demand.accesses, total(r.counts.rt).chunk_requests);
 }
 
 }  // namespace
@@ -152,11 +151,12 @@ TEST(TimingAT, SingleRayLatencyIsTheHandWorkedSum) {
     ASSERT_EQ(r.rays.size(), 1u);
     EXPECT_TRUE(r.rays[0].hit.hit);
     EXPECT_EQ(r.cycles, expected);
-    EXPECT_EQ(r.stats["dram"]["reads"], 4);
-    EXPECT_EQ(r.stats["dram"]["row_misses"], 2);
-    EXPECT_EQ(r.stats["dram"]["row_hits"], 2);
-    EXPECT_EQ(r.stats["l1"]["demand"]["line_misses"], 2);
-    EXPECT_EQ(r.stats["l1"]["demand"]["sector_misses"], 2);
+    const DramStats dram = total(r.counts.dram);
+    EXPECT_EQ(dram.reads, 4u);
+    EXPECT_EQ(dram.row_misses, 2u);
+    EXPECT_EQ(dram.row_hits, 2u);
+    EXPECT_EQ(total(r.counts.l1).demand.line_misses, 2u);
+    EXPECT_EQ(total(r.counts.l1).demand.sector_misses, 2u);
     EXPECT_TRUE(r.protocol_violations.empty()) << r.protocol_violations.front();
 }
 
@@ -195,7 +195,7 @@ TEST(TimingInterval, SingleRayLatenciesAreTheHandWorkedSums) {
     EXPECT_TRUE(out[0].hit.hit);
     EXPECT_EQ(out[0].nodes_visited, 2u);
     EXPECT_EQ(out[0].dram_nodes, 2u);
-    const DramStats d = gpu.dram_stats();
+    const DramStats d = total(gpu.dram_stats());
     EXPECT_EQ(d.reads, 4u);
     EXPECT_EQ(d.row_misses, 2u);
     EXPECT_EQ(d.row_hits, 2u);
@@ -207,8 +207,8 @@ TEST(TimingInterval, SingleRayLatenciesAreTheHandWorkedSums) {
     EXPECT_EQ(time_trace(1, {r}, 2000), 2000 + (2 + hw.l2.latency + internal) + (2 + hw.l2.latency + leaf));  // 2356
     EXPECT_EQ(gpu.l2()[0].tags().stats(ReqKind::Demand).hits + gpu.l2()[1].tags().stats(ReqKind::Demand).hits, 4u);
     EXPECT_EQ(time_trace(0, {r, r}, 3000), 3038u);
-    EXPECT_EQ(gpu.rt_stats().coalesced, 2u);
-    EXPECT_EQ(gpu.dram_stats().reads, 4u);
+    EXPECT_EQ(total(gpu.rt_stats()).coalesced_fetches, 2u);
+    EXPECT_EQ(total(gpu.dram_stats()).reads, 4u);
     EXPECT_EQ(out.size(), 5u);
 }
 

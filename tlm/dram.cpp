@@ -23,9 +23,9 @@ Dram::Dram(sc_module_name name, const DramConfig& cfg, uint32_t line, const Cloc
     }
 }
 
-DramStats Dram::stats() const {
-    DramStats s = lt_.total();
-    for (const DramChannel& c : channels_) add(s, c.stats());
+std::vector<DramStats> Dram::stats() const {
+    std::vector<DramStats> s = lt_.stats();  // LT's bookings (AT's are zero)
+    for (size_t c = 0; c < channels_.size(); ++c) add(s[c], channels_[c].stats());
     return s;
 }
 

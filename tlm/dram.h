@@ -26,7 +26,7 @@ public:
     Dram(sc_core::sc_module_name name, const DramConfig& cfg, uint32_t line, const ClockDomain& clock, Fidelity fidelity);
     SC_HAS_PROCESS(Dram);
 
-    DramStats stats() const;
+    std::vector<DramStats> stats() const;  // per channel
     size_t queue_depth() const;
 
 private:

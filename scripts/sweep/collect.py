@@ -1,45 +1,69 @@
 #!/usr/bin/env python3
 """Collects the stats of every run of a sweep manifest into OUTDIR/results.csv (one row per run,
-in manifest order; a run without stats is listed with its exit status)."""
+in manifest order; a run without stats is listed with its exit status).
+
+Every column names a statistic by its key in `rtsim --stats-schema` (RTSIM: the rtsim binary,
+default build/rtsim). The collector stops with status 1 if a column's key is not in the schema (a
+renamed statistic would otherwise leave a column silently empty) or if a finished run lacks a
+statistic it must have.
+Usage: collect.py MANIFEST OUTDIR"""
 import csv
 import json
+import os
 import pathlib
+import subprocess
 import sys
 
+HERE = pathlib.Path(__file__).resolve().parent
+STREAK = ["not_a_pop", "pop_1", "pop_2", "pop_3", "pop_4_or_more"]
 
-def get(d, path, default=""):
+# (column, statistic); every timing run has these.
+TIMING = [
+    ("cycles", "cycles"),
+    ("node_fetches", "timing.rt_unit.node_fetches"),
+    ("l1_miss_rate", "timing.l1.demand.miss_rate"), ("l2_miss_rate", "timing.l2.demand.miss_rate"),
+    ("l1_mpkf", "timing.l1.rt_misses_per_kilo_node_fetch"), ("l2_mpkf", "timing.l2.rt_misses_per_kilo_node_fetch"),
+    ("dram_reads", "timing.dram.reads"), ("dram_bytes", "timing.dram.bytes"), ("dram_bw", "timing.dram.bandwidth_utilisation"),
+    ("pf_sent", "timing.rt_unit.prefetch_queue.sent"),
+    ("l1_pf_accuracy", "timing.prefetch.l1.accuracy"), ("l2_pf_accuracy", "timing.prefetch.l2.accuracy"),
+    ("l1_pf_useful", "timing.l1.prefetched.useful"), ("l2_pf_useful", "timing.l2.prefetched.useful"),
+    ("l1_pf_efficiency", "timing.prefetch.l1.efficiency"), ("l2_pf_efficiency", "timing.prefetch.l2.efficiency"),
+    ("energy_j", "timing.energy.total_j"), ("power_w", "timing.energy.average_power_w"),
+] + [(f"{lvl}_pf_{name}", f"timing.{lvl}.prefetch.{key}") for lvl in ("l1", "l2")
+     for name, key in (("hit", "hits"), ("mshr_hit", "mshr_hits"), ("resfail", "reservation_fails"),
+                       ("sector_miss", "sector_misses"), ("line_miss", "line_misses"))] \
+  + [(f"{lvl}_demand_{name}", f"timing.{lvl}.demand.{name}") for lvl in ("l1", "l2")
+     for name in ("sector_misses", "line_misses", "mshr_hits")] \
+  + [(f"streak_{c}_{k}", f"timing.rt_unit.pop_streak.{c}.{k}") for c in STREAK for k in ("node_fetches", "l1_misses", "dram_misses")]
+# Every run has these.
+ALWAYS = [("rays", "rays"), ("nodes_per_ray", "nodes_per_ray"), ("max_nodes_per_ray", "max_nodes_per_ray"), ("sim_s", "time_s.run")]
+# Sampled runs only.
+SAMPLED = [("cycles_simulated", "timing.sampling.cycles_simulated"), ("ci95", "timing.sampling.cycles_ci95")]
+# Columns computed from others.
+DERIVED = ["l1_demand_misses", "l2_demand_misses", "l1_pf_miss_free", "l2_pf_miss_free", "ci95_lo", "ci95_hi"]
+
+
+def get(d, path):
     for k in path.split("."):
         if not isinstance(d, dict) or k not in d:
-            return default
+            raise KeyError(path)
         d = d[k]
     return d
 
 
-COLUMNS = [
-    ("cycles", "cycles"), ("rays", "rays"), ("nodes_per_ray", "nodes_per_ray"), ("max_nodes_per_ray", "max_nodes_per_ray"),
-    ("node_fetches", "timing.rt_unit.node_fetches"),
-    ("l1_miss_rate", "timing.l1.demand.miss_rate"), ("l2_miss_rate", "timing.l2.demand.miss_rate"),
-    ("l1_mpkf", "timing.l1.rt_misses_per_kilo_node_fetch"), ("l2_mpkf", "timing.l2.rt_misses_per_kilo_node_fetch"),
-    ("l1_demand_misses", None), ("l2_demand_misses", None),
-    ("dram_reads", "timing.dram.reads"), ("dram_bw", "timing.dram.bandwidth_utilisation"),
-    ("pf_sent", "timing.prefetch.sent"),
-    ("l1_pf_accuracy", "timing.prefetch.l1.accuracy"), ("l2_pf_accuracy", "timing.prefetch.l2.accuracy"),
-    ("l1_pf_useful", "timing.prefetch.l1.useful"), ("l2_pf_useful", "timing.prefetch.l2.useful"),
-    ("l1_pf_efficiency", "timing.prefetch.l1.efficiency"), ("l2_pf_efficiency", "timing.prefetch.l2.efficiency"),
-    ("l1_pf_hit", "timing.prefetch.l1.response.hit"), ("l1_pf_mshr_hit", "timing.prefetch.l1.response.mshr_hit"),
-    ("l1_pf_miss_free", "timing.prefetch.l1.response.mshr_miss_free_entry"), ("l1_pf_resfail", "timing.prefetch.l1.response.reservation_fail"),
-    ("l2_pf_hit", "timing.prefetch.l2.response.hit"), ("l2_pf_mshr_hit", "timing.prefetch.l2.response.mshr_hit"),
-    ("l2_pf_miss_free", "timing.prefetch.l2.response.mshr_miss_free_entry"), ("l2_pf_resfail", "timing.prefetch.l2.response.reservation_fail"),
-    ("energy_j", "timing.energy.total_j"), ("power_w", "timing.energy.average_power_w"),
-    ("sim_s", "time_s.run"),
-    ("ci95_lo", None), ("ci95_hi", None),
-]
-STREAK = ["not_a_pop", "pop_1", "pop_2", "pop_3", "pop_4_or_more"]
+def schema_keys():
+    rtsim = os.environ.get("RTSIM", str(HERE.parent.parent / "build" / "rtsim"))
+    out = subprocess.run([rtsim, "--stats-schema"], capture_output=True, text=True, check=True).stdout
+    return {line.split("\t")[0] for line in out.splitlines()[1:]}
 
 
 def main():
     manifest, outdir = pathlib.Path(sys.argv[1]), pathlib.Path(sys.argv[2])
-    rows = []
+    keys = schema_keys()
+    unknown = [path for _, path in ALWAYS + TIMING + SAMPLED if path not in keys]
+    if unknown:
+        sys.exit(f"collect: statistics not in rtsim --stats-schema: {', '.join(unknown)}")
+    rows, missing = [], []
     with open(manifest) as f:
         lines = f.read().splitlines()[1:]
     for line in lines:
@@ -53,28 +77,29 @@ def main():
             row["exit"], row["wall_s"] = st["exit"], st["wall_s"]
         if stats.exists() and stats.stat().st_size:
             j = json.loads(stats.read_text())
-            for name, path in COLUMNS:
-                row[name] = get(j, path) if path else ""
-            ci = get(j, "timing.sampling.cycles_ci95", [])
-            if len(ci) == 2:
-                row["ci95_lo"], row["ci95_hi"] = ci
+            wanted = ALWAYS + (TIMING if "timing" in j else []) + (SAMPLED if "sampling" in j.get("timing", {}) else [])
+            for name, path in wanted:
+                try:
+                    row[name] = get(j, path)
+                except KeyError:
+                    missing.append(f"{rid}: {path}")
+            if "ci95" in row:
+                row["ci95_lo"], row["ci95_hi"] = row.pop("ci95")
             for lvl in ("l1", "l2"):
-                d = get(j, f"timing.{lvl}.demand", {})
-                if d:
-                    row[f"{lvl}_demand_misses"] = d["sector_misses"] + d["line_misses"] + d["mshr_hits"]
-            for i, entry in enumerate(get(j, "timing.pop_streak", []) or []):
-                row[f"streak_{STREAK[i]}_fetches"] = entry["node_fetches"]
-                row[f"streak_{STREAK[i]}_l1_misses"] = entry["l1_misses"]
-                row[f"streak_{STREAK[i]}_dram_misses"] = entry["dram_misses"]
+                if f"{lvl}_demand_sector_misses" in row:
+                    row[f"{lvl}_demand_misses"] = sum(row[f"{lvl}_demand_{k}"] for k in ("sector_misses", "line_misses", "mshr_hits"))
+                    row[f"{lvl}_pf_miss_free"] = row[f"{lvl}_pf_sector_miss"] + row[f"{lvl}_pf_line_miss"]
         rows.append(row)
-    fields = ["id", "experiment", "scene", "exit", "wall_s"] + [c for c, _ in COLUMNS]
-    fields += [f"streak_{s}_{k}" for s in STREAK for k in ("fetches", "l1_misses", "dram_misses")]
+    if missing:
+        sys.exit("collect: runs lack statistics they must have:\n  " + "\n  ".join(missing[:20]))
+    fields = ["id", "experiment", "scene", "exit", "wall_s"] + [c for c, _ in ALWAYS + TIMING] + \
+             ["cycles_simulated"] + DERIVED
     with open(outdir / "results.csv", "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=fields)
         w.writeheader()
         for r in rows:
             w.writerow(r)
-    done = sum(1 for r in rows if r.get("cycles") != "" and "cycles" in r)
+    done = sum(1 for r in rows if r.get("rays", "") != "")
     print(f"collect: {done} of {len(rows)} runs have stats -> {outdir / 'results.csv'}", file=sys.stderr)
 
 
