@@ -28,7 +28,7 @@ const Key kSchema[] = {
     {"rt.warp_size", "threads", Type::Int, 1, 32, true, "threads per warp"},
     {"rt.warp_buffer", "warps", Type::Int, 1, 64, false, "warps resident in an RT unit"},
     {"rt.l1_hit_latency", "core cycles", Type::Int, 0, 1000, false, "extra cycles the RT unit waits on an L1 hit"},
-    {"rt.response_fifo", "entries", Type::Int, 0, 1 << 20, false, "response FIFO entries (0: unbounded)"},
+    {"rt.response_fifo", "entries", Type::Int, 0, 1 << 20, false, "response FIFO entries (0: unbounded, as in Vulkan-sim); a full FIFO holds the L1's responses back"},
     {"rt.latency.header", "core cycles", Type::Int, 0, 1000, false, "BVH node header decode"},
     {"rt.latency.ray_box", "core cycles", Type::Int, 0, 1000, false, "ray-box tests of an internal node"},
     {"rt.latency.transform", "core cycles", Type::Int, 0, 1000, false, "instance transform"},
@@ -43,7 +43,6 @@ const Key kSchema[] = {
     {"l1.sector", "bytes", Type::Int, 16, 4096, true, "sector bytes"},
     {"l1.mshrs", "MSHRs", Type::Int, 1, 1 << 16, false, "miss status holding registers"},
     {"l1.mshr_merge", "requests", Type::Int, 1, 1024, false, "requests merged into one MSHR"},
-    {"l1.latency", "core cycles", Type::Int, 0, 10000, false, "load/store hit latency (the RT unit uses rt.l1_hit_latency)"},
     {"l2.slices", "slices", Type::Int, 1, 256, false, "L2 slices"},
     {"l2.slice_kb", "KiB", Type::Int, 1, 1 << 22, false, "capacity of one slice"},
     {"l2.assoc", "ways", Type::Int, 0, 1 << 16, false, "ways (0: fully associative)"},
@@ -55,9 +54,8 @@ const Key kSchema[] = {
     {"xbar.latency", "core cycles", Type::Int, 0, 10000, false, "crossbar latency each way (core cycles)"},
     {"dram.channels", "channels", Type::Int, 1, 256, false, "channels"},
     {"dram.banks", "banks", Type::Int, 1, 1024, true, "banks per channel"},
-    {"dram.bank_groups", "bank groups", Type::Int, 1, 64, true, "bank groups per channel"},
     {"dram.bus_bytes", "bytes", Type::Int, 1, 64, true, "data bus width per channel (bytes)"},
-    {"dram.burst", "beats", Type::Int, 1, 64, true, "burst length"},
+    {"dram.burst", "beats", Type::Int, 1, 64, true, "burst length: a transfer moves whole bursts of bus_bytes x burst bytes (two beats per memory cycle)"},
     {"dram.queue", "requests", Type::Int, 1, 1 << 16, false, "scheduler queue entries per channel"},
     {"dram.row_bytes", "bytes", Type::Int, 128, 1 << 20, true, "row (page) size"},
     {"dram.scheduler", "", Type::Text, 0, 0, false, "frfcfs or fcfs"},
@@ -87,6 +85,22 @@ const Key kSchema[] = {
     {"sim.quantum", "core cycles", Type::Int, 1, 1e9, false, "LT quantum (core cycles)"},
     {"sim.watchdog", "core cycles", Type::Int, 1000, 1e12, false, "cycles without progress before the run is stopped"},
 };
+
+// Keys that earlier versions had, with why they are gone (a configuration naming one is refused
+// with this reason rather than as unknown).
+const std::pair<const char*, const char*> kRemoved[] = {
+    {"l1.latency", "the L1's load/store hit latency (Table 2: 20 cycles) applies to the shader core's loads, "
+                   "which are not modelled; the RT unit's L1 hit latency is rt.l1_hit_latency (0: Vulkan-sim's RT unit reads L1 directly)"},
+    {"dram.bank_groups", "bank groups only matter through a longer column-to-column delay within a group (tCCDL); "
+                         "the authors' GDDR timing has tCCDL = tCCD = 4 (configs/tested-cfgs/MOBILE/gpgpusim.config l.158-159), "
+                         "so it is not modelled"},
+};
+
+std::string removed_reason(const std::string& name) {
+    for (const auto& [key, why] : kRemoved)
+        if (name == key) return why;
+    return "";
+}
 
 const Key* find_key(const std::string& name) {
     for (const Key& k : kSchema)
@@ -145,6 +159,8 @@ void Config::apply(const nlohmann::json& j, const std::string& prefix, const std
             continue;
         }
         const Key* k = find_key(name);
+        if (!k && !removed_reason(name).empty())
+            throw ConfigError(source + ": key '" + name + "' was removed: " + removed_reason(name));
         if (!k) throw ConfigError(source + ": unknown key '" + name + "' (known: " + near_keys(name) + ")");
         values_[name] = checked_value(*k, it.value(), source);
     }
@@ -188,6 +204,7 @@ void Config::set(const std::string& assignment) {
     if (eq == std::string::npos) throw ConfigError("--set '" + assignment + "': expected key=value");
     const std::string name = assignment.substr(0, eq), text = assignment.substr(eq + 1);
     const Key* k = find_key(name);
+    if (!k && !removed_reason(name).empty()) throw ConfigError("--set: key '" + name + "' was removed: " + removed_reason(name));
     if (!k) throw ConfigError("--set: unknown key '" + name + "' (known: " + near_keys(name) + ")");
     nlohmann::json v;
     if (k->type == Type::Text) {
@@ -220,7 +237,8 @@ HwConfig Config::resolve() const {
              u32("rt.latency.leaf_descriptor"), u32("rt.latency.ray_triangle"), u32("rt.latency.triangle_hit"),
              u32("rt.latency.procedural")};
     h.shade_latency = u32("workload.shade_latency");
-    auto cache = [&](const std::string& p, uint64_t kb) {
+    // `latency`: what a hit costs the cache's requester (the RT unit at an L1).
+    auto cache = [&](const std::string& p, uint64_t kb, uint32_t latency) {
         CacheConfig c;
         c.size_bytes = kb * 1024;
         c.assoc = u32((p + ".assoc").c_str());
@@ -228,7 +246,7 @@ HwConfig Config::resolve() const {
         c.sector = u32((p + ".sector").c_str());
         c.mshrs = u32((p + ".mshrs").c_str());
         c.mshr_merge = u32((p + ".mshr_merge").c_str());
-        c.latency = u32((p + ".latency").c_str());
+        c.latency = latency;
         if (c.sector > c.line) throw ConfigError("key '" + p + ".sector' (" + std::to_string(c.sector) + ") must not exceed '" + p + ".line' (" + std::to_string(c.line) + ")");
         const uint64_t lines = c.size_bytes / c.line;
         if (lines == 0 || c.size_bytes % c.line) throw ConfigError("key '" + p + ".size' must be a multiple of '" + p + ".line'");
@@ -240,16 +258,15 @@ HwConfig Config::resolve() const {
             throw ConfigError("key '" + p + ".mshr_merge' (" + std::to_string(c.mshr_merge) + ") exceeds '" + p + ".mshrs' (" + std::to_string(c.mshrs) + ")");
         return c;
     };
-    h.l1 = cache("l1", values_.at("l1.size_kb").get<uint64_t>());
+    h.l1 = cache("l1", values_.at("l1.size_kb").get<uint64_t>(), h.l1_hit_latency);
     h.l2_slices = u32("l2.slices");
-    h.l2 = cache("l2", values_.at("l2.slice_kb").get<uint64_t>());
+    h.l2 = cache("l2", values_.at("l2.slice_kb").get<uint64_t>(), u32("l2.latency"));
     if (h.l1.line != h.l2.line || h.l1.sector != h.l2.sector)
         throw ConfigError("keys 'l1.line'/'l1.sector' must equal 'l2.line'/'l2.sector'");
     h.xbar_latency = u32("xbar.latency");
     DramConfig& d = h.dram;
     d.channels = u32("dram.channels");
     d.banks = u32("dram.banks");
-    d.bank_groups = u32("dram.bank_groups");
     d.bus_bytes = u32("dram.bus_bytes");
     d.burst = u32("dram.burst");
     d.queue = u32("dram.queue");
@@ -266,7 +283,6 @@ HwConfig Config::resolve() const {
     d.tCCD = u32("dram.tCCD");
     d.tWL = u32("dram.tWL");
     d.tWR = u32("dram.tWR");
-    if (d.bank_groups > d.banks) throw ConfigError("key 'dram.bank_groups' exceeds 'dram.banks'");
     if (d.row_bytes < h.l2.line) throw ConfigError("key 'dram.row_bytes' must be at least one cache line");
     if (d.tRC < d.tRAS) throw ConfigError("key 'dram.tRC' (" + std::to_string(d.tRC) + ") must be at least 'dram.tRAS' (" + std::to_string(d.tRAS) + ")");
     try {

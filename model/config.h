@@ -22,11 +22,12 @@ struct ConfigError : std::runtime_error {
 struct CacheConfig {
     uint64_t size_bytes;
     uint32_t assoc;  // 0 = fully associative
-    uint32_t line, sector, mshrs, mshr_merge, latency;
+    uint32_t line, sector, mshrs, mshr_merge;
+    uint32_t latency;  // a hit's latency to the requester (L1: rt.l1_hit_latency)
 };
 
 struct DramConfig {
-    uint32_t channels, banks, bank_groups, bus_bytes, burst, queue, row_bytes;
+    uint32_t channels, banks, bus_bytes, burst, queue, row_bytes;
     bool frfcfs;
     uint32_t tCL, tRCD, tRP, tRAS, tRC, tRRD, tCCD, tWL, tWR;  // memory clock cycles
 };

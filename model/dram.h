@@ -29,8 +29,14 @@ private:
     uint32_t channels_, banks_, line_, lines_per_row_;
 };
 
-// Data-bus cycles (memory clock) of one transfer of `bytes`: bus_bytes x 2 per cycle (double data rate).
-inline uint64_t dram_transfer_cycles(const DramConfig& c, uint32_t bytes) { return (bytes + 2 * c.bus_bytes - 1) / (2 * c.bus_bytes); }
+// Data-bus cycles (memory clock) of one transfer of `bytes`: whole bursts of `burst` beats of
+// bus_bytes each, two beats per memory cycle (double data rate). 32 B on the mobile preset's
+// 2 B bus with bursts of 8: two bursts of 16 B, 16 beats, 8 cycles.
+inline uint64_t dram_transfer_cycles(const DramConfig& c, uint32_t bytes) {
+    const uint64_t burst_bytes = uint64_t(c.bus_bytes) * c.burst;
+    const uint64_t beats = (bytes + burst_bytes - 1) / burst_bytes * c.burst;
+    return (beats + 1) / 2;
+}
 
 struct DramRequest {
     uint64_t addr = 0;

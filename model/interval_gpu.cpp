@@ -21,6 +21,9 @@ IntervalGpu::IntervalGpu(const HwConfig& cfg, const BvhImage& image, TraversalOr
       rt_(cfg.sms) {
     if (order == TraversalOrder::Treelet)
         throw std::invalid_argument("the interval fidelity models DFS and BFS traversal, not treelet traversal (use --fidelity at or lt)");
+    if (cfg.response_fifo != 0)
+        throw std::invalid_argument("the interval fidelity models an unbounded response FIFO (rt.response_fifo 0), not " +
+                                    std::to_string(cfg.response_fifo) + " entries (use --fidelity at or lt)");
     prefetcher_ = make_prefetcher(cfg.prefetch, order, cfg.lat, nullptr);
     // A fetch event is where a pop happens: the prefetchers that act on other moments (a node's
     // test, a warp's scheduling, the limit studies) are AT's and LT's.

@@ -164,9 +164,10 @@ void RtUnitCore::cycle(uint64_t now) {
     schedule_warp(now);
 }
 
-// Limit studies: fetches answered as L1 hits reach the response FIFO on their cycle.
+// Limit studies: fetches answered as L1 hits reach the response FIFO on their cycle (or when it
+// has room).
 void RtUnitCore::answer_limit_study_fetches(uint64_t now) {
-    while (!limit_study_.empty() && limit_study_.front().first <= now) {
+    while (!limit_study_.empty() && limit_study_.front().first <= now && !fifo_.full()) {
         fifo_.push({limit_study_.front().second, false, false});
         limit_study_.pop_front();
     }

@@ -55,10 +55,12 @@ public:
     void pop_request(uint64_t now);
 
     // A response for chunk `id` reached the RT unit; `l1_miss`/`dram` describe where it was
-    // served. A demand response enters the response FIFO, which must not be full (fifo_full());
-    // a prefetch's response is dropped (its data went into the caches).
+    // served. A demand response enters the response FIFO, which must have room
+    // (takes_response); a prefetch's response is dropped (its data went into the caches).
     void on_response(uint64_t id, bool l1_miss, bool dram, uint64_t now);
-    bool fifo_full() const { return fifo_.full(); }
+    // Whether the response for chunk `id` can come in now: a prefetch's always, a demand's while
+    // the response FIFO (rt.response_fifo entries) has room; otherwise memory holds it back.
+    bool takes_response(uint64_t id) const { return prefetch_ids_.contains(id) || !fifo_.full(); }
 
     // Rays of warps that finished since the last call.
     std::vector<RetiredRay> take_retired();

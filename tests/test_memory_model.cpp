@@ -73,12 +73,27 @@ TEST(SectorCache, FullyAssociativeLru) {
     EXPECT_EQ(c.read(0, 9, ReqKind::Demand), CacheOutcome::Hit);
 }
 
+// A transfer moves whole bursts: 2 B x 8 beats = 16 B per burst, two beats per memory cycle.
+TEST(Dram, TransfersAreWholeBursts) {
+    DramConfig c{};
+    c.bus_bytes = 2;
+    c.burst = 8;
+    EXPECT_EQ(dram_transfer_cycles(c, 32), 8u);  // 2 bursts, 16 beats
+    EXPECT_EQ(dram_transfer_cycles(c, 16), 4u);  // 1 burst
+    EXPECT_EQ(dram_transfer_cycles(c, 8), 4u);   // still a whole burst
+    c.burst = 32;                                // 64 B bursts
+    EXPECT_EQ(dram_transfer_cycles(c, 32), 16u);
+    c.burst = 1;                                 // 2 B per beat: 16 beats
+    EXPECT_EQ(dram_transfer_cycles(c, 32), 8u);
+    c.bus_bytes = 4;
+    EXPECT_EQ(dram_transfer_cycles(c, 2), 1u);   // one beat, half a cycle, rounds up
+}
+
 namespace {
 DramConfig dram() {
     DramConfig d{};
     d.channels = 1;
     d.banks = 4;
-    d.bank_groups = 1;
     d.bus_bytes = 2;
     d.burst = 8;
     d.queue = 8;
@@ -288,7 +303,7 @@ TEST(DramBookings, HandWorkedCommandSequence) {
     ASSERT_EQ(c.tRCD, 20u);
     ASSERT_EQ(c.tCL, 20u);
     ASSERT_EQ(c.tRP, 20u);
-    ASSERT_EQ(dram_transfer_cycles(c, 32), 8u);
+    ASSERT_EQ(dram_transfer_cycles(c, 32), 8u);  // two bursts of 8 beats x 2 B, two beats per cycle
     DramBookings d(c, 128);
     EXPECT_EQ(d.access(0, 32, 0, 0), 48u);       // A
     EXPECT_EQ(d.access(32, 32, 0, 0), 56u);      // B

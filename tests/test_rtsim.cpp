@@ -5,11 +5,16 @@
 
 #include <cmath>
 #include <filesystem>
+#include <map>
 #include <set>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
 
+#include "model/config.h"
+#include "model/dram.h"
+#include "model/stats.h"
+#include "platforms/timing_stats.h"
 #include "test_util.h"
 
 using rtu::test::read_text;
@@ -627,4 +632,141 @@ TEST(RtsimStats, SchemaListsEveryKeyWrittenAndNothingElse) {
         written.insert(keys.begin(), keys.end());
     }
     for (const std::string& k : declared) EXPECT_TRUE(written.count(k)) << "'" << k << "' is declared but no run wrote it";
+}
+
+namespace {
+// Two bumpy 40x40 heightfields side by side, one OBJ file each: a folder scene of two meshes,
+// so a TLAS over two BLASes (instance leaves and transforms), 6,400 triangles whose BVH image
+// (about 0.5 MB) misses in L1 and partly in L2.
+std::string two_heightfields(const TempDir& dir) {
+    std::filesystem::create_directories(dir.file("fields"));
+    for (int m = 0; m < 2; ++m) {
+        std::ostringstream obj;
+        const int n = 40;
+        for (int y = 0; y <= n; ++y)
+            for (int x = 0; x <= n; ++x)
+                obj << "v " << x + m * (n + 5) << " " << y << " " << 2.0 * std::sin(0.7 * x) * std::cos(0.5 * y + m) << "\n";
+        for (int y = 0; y < n; ++y)
+            for (int x = 0; x < n; ++x) {
+                const int a = y * (n + 1) + x + 1, b = a + 1, c = a + n + 1, d = c + 1;
+                obj << "f " << a << " " << b << " " << d << "\nf " << a << " " << d << " " << c << "\n";
+            }
+        write_text(dir.file("fields/field" + std::to_string(m) + ".obj"), obj.str());
+    }
+    return dir.file("fields");
+}
+
+// The statistics of a run without what measures the machine or echoes the configuration.
+nlohmann::json model_stats(const std::string& path) {
+    auto j = nlohmann::json::parse(read_text(path));
+    for (const char* k : {"time_s", "simulation_rate", "memory_mb", "config"}) j.erase(k);
+    return j;
+}
+}  // namespace
+
+// Every configuration key of every preset is read. Changed alone (or with the keys it must agree
+// with), each changes the statistics of a small AT run, or (the watchdog) its exit status. The
+// DRAM's write timing and write energy change no run, because the modelled RT unit only reads:
+// they are shown read by the DRAM model and the energy figures directly.
+TEST(RtsimConfig, EveryKeyOfEveryPresetIsRead) {
+    using namespace rtu;
+    TempDir dir;
+    const std::string scene = two_heightfields(dir);
+    struct Case {
+        std::vector<std::string> sets;  // the change
+        std::string extra = "";         // arguments of both runs
+        bool exit_status = false;       // the change shows in the exit status
+    };
+    const std::string ttp = "--prefetcher ttp", treelet = "--traversal treelet --prefetcher treelet";
+    const std::vector<Case> cases = {
+        {{"gpu.sms=2"}}, {{"gpu.core_clock_mhz=700"}}, {{"gpu.memory_clock_mhz=1000"}}, {{"rt.warp_size=8"}},
+        {{"rt.warp_buffer=1"}, "--set gpu.sms=2"}, {{"rt.l1_hit_latency=30"}}, {{"rt.response_fifo=1"}},
+        {{"rt.latency.header=40"}}, {{"rt.latency.ray_box=40"}}, {{"rt.latency.transform=40"}},
+        {{"rt.latency.leaf_descriptor=40"}}, {{"rt.latency.ray_triangle=40"}}, {{"rt.latency.triangle_hit=40"}},
+        {{"rt.latency.procedural=40"}, "--scene wknd"}, {{"workload.shade_latency=5000"}},
+        {{"l1.size_kb=2"}}, {{"l1.assoc=4"}}, {{"l1.line=64", "l2.line=64"}}, {{"l1.sector=64", "l2.sector=64"}},
+        {{"l1.mshrs=2", "l1.mshr_merge=2"}}, {{"l1.mshr_merge=1"}},
+        {{"l2.slices=1"}}, {{"l2.slice_kb=16"}}, {{"l2.assoc=1"}, "--set l2.slice_kb=16"}, {{"l2.mshrs=2", "l2.mshr_merge=2"}}, {{"l2.mshr_merge=1"}},
+        {{"l2.latency=20"}}, {{"xbar.latency=30"}},
+        {{"dram.channels=1"}}, {{"dram.banks=2"}}, {{"dram.bus_bytes=8"}}, {{"dram.burst=32"}}, {{"dram.queue=1"}},
+        {{"dram.row_bytes=256"}}, {{"dram.scheduler=fcfs"}}, {{"dram.tCL=40"}}, {{"dram.tRCD=40"}}, {{"dram.tRP=40"}},
+        {{"dram.tRAS=60"}}, {{"dram.tRC=200"}}, {{"dram.tRRD=40"}}, {{"dram.tCCD=16"}},
+        {{"prefetch.kind=ttp"}}, {{"prefetch.treelet_budget=4096"}, treelet}, {{"prefetch.treelet_threshold=0.25"}, treelet},
+        {{"prefetch.ttp_depth_s1=4"}, ttp}, {{"prefetch.ttp_depth_s2=8"}, ttp}, {{"prefetch.ttp_depth_s3=2"}, ttp},
+        {{"prefetch.bfs_n=4"}, ttp + " --traversal bfs"}, {{"prefetch.priority_after=5"}, ttp},
+        {{"energy.l1_access_pj=40"}}, {{"energy.l2_access_pj=160"}}, {{"energy.dram_read_pj=1000"}},
+        {{"energy.dram_activate_pj=2000"}}, {{"energy.static_w=10"}},
+        {{"sim.quantum=10"}, "--fidelity lt"},
+        {{"sim.watchdog=1000"}, "--set workload.shade_latency=200000", true},
+    };
+    // Read by the DRAM model's write path and the energy figures, which no run reaches.
+    const std::set<std::string> write_path = {"dram.tWL", "dram.tWR", "energy.dram_write_pj"};
+    {
+        DramConfig d = Config::load("mobile").resolve().dram;
+        auto write_done = [&](const DramConfig& c) {
+            DramChannel ch(c);
+            DramRequest w;
+            w.write = true;
+            ch.enqueue(w);
+            DramRequest out;
+            uint64_t done = 0;
+            ch.schedule(0, &out, &done);
+            DramRequest conflict;  // same bank, another row: its precharge waits for the write's recovery
+            conflict.at.row = 1;
+            ch.enqueue(conflict);
+            ch.schedule(ch.next_decision(), &out, &done);
+            return done;
+        };
+        const uint64_t base = write_done(d);
+        DramConfig wl = d, wr = d;
+        wl.tWL += 20;
+        wr.tWR += 200;
+        EXPECT_NE(write_done(wl), base) << "dram.tWL";
+        EXPECT_NE(write_done(wr), base) << "dram.tWR";
+        HwConfig hw = Config::load("mobile").resolve();
+        HierarchyCounts h;
+        h.dram.push_back(DramStats{});
+        h.dram[0].writes = 1;
+        auto dram_j = [&](const HwConfig& c) {
+            nlohmann::ordered_json j;
+            StatsOut out(j);
+            write_hierarchy(out, c, h, {}, 1.0);
+            return j["energy"]["dram_j"].get<double>();
+        };
+        const double e = dram_j(hw);
+        hw.energy.dram_write_pj *= 2;
+        EXPECT_NE(dram_j(hw), e) << "energy.dram_write_pj";
+    }
+    // Every key of the schema has a case.
+    std::set<std::string> covered = write_path;
+    for (const Case& c : cases)
+        for (const std::string& s : c.sets) covered.insert(s.substr(0, s.find('=')));
+    for (const Config::KeyInfo& k : Config::keys()) EXPECT_TRUE(covered.count(k.name)) << "no case shows that '" << k.name << "' is read";
+    for (const std::string preset : {"mobile", "desktop"}) {
+        std::map<std::string, std::pair<int, nlohmann::json>> baselines;  // by `extra`
+        int n = 0;
+        for (const Case& c : cases) {
+            // The heightfields in AT, unless the case names another scene or fidelity.
+            const bool own_scene = c.extra.find("--scene") != std::string::npos, own_fidelity = c.extra.find("--fidelity") != std::string::npos;
+            const std::string base = (own_scene ? "" : "--scene " + scene) + (own_fidelity ? "" : " --fidelity at") +
+                                     " --width 32 --height 32 --spp 1 --config " + preset + " " + c.extra;
+            auto run = [&](const std::string& args) {
+                const std::string stats = dir.file("s" + std::to_string(n++) + ".json");
+                const Result r = rtsim(dir, base + " " + args + " --stats " + stats);
+                return std::make_pair(r.status, exists(stats) ? model_stats(stats) : nlohmann::json());
+            };
+            if (!baselines.count(c.extra)) baselines[c.extra] = run("");
+            std::string sets;
+            for (const std::string& s : c.sets) sets += " --set " + s;
+            const auto changed = run(sets);
+            const auto& reference = baselines[c.extra];
+            ASSERT_EQ(reference.first, 0) << preset << " " << c.extra;
+            if (c.exit_status) {
+                EXPECT_NE(changed.first, reference.first) << preset << ":" << sets;
+            } else {
+                ASSERT_EQ(changed.first, 0) << preset << ":" << sets;
+                EXPECT_TRUE(changed.second != reference.second) << preset << ":" << sets << " changed nothing";
+            }
+        }
+    }
 }

@@ -36,7 +36,7 @@ enum class Model { AT, LT, Interval };
 
 // Runs the functional model and the timing model on the same workload and checks that every ray
 // (keyed by path and order within its path) got exactly the same hit.
-void timing_equals_functional(const std::string& name, Model model, WorkloadKind kind) {
+void timing_equals_functional(const std::string& name, Model model, WorkloadKind kind, uint32_t response_fifo = 0) {
     FsResolution resolution;
     const Scene scene = scene_named(name);
     const BvhImage image = build_bvh_image(scene);
@@ -53,6 +53,7 @@ void timing_equals_functional(const std::string& name, Model model, WorkloadKind
     opt.fidelity = model == Model::LT ? Fidelity::LT : Fidelity::AT;
     opt.check_protocol = true;
     HwConfig hw = Config::load("mobile").resolve();
+    hw.response_fifo = response_fifo;
     TimingResult r;
     if (model == Model::Interval) {
         r = run_interval(hw, image, *tw, opt);
@@ -78,6 +79,9 @@ void timing_equals_functional(const std::string& name, Model model, WorkloadKind
     }
     // Cache accounting: L1 sees every chunk request (plus retries), L2 every L1 miss.
     EXPECT_GE(total(r.counts.l1).demand.accesses, total(r.counts.rt).chunk_requests);
+    if (response_fifo) {
+        EXPECT_EQ(total(r.counts.rt).max_response_fifo, response_fifo);
+    }
 }
 
 }  // namespace
@@ -85,6 +89,12 @@ void timing_equals_functional(const std::string& name, Model model, WorkloadKind
 TEST(TimingAT, BunnyPathTracingHitsEqualFunctional) { timing_equals_functional("bunny", Model::AT, WorkloadKind::PathTrace); }
 TEST(TimingAT, WkndAmbientOcclusionHitsEqualFunctional) { timing_equals_functional("wknd", Model::AT, WorkloadKind::AmbientOcclusion); }
 TEST(TimingAT, ShipShadowHitsEqualFunctional) { timing_equals_functional("ship", Model::AT, WorkloadKind::Shadow); }
+// A one-entry response FIFO: a response that finds it full waits in the L1 (BEGIN_RESP accepted,
+// END_RESP when the FIFO has drained), within the base protocol, and the answers do not change.
+TEST(TimingAT, OneEntryResponseFifoHoldsResponsesBackWithinTheProtocol) {
+    timing_equals_functional("cornell", Model::AT, WorkloadKind::PathTrace, 1);
+}
+TEST(TimingLT, OneEntryResponseFifo) { timing_equals_functional("cornell", Model::LT, WorkloadKind::PathTrace, 1); }
 TEST(TimingLT, BunnyPathTracingHitsEqualFunctional) { timing_equals_functional("bunny", Model::LT, WorkloadKind::PathTrace); }
 TEST(TimingLT, CornellPrimaryHitsEqualFunctional) { timing_equals_functional("cornell", Model::LT, WorkloadKind::Primary); }
 TEST(TimingInterval, BunnyPathTracingHitsEqualFunctional) { timing_equals_functional("bunny", Model::Interval, WorkloadKind::PathTrace); }

@@ -74,14 +74,21 @@ tlm::tlm_sync_enum Cache::nb_transport_fw(tlm::tlm_generic_payload& t, tlm::tlm_
         blocked_ = &t;  // END_REQ withheld until an MSHR or a way frees
         return tlm::TLM_ACCEPTED;
     }
-    if (ph == tlm::END_RESP) return tlm::TLM_COMPLETED;
+    if (ph == tlm::END_RESP) {
+        // The requester took a response it had held back: the next one may go.
+        if (&t != resp_open_) SC_REPORT_FATAL(name(), "END_RESP for a response not held");
+        resp_open_ = nullptr;
+        t.release();
+        if (!resp_queue_.empty()) resp_event_.notify(SC_ZERO_TIME);
+        return tlm::TLM_COMPLETED;
+    }
     SC_REPORT_FATAL(name(), "unexpected phase on the forward path");
     return tlm::TLM_COMPLETED;
 }
 
 void Cache::send_responses() {
     while (tlm::tlm_generic_payload* t = FifoPeq<tlm::tlm_generic_payload>::merge_next(hit_peq_, fill_peq_)) resp_queue_.push_back(t);
-    if (resp_queue_.empty()) return;
+    if (resp_queue_.empty() || resp_open_) return;  // none, or the last one not ended yet
     const uint64_t c = clock_.cycle_at_or_after(sc_time_stamp());
     if (c == last_resp_cycle_ || clock_.time_of(c) != sc_time_stamp()) {
         resp_event_.notify(clock_.time_of(c == last_resp_cycle_ ? c + 1 : c) - sc_time_stamp());
@@ -91,7 +98,15 @@ void Cache::send_responses() {
     tlm::tlm_generic_payload* t = resp_queue_.front();
     resp_queue_.pop_front();
     t->set_response_status(tlm::TLM_OK_RESPONSE);
-    send_response(in.operator->(), *t, name());
+    tlm::tlm_phase ph = tlm::BEGIN_RESP;
+    sc_time d = SC_ZERO_TIME;
+    const tlm::tlm_sync_enum r = in->nb_transport_bw(*t, ph, d);
+    if (r == tlm::TLM_ACCEPTED) {
+        resp_open_ = t;  // the requester (an RT unit with a full response FIFO) ends it later
+        return;
+    }
+    if (r != tlm::TLM_COMPLETED) SC_REPORT_FATAL(name(), "unexpected reply to BEGIN_RESP");
+    t->release();
     if (!resp_queue_.empty()) resp_event_.notify(clock_.period());
 }
 

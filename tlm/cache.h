@@ -67,6 +67,7 @@ private:
     uint64_t resp_seq_ = 0;
     FifoPeq<tlm::tlm_generic_payload> hit_peq_, fill_peq_;
     std::deque<tlm::tlm_generic_payload*> resp_queue_;
+    tlm::tlm_generic_payload* resp_open_ = nullptr;  // a response whose END_RESP the requester withholds
     sc_core::sc_event resp_event_, miss_event_;
     uint64_t last_resp_cycle_ = ~0ull, last_miss_cycle_ = ~0ull;
     std::deque<std::pair<uint64_t, tlm::tlm_generic_payload*>> miss_queue_;  // (cycle it may leave, request)

@@ -68,6 +68,7 @@ void RtUnit::tick() {
             }
         }
         core_.cycle(c);
+        admit_held_response(c);
         auto retired = core_.take_retired();
         if (!retired.empty()) source_.retire(sm_, retired, c);
         if (on_cycle) on_cycle(c);
@@ -91,6 +92,12 @@ tlm::tlm_sync_enum RtUnit::nb_transport_bw(tlm::tlm_generic_payload& t, tlm::tlm
     }
     if (ph == tlm::BEGIN_RESP) {
         const RtExtension& e = ext(t);
+        if (!core_.takes_response(e.id)) {
+            // The response FIFO is full: the response waits in the L1, which sends no other
+            // until END_RESP (the base protocol's response exclusion).
+            held_response_ = &t;
+            return tlm::TLM_ACCEPTED;
+        }
         core_.on_response(e.id, e.l1_miss, e.dram, c);
         t.release();
         wake_at(std::max(c, last_cycle_ == ~0ull ? 0 : last_cycle_ + 1));
@@ -98,6 +105,19 @@ tlm::tlm_sync_enum RtUnit::nb_transport_bw(tlm::tlm_generic_payload& t, tlm::tlm
     }
     SC_REPORT_FATAL(name(), "unexpected phase on the backward path");
     return tlm::TLM_COMPLETED;
+}
+
+// A response held back by a full response FIFO comes in once the FIFO has drained one.
+void RtUnit::admit_held_response(uint64_t c) {
+    if (!held_response_ || !core_.takes_response(ext(*held_response_).id)) return;
+    tlm::tlm_generic_payload* t = held_response_;
+    held_response_ = nullptr;
+    const RtExtension& e = ext(*t);
+    core_.on_response(e.id, e.l1_miss, e.dram, c);
+    tlm::tlm_phase ph = tlm::END_RESP;
+    sc_time d = SC_ZERO_TIME;
+    socket->nb_transport_fw(*t, ph, d);
+    t->release();
 }
 
 void RtUnit::lt_loop() {
@@ -115,7 +135,8 @@ void RtUnit::lt_loop() {
     uint64_t c = clock_.cycle_at_or_after(sc_time_stamp());
     for (;;) {
         last_cycle_ = c;
-        while (!responses.empty() && responses.top().at <= c) {
+        // Responses due enter the response FIFO while it has room (the rest wait in the L1).
+        while (!responses.empty() && responses.top().at <= c && core_.takes_response(responses.top().id)) {
             core_.on_response(responses.top().id, responses.top().l1_miss, responses.top().dram, c);
             responses.pop();
         }

@@ -35,6 +35,7 @@ private:
     void tick();     // AT
     void lt_loop();  // LT
     void pull_work(uint64_t c);
+    void admit_held_response(uint64_t c);
     tlm::tlm_sync_enum nb_transport_bw(tlm::tlm_generic_payload& t, tlm::tlm_phase& ph, sc_core::sc_time& d);
     tlm::tlm_generic_payload* make_payload(const ChunkRequest& r);
     void wake_at(uint64_t cycle);
@@ -46,6 +47,7 @@ private:
     PayloadPool& pool_;
     const ClockDomain& clock_;
     bool waiting_end_req_ = false;
+    tlm::tlm_generic_payload* held_response_ = nullptr;  // AT: BEGIN_RESP accepted, END_RESP withheld while the response FIFO is full
     uint64_t last_cycle_ = ~0ull;
     sc_core::sc_event wake_;
 };
