@@ -49,8 +49,8 @@ def main():
       f"pre-pass with `--threads 1`), {wall_sum / 60:.1f} "
       "minutes of simulation summed. Wall time is the simulation alone (scene loading and BVH build excluded; the "
       "sampled runs' functional pre-pass included), of the baseline run; the speed-up over AT is the geometric mean "
-      "of the baseline's and TTP's, each against AT's run in the same configuration (the machine is shared, and one "
-      "run's speed varies by up to 40 %). Errors "
+      "of the baseline's and TTP's, each against AT's run in the same configuration (the machine is shared: "
+      "compare speeds within one run of this script). Errors "
       "are against AT on the same scene: total cycles (baseline run), TTP speed-up (baseline / TTP cycles) and L1 "
       "demand miss rate.")
     p("")
@@ -171,48 +171,55 @@ def main():
 
     p("## Which fidelity for which question")
     p("")
-    p("- **Functional** (not in the table: it has no time) answers what the rays hit and how many nodes they visit, "
-      "3-7x slower than Embree. Use it for BVH and traversal-order studies (nodes per ray, the paper's Table 1).")
-    p("- **AT** is the reference: cycles, every cache and DRAM statistic, waveforms. Use it for final numbers and for "
-      "anything about queueing (reservation fails, DRAM bandwidth, arbitration).")
-    lt1, lt10 = row("lt_q1000"), row("lt_q10000")
-    if lt1 and lt10:
-        p(f"- **LT at a quantum of 100-1,000 cycles**: {lt1[0]:.2f}x faster than AT, cycles within {lt1[1]:.1f} % on "
-          f"average (worst {lt1[2]:.1f} %), TTP speed-up within {lt1[3]:.1f} %. Good for first-order design "
-          f"questions on large frames. At a quantum of 10,000 the cycle error grows to {lt10[1]:.1f} % on average "
-          f"(worst {lt10[2]:.1f} %) with no gain in speed: do not use it.")
+    p("Each line below is computed from the tables above (mean and worst absolute cycle error over the scenes, "
+      "speed-up as the geometric mean).")
+    p("")
+    p("- **Functional** (not in the table: it has no time) answers what the rays hit and how many nodes they visit "
+      "(docs/foundation.md). Use it for BVH and traversal-order studies (nodes per ray, the paper's Table 1).")
+    p("- **AT** is the reference: cycles, every cache and DRAM statistic, waveforms; final numbers and anything about "
+      "queueing (reservation fails, DRAM bandwidth, arbitration).")
+    lts = {q: row(f"lt_q{q}") for q in (100, 1000, 10000)}
+    if all(lts.values()):
+        best = min(lts, key=lambda q: lts[q][1])
+        fastest = max(lts, key=lambda q: lts[q][0])
+        p("- **LT**: " + "; ".join(f"quantum {q:,}: {lts[q][0]:.2f}x faster than AT, cycles within {lts[q][1]:.2f} % on average "
+                                  f"(worst {lts[q][2]:.2f} %), TTP speed-up within {lts[q][3]:.2f} %" for q in lts) +
+          f". The smallest error is at quantum {best:,}, the highest speed at quantum {fastest:,}" +
+          (f" ({lts[fastest][0] / lts[best][0]:.2f}x the speed of quantum {best:,} for {lts[fastest][1] - lts[best][1]:+.2f} points "
+           "of mean cycle error)." if fastest != best else "."))
     iv = row("interval")
     if iv:
-        p(f"- **Interval** (docs/interval.md): {iv[0]:.1f}x faster than AT, cycles within {iv[1]:.2f} % on average "
-          f"(worst {iv[2]:.1f} %), TTP speed-up within {iv[3]:.1f} %. One event per node fetch: no SystemC kernel, no "
-          "cycle stepping. Use it for sweeps of configurations and for large frames; where it is both faster and "
-          "closer to AT than LT, prefer it to LT. Keep AT for final figures, waveforms, the DRAM's queueing (it has "
-          "no FR-FCFS queue) and prefetchers other than TTP.")
-    s50, s25, s10 = row("at_s50"), row("at_s25"), row("at_s10")
-    if s50 and s25 and s10:
-        def study_line(rid):
-            rows = study.get(rid, [])
-            if not rows:
-                return ""
-            errs = [abs(r[2]) for r in rows]
-            return (f"over {len(rows)} draws on all scenes its cycles are off by {sum(errs) / len(errs):.1f} % on average "
-                    f"(worst {max(errs):.1f} %) and its interval holds the full run's cycles in {sum(r[3] for r in rows)} "
-                    f"of {len(rows)}")
-        p(f"- **Sampling at 25-50 %** ({s25[0]:.1f}x and {s50[0]:.1f}x faster than AT, the functional pre-pass "
-          f"included): {study_line('s25')} at 25 %; {study_line('s50')} at 50 %. The TTP speed-up stays within "
-          f"{s25[3]:.1f} % (25 %) and {s50[3]:.1f} % (50 %) of AT's, because baseline and TTP share the same sample. "
-          "Use it for sweeps of absolute cycles on frames of this size, and read the interval it reports.")
-        p(f"- **Sampling at 10 %** ({s10[0]:.1f}x): {study_line('s10')}. A 128x128 frame has only 32 clusters, so a "
-          "10 % sample is 3 of them; use it for ratios between configurations (TTP speed-up within "
-          f"{s10[3]:.1f} %), or on larger frames. Zatel's <1 % at 10x is not matched at this frame size "
-          "(docs/sampling.md).")
-    i50, i25, i10 = row("iv_s50"), row("iv_s25"), row("iv_s10")
-    if i50 and i25 and i10:
-        p(f"- **Sampling on the interval fidelity** ({i50[0]:.1f}x / {i25[0]:.1f}x / {i10[0]:.1f}x faster than AT at "
-          f"50 / 25 / 10 %, cycles within {i50[1]:.1f} / {i25[1]:.1f} / {i10[1]:.1f} % on average): the error is the "
-          "sample's, as for sampled AT, plus the interval fidelity's own fraction of a percent. The functional pre-pass "
-          "costs as much as at any fidelity, so it is a large part of these runs: `--threads` (all cores by default) "
-          "shortens it. The fastest way to a first estimate of absolute cycles; read the interval it reports.")
+        lt_best = min((r for r in lts.values() if r), key=lambda r: r[1], default=None)
+        cmp = ""
+        if lt_best:
+            faster = iv[0] > lt_best[0]
+            closer = iv[1] < lt_best[1]
+            cmp = (f" Against LT's most accurate quantum it is {'faster' if faster else 'slower'} "
+                   f"({iv[0]:.2f}x against {lt_best[0]:.2f}x) and {'closer to' if closer else 'further from'} AT "
+                   f"({iv[1]:.2f} % against {lt_best[1]:.2f} %).")
+        p(f"- **Interval** (docs/interval.md): {iv[0]:.2f}x faster than AT, cycles within {iv[1]:.2f} % on average "
+          f"(worst {iv[2]:.2f} %), TTP speed-up within {iv[3]:.2f} %.{cmp} It has no waveforms, no FR-FCFS DRAM queue, "
+          "and models the prefetchers none and TTP only.")
+    def study_line(rid):
+        rows = study.get(rid, [])
+        if not rows:
+            return ""
+        errs = [abs(r[2]) for r in rows]
+        return (f"over {len(rows)} draws its cycles are off by {sum(errs) / len(errs):.1f} % on average (worst "
+                f"{max(errs):.1f} %) and its 95 % interval holds the full run's cycles in {sum(r[3] for r in rows)} of {len(rows)}")
+    for rid, rate in SAMPLE_RATES.items():
+        r = row(f"at_{rid}")
+        if r:
+            p(f"- **Sampled AT at {float(rate) * 100:.0f} %**: {r[0]:.1f}x faster than AT (functional pre-pass included); "
+              f"{study_line(rid)}; TTP speed-up within {r[3]:.1f} % of AT's.")
+    ivs = {rid: row(f"iv_{rid}") for rid in SAMPLE_RATES}
+    if all(ivs.values()):
+        p("- **Sampled interval** at " + " / ".join(f"{float(SAMPLE_RATES[k]) * 100:.0f} %" for k in ivs) + ": " +
+          " / ".join(f"{ivs[k][0]:.1f}x" for k in ivs) + " faster than AT, cycles within " +
+          " / ".join(f"{ivs[k][1]:.1f} %" for k in ivs) + " on average.")
+    zatel = [(LABEL[f], r) for f in FIDELITIES for r in [row(f)] if r and r[0] >= 10 and r[1] < 1.0]
+    p(f"- Zatel's mark (< 1 % cycle error at 10x): " + (", ".join(f"met by {name} ({r[0]:.1f}x, {r[1]:.2f} %)" for name, r in zatel)
+      if zatel else f"not met by any fidelity at {meta['size']}x{meta['size']} (docs/sampling.md has larger frames)") + ".")
     p("")
     (outdir / "README.md").write_text("\n".join(lines) + "\n")
     print(f"report: {outdir / 'README.md'}", file=sys.stderr)
