@@ -46,12 +46,13 @@ uint64_t IntervalGpu::core_cycle(uint64_t m) const { return (m * memory_fs_ + co
 void IntervalGpu::advance(uint64_t floor) {
     if (floor <= floor_) return;
     floor_ = floor;
-    for (CacheBookings& c : l1_) c.advance(floor);
-    for (CacheBookings& c : l2_) c.advance(floor);
-    // The ports' rings are recycled every 1,024 cycles: bookings come at or after the floor
-    // anyway, since fetches run in time order.
+    // The ports' rings are recycled, and the caches forget sectors that arrived, every 1,024
+    // cycles: bookings come at or after the floor anyway, since fetches run in time order, and a
+    // sector remembered past its arrival answers as it would forgotten.
     if (floor < ports_floor_ + 1024) return;
     ports_floor_ = floor;
+    for (CacheBookings& c : l1_) c.advance(floor);
+    for (CacheBookings& c : l2_) c.advance(floor);
     for (PortCalendar& p : issue_) p.advance(floor);
     for (PortCalendar& p : drain_) p.advance(floor);
 }

@@ -17,16 +17,15 @@ const StackEntry& from_next(const std::deque<StackEntry>& st, TraversalOrder ord
 
 class NoPrefetcher : public Prefetcher {
 public:
+    NoPrefetcher() : Prefetcher(0) {}
     PrefetcherKind kind() const override { return PrefetcherKind::None; }
-    unsigned hooks() const override { return 0; }
 };
 
 // TTP (paper section 4): on each pop, the state machine picks the entries below the popped one.
 class TtpPrefetcher : public Prefetcher {
 public:
-    TtpPrefetcher(const PrefetchConfig& c, TraversalOrder order) : cfg_(c), bfs_(order == TraversalOrder::BFS) {}
+    TtpPrefetcher(const PrefetchConfig& c, TraversalOrder order) : Prefetcher(OnPop), cfg_(c), bfs_(order == TraversalOrder::BFS) {}
     PrefetcherKind kind() const override { return PrefetcherKind::Ttp; }
-    unsigned hooks() const override { return OnPop; }
     void on_pop(PrefetchThreadState& s, const std::deque<StackEntry>& st, PrefetchSink& sink) override {
         if (st.empty()) return;
         picks_.clear();
@@ -53,9 +52,8 @@ private:
 // is dropped.
 class ParkPrefetcher : public Prefetcher {
 public:
-    ParkPrefetcher(TraversalOrder order, const RtLatency& lat) : order_(order), lat_(lat) {}
+    ParkPrefetcher(TraversalOrder order, const RtLatency& lat) : Prefetcher(OnNodeTest), order_(order), lat_(lat) {}
     PrefetcherKind kind() const override { return PrefetcherKind::Park; }
-    unsigned hooks() const override { return OnNodeTest; }
     void on_node_test(const StepInfo& step, const std::deque<StackEntry>& st, uint64_t test_end, PrefetchSink& sink) override {
         if (step.type != NodeType::Triangle && step.type != NodeType::Procedural) return;
         uint32_t budget = step.type == NodeType::Triangle ? lat_.ray_triangle : lat_.procedural;
@@ -77,9 +75,8 @@ private:
 // the same next treelet, the whole treelet is prefetched (once per warp).
 class TreeletPrefetcher : public Prefetcher {
 public:
-    TreeletPrefetcher(const PrefetchConfig& c, const Treelets& t) : threshold_(c.treelet_threshold), treelets_(t) {}
+    TreeletPrefetcher(const PrefetchConfig& c, const Treelets& t) : Prefetcher(OnWarpScheduled), threshold_(c.treelet_threshold), treelets_(t) {}
     PrefetcherKind kind() const override { return PrefetcherKind::Treelet; }
-    unsigned hooks() const override { return OnWarpScheduled; }
     void on_warp_scheduled(PrefetchWarpState& ws, const WarpThreads& threads, uint32_t live, PrefetchSink& sink) override {
         std::map<uint32_t, uint32_t> votes;
         for (uint32_t i = 0; i < threads.size(); ++i)
@@ -103,9 +100,8 @@ private:
 // The limit studies (paper section 6.1): node reads of some pop-streak classes always hit L1.
 class PerfectPrefetcher : public Prefetcher {
 public:
-    explicit PerfectPrefetcher(bool upward) : upward_(upward) {}
+    explicit PerfectPrefetcher(bool upward) : Prefetcher(LimitStudy), upward_(upward) {}
     PrefetcherKind kind() const override { return upward_ ? PrefetcherKind::PerfectUp : PrefetcherKind::PerfectDown; }
-    unsigned hooks() const override { return LimitStudy; }
     // Upward: 2nd and later consecutive pops; downward: 1st pops.
     bool answered_as_l1_hit(uint8_t c) const override { return upward_ ? c >= 2 : c == 1; }
 

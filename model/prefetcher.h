@@ -103,10 +103,12 @@ public:
     // The hooks a prefetcher uses (a fidelity that does not call one refuses the prefetcher).
     enum Hook : unsigned { OnPop = 1, OnNodeTest = 2, OnWarpScheduled = 4, LimitStudy = 8 };
 
+    explicit Prefetcher(unsigned hooks) : hooks_(hooks) {}
     virtual ~Prefetcher() = default;
     virtual PrefetcherKind kind() const = 0;
     const char* name() const { return prefetcher_name(kind()); }
-    virtual unsigned hooks() const = 0;
+    // Not virtual: the RT unit asks on every node fetch, and calls only the hooks in use.
+    unsigned hooks() const { return hooks_; }
     // A thread's node fetch is scheduled and pops `stack`'s next entry (DFS: the top; BFS: the
     // head); `stack` still holds it.
     virtual void on_pop(PrefetchThreadState&, const std::deque<StackEntry>& stack, PrefetchSink&) {}
@@ -120,6 +122,9 @@ public:
     virtual void on_warp_scheduled(PrefetchWarpState&, const WarpThreads& threads, uint32_t live, PrefetchSink&) {}
     // Limit studies: a node fetch of pop-streak class `fetch_class` is answered as an L1 hit.
     virtual bool answered_as_l1_hit(uint8_t fetch_class) const { return false; }
+
+private:
+    unsigned hooks_;
 };
 
 // The configured prefetcher for `order`. Throws std::invalid_argument where it cannot work:

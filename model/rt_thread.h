@@ -36,7 +36,7 @@ struct RtThread {
     uint8_t begin_fetch(Prefetcher& prefetcher, PrefetchSink& sink) {
         if (!trav.next_is_pop()) return 0;
         const uint8_t c = streak.pop();
-        prefetcher.on_pop(prefetch, trav.stack(), sink);
+        if (prefetcher.hooks() & Prefetcher::OnPop) prefetcher.on_pop(prefetch, trav.stack(), sink);
         return c;
     }
 
@@ -51,7 +51,7 @@ struct RtThread {
         const StepInfo info = trav.step(image);
         if (info.pushed > 0) {
             streak.push();
-            prefetcher.on_push(prefetch, trav.stack().size());
+            if (prefetcher.hooks() & Prefetcher::OnPop) prefetcher.on_push(prefetch, trav.stack().size());
         }
         return info;
     }

@@ -192,7 +192,7 @@ void RtUnitCore::drain_response(uint64_t now) {
         const uint64_t end = now + math_latency(info);
         sink_.warp = p.warp;
         sink_.thread = ti;
-        prefetcher_->on_node_test(info, t.rt.trav.stack(), end, sink_);
+        if (prefetcher_->hooks() & Prefetcher::OnNodeTest) prefetcher_->on_node_test(info, t.rt.trav.stack(), end, sink_);
         set_status(t, ThreadStatus::InMath, now);
         math_.push({end, p.warp, ti});
     }
@@ -238,7 +238,7 @@ void RtUnitCore::schedule_warp(uint64_t now) {
         sink_.warp = wi;
         sink_.thread = ti;
         t.fetch_class = t.rt.begin_fetch(*prefetcher_, sink_);
-        const bool limit_study = prefetcher_->answered_as_l1_hit(t.fetch_class);
+        const bool limit_study = (prefetcher_->hooks() & Prefetcher::LimitStudy) && prefetcher_->answered_as_l1_hit(t.fetch_class);
         ++stats_.pop_streak[t.fetch_class].node_fetches;
         t.fetch_l1_miss = t.fetch_dram = false;
         t.chunks_left = chunks_of(e.type);
@@ -247,20 +247,19 @@ void RtUnitCore::schedule_warp(uint64_t now) {
         // Coalesce identical addresses (a limit-study hit does not merge with a real fetch).
         const auto [g, fresh] = coalescer_.add(e.addr | (limit_study ? 1ull : 0ull));  // node addresses are 64 B aligned
         if (fresh) {
-            if (group_type_.size() <= g) group_type_.resize(g + 1), group_members_.resize(g + 1);
             group_type_[g] = e.type;
-            group_members_[g].clear();
+            group_size_[g] = 0;
         } else {
             ++stats_.coalesced_fetches;
         }
-        group_members_[g].push_back(ti);
+        group_members_[g][group_size_[g]++] = ti;
     }
     w.ready = 0;
     sink_.warp = wi;
     sink_.thread = 0;
-    prefetcher_->on_warp_scheduled(w.prefetch, WarpView(w), w.live, sink_);
+    if (prefetcher_->hooks() & Prefetcher::OnWarpScheduled) prefetcher_->on_warp_scheduled(w.prefetch, WarpView(w), w.live, sink_);
     for (uint32_t g = 0; g < coalescer_.groups(); ++g) {
-        const std::vector<uint16_t>& members = group_members_[g];
+        const uint16_t* members = group_members_[g].data();
         const bool limit_study = coalescer_.key(g) & 1ull;
         const uint64_t node = coalescer_.key(g) & ~1ull;
         for (uint32_t c = 0; c < chunks_of(group_type_[g]); ++c) {
@@ -273,7 +272,7 @@ void RtUnitCore::schedule_warp(uint64_t now) {
             Pending& slot = claim_slot(r.id);
             slot.id = r.id;
             slot.warp = wi;
-            slot.threads.assign(members.begin(), members.end());
+            slot.threads.assign(members, members + group_size_[g]);
             ++inflight_count_;
             ++stats_.chunk_requests;
             if (limit_study) {

@@ -9,6 +9,7 @@
 // caller sends the request the memory access queue offers (tlm/rt_unit.h, AT or LT).
 // Plain C++ (no SystemC).
 #pragma once
+#include <array>
 #include <cstdint>
 #include <deque>
 #include <functional>
@@ -60,7 +61,7 @@ public:
     void on_response(uint64_t id, bool l1_miss, bool dram, uint64_t now);
     // Whether the response for chunk `id` can come in now: a prefetch's always, a demand's while
     // the response FIFO (rt.response_fifo entries) has room; otherwise memory holds it back.
-    bool takes_response(uint64_t id) const { return prefetch_ids_.contains(id) || !fifo_.full(); }
+    bool takes_response(uint64_t id) const { return !fifo_.full() || prefetch_ids_.contains(id); }
 
     // Rays of warps that finished since the last call.
     std::vector<RetiredRay> take_retired();
@@ -151,9 +152,12 @@ private:
     std::vector<Pending> inflight_ = std::vector<Pending>(1 << 13);
     size_t inflight_count_ = 0;
     std::priority_queue<MathDone, std::vector<MathDone>, std::greater<MathDone>> math_;
+    // The warp being scheduled: its distinct node reads and the threads of each (a warp has at
+    // most 32 threads: rt.warp_size).
     FetchCoalescer<uint64_t> coalescer_;
-    std::vector<NodeType> group_type_;
-    std::vector<std::vector<uint16_t>> group_members_;
+    std::array<NodeType, 32> group_type_{};
+    std::array<std::array<uint16_t, 32>, 32> group_members_{};
+    std::array<uint8_t, 32> group_size_{};
     std::vector<RetiredRay> retired_;
     uint64_t next_id_ = 1;
     RtUnitStats stats_;

@@ -3,7 +3,7 @@
 # nothing (not even apt-get update) when everything is already installed.
 set -euo pipefail
 packages=(
-  build-essential cmake pkg-config
+  build-essential cmake pkg-config python3
   libsystemc-dev            # SystemC 2.3.4 with TLM-2.0 (the timing model)
   libembree-dev             # Embree 3: BVH builder and golden reference
   libglm-dev

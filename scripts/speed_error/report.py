@@ -1,8 +1,6 @@
 #!/usr/bin/python3
 """Writes reports/speed-vs-error/README.md and a Pareto plot from a speed-vs-error sweep."""
-import csv
 import datetime
-import json
 import math
 import pathlib
 import sys
@@ -14,7 +12,9 @@ import matplotlib.pyplot as plt  # noqa: E402
 import matplotlib.ticker  # noqa: E402
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent.parent / "sweep"))
 from experiments import EXTRA_SEEDS, FIDELITIES, SAMPLE_RATES  # noqa: E402
+from report_util import load, number  # noqa: E402
 
 SCENES = ["wknd", "cornell", "ship", "bunny", "ref", "bath", "sprng"]
 LABEL = {"at": "AT (reference)", "lt_q100": "LT, quantum 100", "lt_q1000": "LT, quantum 1000", "lt_q10000": "LT, quantum 10000",
@@ -27,16 +27,10 @@ LABEL = {"at": "AT (reference)", "lt_q100": "LT, quantum 100", "lt_q1000": "LT, 
 def main():
     results, outdir = pathlib.Path(sys.argv[1]), pathlib.Path(sys.argv[2])
     outdir.mkdir(parents=True, exist_ok=True)
-    d = {}
-    with open(results) as f:
-        for r in csv.DictReader(f):
-            d[(r["experiment"], r["scene"])] = r
-    meta_file = results.parent / "manifest.tsv.meta.json"
-    meta = json.loads(meta_file.read_text()) if meta_file.exists() else {"size": 128, "spp": 2}
+    d, meta = load(results)
 
     def v(exp, scene, col):
-        r = d.get((exp, scene))
-        return float(r[col]) if r and r.get(col) not in ("", None) else None
+        return number(d, exp, scene, col)
 
     lines = []
     p = lines.append
