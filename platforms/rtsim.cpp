@@ -192,7 +192,7 @@ int sc_main(int argc, char** argv) {
     desc.add_options()
         ("help,h", "this help")
         ("stats-schema", "print every key --stats can write (key, unit, description; tab-separated) and exit")
-        ("scene", po::value(&a.scene)->default_value(a.scene), "wknd, cornell, ship, bunny, ref, bath, sprng, a mesh file or a folder")
+        ("scene", po::value(&a.scene)->default_value(a.scene), "wknd, cornell, ship, bunny, ref, bath, sprng, party, a mesh file or a folder")
         ("assets", po::value(&a.assets), "asset folder of a LumiBench scene (e.g. ../shared/scenes/bunny)")
         ("workload", po::value(&a.workload)->default_value(a.workload), "primary, pt (path tracing), ao (ambient occlusion), sh (shadow)")
         ("rays", po::value(&a.rays), "ray file (replaces --workload)")

@@ -12,6 +12,7 @@
 #include "workloads/bvh_builder.h"
 #include "workloads/input_error.h"
 #include "workloads/mesh_io.h"
+#include "workloads/verify.h"
 #include "workloads/rays.h"
 #include "workloads/scenes.h"
 
@@ -345,4 +346,42 @@ TEST(Scenes, DefaultCameraFramesARawMesh) {
     // The centre pixel's primary ray hits the mesh.
     const Ray r = camera_ray(s.camera, 0, 0, 1, 1, 0.5f, 0.5f, 0.5f, 0.5f);
     EXPECT_TRUE(trace_ray(img, r, TraversalOrder::DFS).hit.hit);
+}
+
+// Verification: a far, thin triangle of PARTY whose edge test is within float rounding. The ray
+// (PARTY 64x64 path tracing, ray 1931) passes 8e-5 (in barycentric weight) outside the edge in
+// long double; our float test, as Embree's, may decide either way, and ours says inside. That
+// is the class edge_within_float_error, not a mismatch; a ray a clear margin outside is still
+// a mismatch.
+TEST(Verify, EdgeDecisionWithinFloatErrorIsItsOwnClass) {
+    Scene s;
+    s.materials.push_back(Material{});
+    Mesh m;
+    m.name = "thin";
+    m.vertices = {{-0x1.1258d6p+1f, 0x1.d8755ap+3f, -0x1.c8920ep+3f},
+                  {-0x1.15d976p+1f, 0x1.d8b2a4p+3f, -0x1.c8921cp+3f},
+                  {-0x1.160758p+1f, 0x1.c3af06p+3f, -0x1.c88e42p+3f}};
+    m.triangles = {{0, 1, 2}};
+    m.material = {0};
+    s.meshes.push_back(m);
+    add_identity_instances(s);
+    Ray r;
+    r.org = {-0x1.ff0b02p+5f, 0x1.2bc37cp+2f, 0x1.dee4c8p+5f};
+    r.dir = {0x1.4a99p-1f, 0x1.b026p-4f, -0x1.8d228p-1f};
+    TriangleHit th;
+    ASSERT_TRUE(intersect_triangle(r.org, r.dir, m.vertices[0], m.vertices[1], m.vertices[2], 0.0f, INFINITY, &th));
+    EXPECT_TRUE(edge_decision_within_float_error(s, r, 0, 0));
+    Hit ours;
+    ours.hit = true;
+    ours.t = th.t;
+    ours.u = th.u;
+    ours.v = th.v;
+    ours.geom = ours.prim = 0;
+    const Hit embree_miss;
+    EXPECT_EQ(classify(s, r, ours, embree_miss, embree_miss), Agreement::EdgeFloatError);
+    // Turned by a thousandth of a radian the ray misses the edge by far more than the rounding.
+    Ray far = r;
+    far.dir.y += 1e-3f;
+    EXPECT_FALSE(edge_decision_within_float_error(s, far, 0, 0));
+    EXPECT_EQ(classify(s, far, ours, embree_miss, embree_miss), Agreement::Mismatch);
 }

@@ -244,7 +244,7 @@ Camera read_camera_file(const std::string& path, float vfov) {
     return c;
 }
 
-std::vector<std::string> scene_names() { return {"wknd", "cornell", "ship", "bunny", "ref", "ref-full", "bath", "sprng"}; }
+std::vector<std::string> scene_names() { return {"wknd", "cornell", "ship", "bunny", "ref", "ref-full", "bath", "sprng", "party"}; }
 
 Scene load_scene(const std::string& name, const std::string& assets) {
     Scene s;
@@ -317,6 +317,11 @@ Scene load_scene(const std::string& name, const std::string& assets) {
     } else if (name == "sprng") {
         s = load_folder(require_assets(name, assets), "Dirt_grass", 20);  // LumiBench skips Dirt_grass*
         s.sky = true;
+    } else if (name == "party") {
+        // LumiBench PARTY without its characters (shared/scenes/README.md): the camera file is
+        // LumiBench's default view, vfov 20, sky.
+        s = load_folder(require_assets(name, assets), "", 20);
+        s.sky = true;
     } else {
         std::error_code ec;
         if (fs::is_directory(name, ec)) {
@@ -332,7 +337,7 @@ Scene load_scene(const std::string& name, const std::string& assets) {
         }
         s.sky = true;
     }
-    if (s.name.empty() || name == "bath" || name == "sprng") s.name = name;
+    if (s.name.empty() || name == "bath" || name == "sprng" || name == "party") s.name = name;
     s.validate();
     return s;
 }

@@ -17,7 +17,7 @@ Scene make_cornell();
 
 // Resolves --scene NAME|PATH [--assets DIR]:
 //   wknd, cornell                  built in;
-//   ship, bunny, ref, bath, sprng  LumiBench placements of the asset folder DIR;
+//   ship, bunny, ref, bath, sprng, party  LumiBench placements of the asset folder DIR;
 //   a mesh file                    one mesh, geom 0, default camera framing it;
 //   a folder                       one mesh per mesh file, geom = index in byte-wise sorted
 //                                  file-name order, camera from a .camera file if present.

@@ -18,6 +18,7 @@ const char* agreement_name(Agreement a) {
         case Agreement::ZeroDirFace: return "zero_dir_in_face_plane";
         case Agreement::SphereFloatError: return "embree_sphere_float_error";
         case Agreement::TErrorBound: return "t_within_error_bound";
+        case Agreement::EdgeFloatError: return "edge_within_float_error";
         case Agreement::Mismatch: return "mismatch";
         case Agreement::Count: break;
     }
@@ -50,10 +51,12 @@ bool same_point(const Ray& r, long double t1, long double t2, int ulps = kUlpTol
     return std::fabs(t1 - t2) * max_abs(r.dir) <= ulps * 0x1p-24L * scale;
 }
 
-// Two triangles with the same three vertex positions (duplicated faces: 909 of the ship's 6,255).
+// Two triangles with the same three vertex positions (duplicated faces: 909 of the ship's 6,255),
+// in one mesh or in two meshes placed by the same transform (PARTY repeats faces across files).
 bool coincident(const Scene& scene, const Hit& a, const Hit& b) {
     const Mesh &ma = scene.meshes.at(a.geom), &mb = scene.meshes.at(b.geom);
-    if (ma.procedural() || mb.procedural() || a.geom != b.geom) return false;
+    if (ma.procedural() || mb.procedural()) return false;
+    if (a.geom != b.geom && scene.instance_of(a.geom).object_to_world != scene.instance_of(b.geom).object_to_world) return false;
     auto corners = [](const Mesh& m, uint32_t prim) {
         std::array<std::array<float, 3>, 3> c;
         for (int k = 0; k < 3; ++k) {
@@ -152,6 +155,59 @@ std::optional<long double> exact_triangle_t(const Scene& scene, const Ray& ray, 
     return t;  // plane distance (inside-ness is not checked)
 }
 
+bool edge_decision_within_float_error(const Scene& scene, const Ray& ray, uint32_t geom, uint32_t prim) {
+    using LD = long double;
+    const Mesh& m = scene.meshes.at(geom);
+    if (m.procedural() || !is_identity(scene.instance_of(geom).object_to_world)) return false;
+    // The traversal rescales the direction by a power of two, which changes no decision below.
+    const glm::vec3 d = ray.dir, o = ray.org;
+    const glm::vec3 ad(std::fabs(d.x), std::fabs(d.y), std::fabs(d.z));
+    int kz = ad.x > ad.y ? (ad.x > ad.z ? 0 : 2) : (ad.y > ad.z ? 1 : 2);
+    int kx = (kz + 1) % 3, ky = (kx + 1) % 3;
+    if (d[kz] < 0.0f) std::swap(kx, ky);
+    const LD sx = LD(d[kx]) / d[kz], sy = LD(d[ky]) / d[kz];
+    // Exact sheared coordinates and, per coordinate, the float computation's error bound:
+    // a = v - o (one rounding), s = d[kx] / d[kz] (one), s * a[kz] (one), the difference (one):
+    // |error| <= gamma(4) (|a[kx]| + |s a[kz]|), gamma(n) = n u / (1 - n u), u = 2^-24.
+    const LD u = 0x1p-24L, g2 = 2 * u / (1 - 2 * u), g4 = 4 * u / (1 - 4 * u);
+    LD x[3], y[3], ex[3], ey[3];
+    for (int k = 0; k < 3; ++k) {
+        const glm::vec3& v = m.vertices[m.triangles.at(prim)[k]];
+        const LD a[3] = {LD(v.x) - o.x, LD(v.y) - o.y, LD(v.z) - o.z};
+        x[k] = a[kx] - sx * a[kz];
+        y[k] = a[ky] - sy * a[kz];
+        ex[k] = g4 * (std::fabs(a[kx]) + std::fabs(sx * a[kz]));
+        ey[k] = g4 * (std::fabs(a[ky]) + std::fabs(sy * a[kz]));
+    }
+    // Edge functions as intersect_triangle forms them (u from c and b, v from a and c, w from b
+    // and a), and the bound of their float evaluation: the products' and difference's rounding,
+    // gamma(2) (|p q| + |r s|), plus the inputs' errors to first order, doubled for the
+    // second-order terms this leaves out.
+    const int edges[3][2] = {{2, 1}, {0, 2}, {1, 0}};
+    LD e[3], bound[3];
+    for (int i = 0; i < 3; ++i) {
+        const int p = edges[i][0], q = edges[i][1];
+        e[i] = x[p] * y[q] - y[p] * x[q];
+        bound[i] = 2 * (g2 * (std::fabs(x[p] * y[q]) + std::fabs(y[p] * x[q])) + std::fabs(y[q]) * ex[p] + std::fabs(x[p]) * ey[q] +
+                        std::fabs(x[q]) * ey[p] + std::fabs(y[p]) * ex[q]);
+    }
+    // Decided either way: after flipping the edges within their bound, both an inside and an
+    // outside verdict are reachable.
+    bool can_inside_pos = true, can_inside_neg = true, can_outside = false;
+    for (int i = 0; i < 3; ++i) {
+        const bool uncertain = std::fabs(e[i]) <= bound[i];
+        can_inside_pos &= e[i] >= 0 || uncertain;
+        can_inside_neg &= e[i] <= 0 || uncertain;
+    }
+    bool pos = false, neg = false;
+    for (int i = 0; i < 3; ++i) {
+        pos |= e[i] > 0 || std::fabs(e[i]) <= bound[i];
+        neg |= e[i] < 0 || std::fabs(e[i]) <= bound[i];
+    }
+    can_outside = pos && neg;
+    return (can_inside_pos || can_inside_neg) && can_outside;
+}
+
 Agreement classify(const Scene& scene, const Ray& ray, const Hit& ours, const Hit& ref, const Hit& ref_closest) {
     Agreement a;
     const Hit& other = ray.query == Query::Any ? ref_closest : ref;
@@ -179,10 +235,19 @@ Agreement classify(const Scene& scene, const Ray& ray, const Hit& ours, const Hi
                 if (exact && same_point(ray, *exact, ours.t, tol) && same_point(ray, *exact, ref.t, tol))
                     a = Agreement::TErrorBound;
             }
+        } else if (coincident(scene, ours, ref)) {
+            a = Agreement::Coincident;  // the same surface: any t difference is rounding (grazing rays)
         } else {
-            a = !same ? Agreement::Mismatch
-                      : coincident(scene, ours, ref) ? Agreement::Coincident : Agreement::SameTOtherPrim;
+            a = same ? Agreement::SameTOtherPrim : Agreement::Mismatch;
         }
+    }
+    // The nearer of two answers is decided by an edge within the float test's rounding error:
+    // either side's answer is a correct rounding of the exact one.
+    if (a == Agreement::Mismatch) {
+        const Hit* nearer = !ref.hit || (ours.hit && ours.t < other.t) ? &ours : &other;
+        if (nearer->hit && !scene.meshes.at(nearer->geom).procedural() &&
+            edge_decision_within_float_error(scene, ray, nearer->geom, nearer->prim))
+            a = Agreement::EdgeFloatError;
     }
     if (a == Agreement::Mismatch && long_double_confirms_ours(scene, ray, ours, other)) return Agreement::SphereFloatError;
     return a;

@@ -23,6 +23,8 @@ enum class Agreement : uint8_t {
     TErrorBound,      // same triangle; both hit points within kLooseUlpTolerance ulps of the coordinates,
                       // divided by cos(incidence), of the long-double plane hit: grazing rays, and rays
                       // transformed to an instance's object space in float (by us as by Embree)
+    EdgeFloatError,   // the nearer answer's triangle is hit or missed by an edge decision that lies within
+                      // the rounding error of the float edge test (edge_decision_within_float_error)
     Mismatch,
     Count
 };
@@ -45,6 +47,13 @@ Agreement classify(const Scene& scene, const Ray& ray, const Hit& ours, const Hi
 std::optional<long double> exact_triangle_t(const Scene& scene, const Ray& ray, uint32_t geom, uint32_t prim,
                                             long double* cosine = nullptr);
 std::optional<long double> exact_sphere_t(const Scene& scene, const Ray& ray, uint32_t geom, uint32_t prim);
+
+// Whether the float edge test of intersect_triangle (model/robust.h) may decide either way for
+// the ray and triangle `prim` of mesh `geom` (placed by an identity instance): some edge function,
+// evaluated in long double in the test's own sheared frame, has the sign that disagrees with the
+// others and a magnitude within a first-order bound of the float computation's rounding error.
+// False for instanced and procedural geometry (no claim is made there).
+bool edge_decision_within_float_error(const Scene& scene, const Ray& ray, uint32_t geom, uint32_t prim);
 
 struct VerifyCounts {
     std::array<uint64_t, size_t(Agreement::Count)> by_class{};

@@ -12,6 +12,7 @@ SCENES = {
     "ref": "--scene ref --assets {shared}/dragon",
     "bath": "--scene bath --assets {shared}/bath",
     "sprng": "--scene sprng --assets {shared}/sprng",
+    "party": "--scene party --assets {shared}/party",
 }
 
 
