@@ -10,7 +10,7 @@
 namespace rtu {
 namespace {
 
-enum class Type { Int, Real, Text };
+enum class Type { Int, Real, Text, Bool };
 struct Key {
     const char* name;
     const char* unit;
@@ -28,6 +28,7 @@ const Key kSchema[] = {
     {"rt.warp_size", "threads", Type::Int, 1, 32, true, "threads per warp"},
     {"rt.warp_buffer", "warps", Type::Int, 1, 64, false, "warps resident in an RT unit"},
     {"rt.l1_hit_latency", "core cycles", Type::Int, 0, 1000, false, "extra cycles the RT unit waits on an L1 hit"},
+    {"rt.next_node_register", "", Type::Bool, 0, 0, false, "stock Vulkan-sim's next-node register: the first hit child is read from it, not popped (false: every node read is a pop, as in the TTP authors' simulator)"},
     {"rt.response_fifo", "entries", Type::Int, 0, 1 << 20, false, "response FIFO entries (0: unbounded, as in Vulkan-sim); a full FIFO holds the L1's responses back"},
     {"rt.latency.header", "core cycles", Type::Int, 0, 1000, false, "BVH node header decode"},
     {"rt.latency.ray_box", "core cycles", Type::Int, 0, 1000, false, "ray-box tests of an internal node"},
@@ -122,6 +123,10 @@ nlohmann::json checked_value(const Key& k, const nlohmann::json& v, const std::s
         if (!v.is_string()) throw ConfigError(where + " must be a string, got " + v.dump());
         return v;
     }
+    if (k.type == Type::Bool) {
+        if (!v.is_boolean()) throw ConfigError(where + " must be true or false, got " + v.dump());
+        return v;
+    }
     if (!v.is_number()) throw ConfigError(where + " must be a number, got " + v.dump());
     const double d = v.get<double>();
     if (k.type == Type::Int && (d != std::floor(d))) throw ConfigError(where + " must be a whole number, got " + v.dump());
@@ -209,6 +214,10 @@ void Config::set(const std::string& assignment) {
     nlohmann::json v;
     if (k->type == Type::Text) {
         v = text;
+    } else if (k->type == Type::Bool) {
+        if (text == "true" || text == "1") v = true;
+        else if (text == "false" || text == "0") v = false;
+        else throw ConfigError("--set: key '" + name + "' needs true or false, got '" + text + "'");
     } else {
         try {
             size_t used = 0;
@@ -233,6 +242,7 @@ HwConfig Config::resolve() const {
     h.warp_buffer = u32("rt.warp_buffer");
     h.l1_hit_latency = u32("rt.l1_hit_latency");
     h.response_fifo = u32("rt.response_fifo");
+    h.next_node_register = values_.at("rt.next_node_register").get<bool>();
     h.lat = {u32("rt.latency.header"), u32("rt.latency.ray_box"), u32("rt.latency.transform"),
              u32("rt.latency.leaf_descriptor"), u32("rt.latency.ray_triangle"), u32("rt.latency.triangle_hit"),
              u32("rt.latency.procedural")};

@@ -46,6 +46,7 @@ struct HwConfig {
     uint32_t sms;
     double core_mhz, memory_mhz;
     uint32_t warp_size, warp_buffer, l1_hit_latency, response_fifo;
+    bool next_node_register;  // stock Vulkan-sim's register for the first hit child (default: every read a pop)
     RtLatency lat;
     uint32_t shade_latency;
     CacheConfig l1;

@@ -109,7 +109,7 @@ void IntervalGpu::start_trace(uint32_t sm, const std::vector<WarpRay>& rays, uin
     tr.threads.resize(rays.size());
     for (uint32_t i = 0; i < rays.size(); ++i) {
         Thread& t = tr.threads[i];
-        t.rt.start(rays[i], image_.header(), order_, nullptr);
+        t.rt.start(rays[i], image_.header(), {order_, cfg_.next_node_register}, nullptr);
         t.ready = start;
         if (!t.rt.trav.done()) {
             ++tr.live;

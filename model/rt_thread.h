@@ -24,9 +24,9 @@ struct RtThread {
     PrefetchThreadState prefetch;
     uint32_t l1_miss_nodes = 0, dram_nodes = 0;  // node fetches so far not served by L1 / served by DRAM
 
-    void start(const WarpRay& r, const ImageHeader& header, TraversalOrder order, const Treelets* treelets) {
+    void start(const WarpRay& r, const ImageHeader& header, const TraversalRule& rule, const Treelets* treelets) {
         key = r.key;
-        trav.start(r.ray, header, order, treelets);
+        trav.start(r.ray, header, rule.order, treelets, rule.next_node_register);
         streak = PopStreak{};
         prefetch = PrefetchThreadState{};
         l1_miss_nodes = dram_nodes = 0;

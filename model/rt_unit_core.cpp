@@ -82,7 +82,7 @@ void RtUnitCore::accept_warp(const std::vector<WarpRay>& rays, uint64_t now) {
     for (size_t i = 0; i < rays.size(); ++i) {
         Thread& t = w.threads[i];
         t.since = now;
-        t.rt.start(rays[i], image_.header(), order_, treelets_);
+        t.rt.start(rays[i], image_.header(), {order_, cfg_.next_node_register}, treelets_);
         if (!t.rt.trav.done()) {
             t.status = ThreadStatus::WaitSchedule;
             ++w.live;

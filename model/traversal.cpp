@@ -18,9 +18,11 @@ uint32_t TraversalThread::next_treelet() const {
     return deferred_.empty() ? ~0u : treelets_->treelet_of(deferred_.back().addr);
 }
 
-void TraversalThread::start(const Ray& ray, const ImageHeader& header, TraversalOrder order, const Treelets* treelets) {
+void TraversalThread::start(const Ray& ray, const ImageHeader& header, TraversalOrder order, const Treelets* treelets,
+                            bool next_node_register) {
     ray_ = ray;
     order_ = order;
+    register_ = next_node_register && order != TraversalOrder::BFS;
     treelets_ = order == TraversalOrder::Treelet ? treelets : nullptr;
     if (order == TraversalOrder::Treelet && !treelets_) throw std::logic_error("treelet traversal needs treelets");
     current_treelet_ = treelets_ ? treelets_->treelet_of(header.root) : ~0u;
@@ -34,8 +36,13 @@ void TraversalThread::start(const Ray& ray, const ImageHeader& header, Traversal
     dir_ = ray.dir;
     world_box_ray_ = box_ray_ = make_box_test_ray(org_, dir_);
     if (intersect_box(world_box_ray_, header.root_box, ray_.tnear, ray_.tfar, nullptr)) {
-        next_ = StackEntry{header.root, NodeType::Internal, kNoId};
-        has_next_ = true;
+        const StackEntry root{header.root, NodeType::Internal, kNoId};
+        if (register_) {
+            next_ = root;
+            has_next_ = true;
+        } else {
+            stack_.push_back(root);  // the first read is a pop too (Algorithm 1, lines 1-2)
+        }
     }
 }
 
@@ -111,7 +118,7 @@ StepInfo TraversalThread::step(const BvhImage& image) {
                     ++info.pushed;
                     continue;
                 }
-                if (first && order_ != TraversalOrder::BFS) {
+                if (first && register_) {
                     next_ = child;
                     has_next_ = true;
                 } else {
@@ -128,7 +135,7 @@ StepInfo TraversalThread::step(const BvhImage& image) {
             if (treelets_ && treelets_->treelet_of(root.addr) != current_treelet_) {
                 deferred_.push_back(root);
                 ++info.pushed;
-            } else if (order_ != TraversalOrder::BFS) {
+            } else if (register_) {
                 next_ = root;
                 has_next_ = true;
             } else {
@@ -176,13 +183,13 @@ StepInfo TraversalThread::step(const BvhImage& image) {
 }
 
 TraceResult trace_ray(const BvhImage& image, const Ray& ray, TraversalOrder order, const Treelets* treelets,
-                      std::vector<StackEntry>* fetched) {
+                      std::vector<StackEntry>* fetched, bool next_node_register) {
     TraceResult r;
     if (!is_valid_ray(ray)) return r;
     Ray scaled = ray;
     const int k = scale_direction(scaled);
     TraversalThread th;
-    th.start(scaled, image.header(), order, treelets);
+    th.start(scaled, image.header(), order, treelets, next_node_register);
     while (!th.done()) {
         if (fetched) fetched->push_back(th.peek());
         th.step(image);

@@ -1,10 +1,13 @@
 // Per-thread BVH traversal that reads node bytes from the image (the RT unit's warp-buffer
 // entry for one thread: ray, traversal stack or queue, closest hit so far).
 //
-// DFS follows Vulkan-sim's RT unit: of the children an internal node's ray-box tests hit, the
-// first in child order is taken next (kept in a "next node" register, not on the stack) and the
-// others are pushed in child order; a child whose entry distance is beyond the closest hit so far
-// is culled. BFS keeps a FIFO queue: every hit child is appended in child order.
+// DFS follows the TTP authors' RT unit (paper section 3, Algorithm 1: "every memory read request
+// is a pop from a traversal stack"): every child an internal node's ray-box tests hit is pushed,
+// in child order, so the last one is popped next; the root and a BLAS root are pushed and popped
+// too. With the next-node register of stock Vulkan-sim (an option, rt.next_node_register), the
+// first hit child is taken next from the register instead and the others are pushed: that read
+// is not a pop. A child whose entry distance is beyond the closest hit so far is culled. BFS
+// keeps a FIFO queue: every hit child is appended in child order.
 #pragma once
 #include <cstdint>
 #include <deque>
@@ -29,20 +32,27 @@ struct StackEntry {
 struct StepInfo {
     NodeType type = NodeType::Empty;  // what was fetched and tested
     uint32_t pushed = 0;              // entries pushed on the stack / queue
-    bool from_stack = false;          // popped from the stack (false: taken from the next register)
+    bool from_stack = false;          // popped from the stack (false: taken from the next-node register)
     bool hit = false;                 // a primitive test accepted a hit
+};
+
+// How a thread chooses its next node besides the order.
+struct TraversalRule {
+    TraversalOrder order = TraversalOrder::DFS;
+    bool next_node_register = false;  // DFS and treelet: stock Vulkan-sim's register for the first hit child
 };
 
 class TraversalThread {
 public:
-    // Prepares the ray and tests the root box (a register in the RT unit, not a memory read).
-    // The ray must be valid (is_valid_ray).
-    // `treelets` is required for TraversalOrder::Treelet and ignored otherwise.
-    void start(const Ray& ray, const ImageHeader& header, TraversalOrder order, const Treelets* treelets = nullptr);
+    // Prepares the ray and tests the root box (a register in the RT unit, not a memory read);
+    // the root, if hit, is pushed (or put in the next-node register). The ray must be valid
+    // (is_valid_ray). `treelets` is required for TraversalOrder::Treelet and ignored otherwise.
+    void start(const Ray& ray, const ImageHeader& header, TraversalOrder order, const Treelets* treelets = nullptr,
+               bool next_node_register = false);
     bool done() const { return !has_next_ && stack_.empty() && deferred_.empty(); }
     // The node the thread reads next; only when !done().
     // True when the next node comes off the stack / queue (a pop), false when it is the
-    // "next node" register (the first hit child, the root, or a BLAS root).
+    // next-node register (with rt.next_node_register: the first hit child, the root, a BLAS root).
     bool next_is_pop() const { return !has_next_; }
     const StackEntry& peek() const {
         if (has_next_) return next_;
@@ -72,6 +82,7 @@ private:
 
     Ray ray_;
     TraversalOrder order_ = TraversalOrder::DFS;
+    bool register_ = false;  // the next-node register is in use
     Hit hit_;
     std::deque<StackEntry> stack_, deferred_;  // deferred: entries of other treelets (Treelet order)
     const Treelets* treelets_ = nullptr;
@@ -93,6 +104,6 @@ struct TraceResult {
 };
 // `fetched`, when given, receives every node the traversal reads, in order.
 TraceResult trace_ray(const BvhImage& image, const Ray& ray, TraversalOrder order, const Treelets* treelets = nullptr,
-                      std::vector<StackEntry>* fetched = nullptr);
+                      std::vector<StackEntry>* fetched = nullptr, bool next_node_register = false);
 
 }  // namespace rtu

@@ -13,8 +13,9 @@ SamplingOptions sampling_options(const HwConfig& c, const BvhImage& img, const T
     // Enough fetches to refill every cache twice over.
     s.warm_window = 2 * (uint64_t(c.l2_slices) * c.l2.size_bytes + uint64_t(c.sms) * c.l1.size_bytes) / c.l1.sector;
     const TraversalOrder order = o.order;
-    s.trace = [&img, order, treelets](const Ray& r, std::vector<StackEntry>* fetched) {
-        return trace_ray(img, r, order, treelets, fetched);
+    const bool next_node_register = c.next_node_register;
+    s.trace = [&img, order, treelets, next_node_register](const Ray& r, std::vector<StackEntry>* fetched) {
+        return trace_ray(img, r, order, treelets, fetched, next_node_register);
     };
     return s;
 }

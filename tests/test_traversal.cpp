@@ -200,9 +200,11 @@ TEST(Traversal, BfsVisitsAtLeastAsManyNodesAsDfs) {
     }
 }
 
-// Vulkan-sim's order: the first child hit (in child order) is taken next, the other hit
-// children are pushed in child order.
-TEST(Traversal, DfsTakesFirstHitChildNextAndPushesOthersInChildOrder) {
+// Every node read is a pop (paper Algorithm 1): the root is pushed and popped, and every hit
+// child is pushed in child order, the last one on top. With stock Vulkan-sim's next-node
+// register (rt.next_node_register) the root and the first hit child are read from the register
+// instead, and only the others are pushed. Both find the same hits.
+TEST(Traversal, DfsPushesEveryHitChildOrKeepsTheFirstInTheNextNodeRegister) {
     const Loaded l = load("cornell");
     const glm::vec3 eye(278, 278, 800);
     int checked = 0;
@@ -210,24 +212,46 @@ TEST(Traversal, DfsTakesFirstHitChildNextAndPushesOthersInChildOrder) {
         Ray r;
         r.org = eye;
         r.dir = glm::vec3(-0.4f + 0.8f * (i % 8) / 7.0f, -0.4f + 0.8f * (i / 8) / 7.0f, -1.0f);
-        TraversalThread th;
-        th.start(r, l.image.header(), TraversalOrder::DFS);
-        if (th.done()) continue;  // misses the root box
+        TraversalThread pop, reg;
+        pop.start(r, l.image.header(), TraversalOrder::DFS);
+        reg.start(r, l.image.header(), TraversalOrder::DFS, nullptr, true);
+        if (pop.done()) {  // misses the root box
+            EXPECT_TRUE(reg.done());
+            continue;
+        }
+        EXPECT_TRUE(pop.next_is_pop());
+        EXPECT_FALSE(reg.next_is_pop());
+        ASSERT_EQ(pop.stack().size(), 1u);
+        EXPECT_EQ(pop.peek().addr, l.image.header().root);
+        EXPECT_EQ(reg.peek().addr, l.image.header().root);
         const InternalNode root = decode_internal(l.image.at(l.image.header().root, kBlockBytes));
         const BoxTestRay br = make_box_test_ray(r.org, r.dir);
         std::vector<uint64_t> hit_children;
         for (int c = 0; c < root.count; ++c)
             if (intersect_box(br, root.box[c], r.tnear, r.tfar, nullptr)) hit_children.push_back(root.addr[c]);
-        const StepInfo info = th.step(l.image);
-        EXPECT_EQ(info.type, NodeType::Internal);
+        const StepInfo a = pop.step(l.image), b = reg.step(l.image);
+        EXPECT_TRUE(a.from_stack);
+        EXPECT_FALSE(b.from_stack);
         if (hit_children.empty()) {
-            EXPECT_TRUE(th.done());
+            EXPECT_TRUE(pop.done());
+            EXPECT_TRUE(reg.done());
             continue;
         }
-        EXPECT_EQ(th.peek().addr, hit_children[0]);
-        ASSERT_EQ(th.stack().size(), hit_children.size() - 1);
-        for (size_t k = 1; k < hit_children.size(); ++k) EXPECT_EQ(th.stack()[k - 1].addr, hit_children[k]);
-        EXPECT_EQ(info.pushed, hit_children.size() - 1);
+        ASSERT_EQ(pop.stack().size(), hit_children.size());
+        for (size_t k = 0; k < hit_children.size(); ++k) EXPECT_EQ(pop.stack()[k].addr, hit_children[k]);
+        EXPECT_EQ(pop.peek().addr, hit_children.back());
+        EXPECT_TRUE(pop.next_is_pop());
+        EXPECT_EQ(a.pushed, hit_children.size());
+        EXPECT_EQ(reg.peek().addr, hit_children[0]);
+        ASSERT_EQ(reg.stack().size(), hit_children.size() - 1);
+        for (size_t k = 1; k < hit_children.size(); ++k) EXPECT_EQ(reg.stack()[k - 1].addr, hit_children[k]);
+        EXPECT_EQ(b.pushed, hit_children.size() - 1);
+        while (!pop.done()) pop.step(l.image);
+        while (!reg.done()) reg.step(l.image);
+        EXPECT_EQ(pop.hit().hit, reg.hit().hit);
+        if (pop.hit().hit) {
+            EXPECT_EQ(pop.hit().t, reg.hit().t);
+        }
         ++checked;
     }
     EXPECT_GT(checked, 32);
