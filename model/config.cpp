@@ -29,6 +29,7 @@ const Key kSchema[] = {
     {"rt.warp_buffer", "warps", Type::Int, 1, 64, false, "warps resident in an RT unit"},
     {"rt.l1_hit_latency", "core cycles", Type::Int, 0, 1000, false, "extra cycles the RT unit waits on an L1 hit"},
     {"rt.next_node_register", "", Type::Bool, 0, 0, false, "stock Vulkan-sim's next-node register: the first hit child is read from it, not popped (false: every node read is a pop, as in the TTP authors' simulator)"},
+    {"rt.leaf_descriptor_read", "", Type::Bool, 0, 0, false, "a primitive leaf is read in two dependent steps, its 8 B descriptor (one 32 B chunk) then the 64 B leaf, as in the TTP authors' simulator (false: both chunks at once)"},
     {"rt.response_fifo", "entries", Type::Int, 0, 1 << 20, false, "response FIFO entries (0: unbounded, as in Vulkan-sim); a full FIFO holds the L1's responses back"},
     {"rt.latency.header", "core cycles", Type::Int, 0, 1000, false, "BVH node header decode"},
     {"rt.latency.ray_box", "core cycles", Type::Int, 0, 1000, false, "ray-box tests of an internal node"},
@@ -243,6 +244,7 @@ HwConfig Config::resolve() const {
     h.l1_hit_latency = u32("rt.l1_hit_latency");
     h.response_fifo = u32("rt.response_fifo");
     h.next_node_register = values_.at("rt.next_node_register").get<bool>();
+    h.leaf_descriptor_read = values_.at("rt.leaf_descriptor_read").get<bool>();
     h.lat = {u32("rt.latency.header"), u32("rt.latency.ray_box"), u32("rt.latency.transform"),
              u32("rt.latency.leaf_descriptor"), u32("rt.latency.ray_triangle"), u32("rt.latency.triangle_hit"),
              u32("rt.latency.procedural")};

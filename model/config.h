@@ -46,7 +46,8 @@ struct HwConfig {
     uint32_t sms;
     double core_mhz, memory_mhz;
     uint32_t warp_size, warp_buffer, l1_hit_latency, response_fifo;
-    bool next_node_register;  // stock Vulkan-sim's register for the first hit child (default: every read a pop)
+    bool next_node_register;    // stock Vulkan-sim's register for the first hit child (default: every read a pop)
+    bool leaf_descriptor_read;  // a primitive leaf read in two dependent steps (model/node_fetch.h)
     RtLatency lat;
     uint32_t shade_latency;
     CacheConfig l1;

@@ -111,6 +111,7 @@ void IntervalGpu::start_trace(uint32_t sm, const std::vector<WarpRay>& rays, uin
         Thread& t = tr.threads[i];
         t.rt.start(rays[i], image_.header(), {order_, cfg_.next_node_register}, nullptr);
         t.ready = start;
+        t.descriptor_done = false;
         if (!t.rt.trav.done()) {
             ++tr.live;
             events_.push({start, next_seq_++, id, i});
@@ -188,24 +189,31 @@ void IntervalGpu::run_next(std::vector<Finished>& finished) {
     PortCalendar& issue = issue_[sm];
     PortCalendar& drain = drain_[sm];
     const StackEntry e = t.rt.trav.peek();
-    // On a pop, TTP's picks join the SM's prefetch queue, which sends one chunk in each cycle the
-    // request port has no demand for (send_prefetch).
-    sink_.sm = sm;
-    const uint8_t fetch_class = t.rt.begin_fetch(*prefetcher_, sink_);
-    SmPrefetchQueue& pq = prefetch_queue_[sm];
-    if (!pq.chunks.empty() && !pq.scheduled) {
-        pq.scheduled = true;
-        events_.push({t.ready + 1, next_seq_++, sm, kPrefetch});
+    // The read this event makes: a whole node, a leaf's descriptor (the first of a two-step leaf
+    // read, model/node_fetch.h), or the leaf after its descriptor.
+    const bool leaf_after_descriptor = t.descriptor_done;
+    if (!leaf_after_descriptor) {
+        // On a pop, TTP's picks join the SM's prefetch queue, which sends one chunk in each cycle
+        // the request port has no demand for (send_prefetch).
+        sink_.sm = sm;
+        t.fetch_class = t.rt.begin_fetch(*prefetcher_, sink_);
+        SmPrefetchQueue& pq = prefetch_queue_[sm];
+        if (!pq.chunks.empty() && !pq.scheduled) {
+            pq.scheduled = true;
+            events_.push({t.ready + 1, next_seq_++, sm, kPrefetch});
+        }
+        ++rt_[sm].node_fetches;
+        ++rt_[sm].pop_streak[t.fetch_class].node_fetches;
+        t.fetch_l1_miss = t.fetch_dram = false;
     }
-    ++rt_[sm].node_fetches;
-    ++rt_[sm].pop_streak[fetch_class].node_fetches;
-    // Threads of one trace that fetch the same node scheduled in the same cycle share one fetch.
-    const auto [g, fresh] = coalescer_.add({ev.trace, e.addr});
+    const bool descriptor = !leaf_after_descriptor && read_in_two_steps(e.type, cfg_.leaf_descriptor_read);
+    const uint32_t chunks = descriptor ? kDescriptorChunks : chunks_of(e.type);
+    // Threads of one trace that make the same read scheduled in the same cycle share one fetch.
+    const auto [g, fresh] = coalescer_.add({ev.trace, e.addr | (descriptor ? 2ull : 0ull)});
     if (!fresh) {
         ++rt_[sm].coalesced_fetches;
     } else {
         Fetch f{t.ready, false, false};
-        const uint32_t chunks = chunks_of(e.type);
         for (uint32_t c = 0; c < chunks; ++c) {
             const uint64_t sent = issue.book(t.ready + 1);
             const Served s = read(sm, chunk_address(e.addr, c), sent, ReqKind::Demand);
@@ -220,9 +228,21 @@ void IntervalGpu::run_next(std::vector<Finished>& finished) {
         coalesced_.push_back(f);
     }
     const Fetch f = coalesced_[g];
-    const StepInfo info = t.rt.complete_fetch(rt_[sm], fetch_class, f.l1_miss, f.dram, image_, *prefetcher_);
-    const uint32_t math = rt_math_latency(cfg_.lat, info);
+    t.fetch_l1_miss |= f.l1_miss;
+    t.fetch_dram |= f.dram;
     rt_[sm].thread_cycles[ThreadStatus::WaitMemory] += f.done - t.ready;
+    if (descriptor) {
+        // Decode the descriptor, then read the leaf.
+        const uint32_t decode = std::max<uint32_t>(1, cfg_.lat.leaf_descriptor);
+        rt_[sm].thread_cycles[ThreadStatus::InMath] += decode;
+        t.ready = f.done + decode;
+        t.descriptor_done = true;
+        events_.push({t.ready, next_seq_++, ev.trace, ev.thread});
+        return;
+    }
+    t.descriptor_done = false;
+    const StepInfo info = t.rt.complete_fetch(rt_[sm], t.fetch_class, t.fetch_l1_miss, t.fetch_dram, image_, *prefetcher_);
+    const uint32_t math = rt_math_latency(cfg_.lat, info, cfg_.leaf_descriptor_read);
     rt_[sm].thread_cycles[ThreadStatus::InMath] += math;
     t.ready = f.done + math;
     if (!t.rt.trav.done()) {

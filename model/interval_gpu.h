@@ -118,6 +118,9 @@ private:
     struct Thread {
         RtThread rt;
         uint64_t ready = 0;  // cycle its next fetch is scheduled
+        uint8_t fetch_class = 0;           // pop-streak class of the node being read
+        bool fetch_l1_miss = false, fetch_dram = false;
+        bool descriptor_done = false;      // a two-step leaf read: the descriptor is read, the leaf is next
     };
     struct Trace {  // in a warp-buffer slot; reused
         uint32_t sm = 0, live = 0;  // live: threads not done

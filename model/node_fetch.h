@@ -13,6 +13,15 @@ namespace rtu {
 
 constexpr uint32_t kChunkBytes = 32;
 
+// With rt.leaf_descriptor_read (the TTP authors' simulator: vulkan_ray_tracing.cc ~l.1229, then
+// ~l.1294 / ~l.1367), a primitive leaf is read in two dependent steps: first its 8 B descriptor
+// (the 32 B chunk at the leaf's address), and when that has arrived and been decoded
+// (rt.latency.leaf_descriptor), the whole 64 B leaf. Instance leaves are read whole.
+inline bool read_in_two_steps(NodeType t, bool leaf_descriptor_read) {
+    return leaf_descriptor_read && (t == NodeType::Triangle || t == NodeType::Procedural);
+}
+constexpr uint32_t kDescriptorChunks = 1;
+
 // Chunks of a node of type `t`, and the address of chunk `c` of the node at `node`.
 inline uint32_t chunks_of(NodeType t) { return node_bytes(t) / kChunkBytes; }
 inline uint64_t chunk_address(uint64_t node, uint32_t c) { return node + uint64_t(c) * kChunkBytes; }

@@ -97,19 +97,20 @@ void RtUnitCore::accept_warp(const std::vector<WarpRay>& rays, uint64_t now) {
     }
 }
 
-uint32_t rt_math_latency(const RtLatency& lat, const StepInfo& s) {
+uint32_t rt_math_latency(const RtLatency& lat, const StepInfo& s, bool leaf_descriptor_read) {
+    const uint32_t descriptor = leaf_descriptor_read ? 0 : lat.leaf_descriptor;  // else paid by the first read
     uint32_t l = 0;
     switch (s.type) {
         case NodeType::Internal: l = lat.header + lat.ray_box; break;
-        case NodeType::Triangle: l = lat.leaf_descriptor + lat.ray_triangle + (s.hit ? lat.triangle_hit : 0); break;
-        case NodeType::Procedural: l = lat.leaf_descriptor + lat.procedural; break;
-        case NodeType::Instance: l = lat.leaf_descriptor + lat.transform; break;
+        case NodeType::Triangle: l = descriptor + lat.ray_triangle + (s.hit ? lat.triangle_hit : 0); break;
+        case NodeType::Procedural: l = descriptor + lat.procedural; break;
+        case NodeType::Instance: l = descriptor + lat.transform; break;
         case NodeType::Empty: break;
     }
     return std::max<uint32_t>(l, 1);
 }
 
-uint32_t RtUnitCore::math_latency(const StepInfo& s) const { return rt_math_latency(cfg_.lat, s); }
+uint32_t RtUnitCore::math_latency(const StepInfo& s) const { return rt_math_latency(cfg_.lat, s, cfg_.leaf_descriptor_read); }
 
 bool RtUnitCore::has_request(uint64_t now) { return maq_.has_request(now, stats_.prefetch_queue.expired_unsent); }
 
@@ -188,6 +189,12 @@ void RtUnitCore::drain_response(uint64_t now) {
         t.fetch_l1_miss |= resp.l1_miss;
         t.fetch_dram |= resp.dram;
         if (--t.chunks_left > 0) continue;
+        if (t.descriptor_read) {
+            // The leaf's descriptor is here: decoding it takes its latency, then the leaf is read.
+            set_status(t, ThreadStatus::InMath, now);
+            math_.push({now + std::max<uint32_t>(1, cfg_.lat.leaf_descriptor), p.warp, ti});
+            continue;
+        }
         const StepInfo info = t.rt.complete_fetch(stats_, t.fetch_class, t.fetch_l1_miss, t.fetch_dram, image_, *prefetcher_);
         const uint64_t end = now + math_latency(info);
         sink_.warp = p.warp;
@@ -217,6 +224,10 @@ void RtUnitCore::finish_math(uint64_t now) {
                 w.threads.clear();
             }
         } else {
+            if (t.descriptor_read) {
+                t.descriptor_read = false;
+                t.leaf_read = true;
+            }
             set_status(t, ThreadStatus::WaitSchedule, now);
             ++w.ready;
         }
@@ -235,19 +246,27 @@ void RtUnitCore::schedule_warp(uint64_t now) {
         Thread& t = w.threads[ti];
         if (t.status != ThreadStatus::WaitSchedule) continue;
         const StackEntry e = t.rt.trav.peek();
-        sink_.warp = wi;
-        sink_.thread = ti;
-        t.fetch_class = t.rt.begin_fetch(*prefetcher_, sink_);
+        if (t.leaf_read) {
+            // The second read of a two-step leaf: no pop, the same node read.
+            t.leaf_read = false;
+            t.chunks_left = chunks_of(e.type);
+        } else {
+            sink_.warp = wi;
+            sink_.thread = ti;
+            t.fetch_class = t.rt.begin_fetch(*prefetcher_, sink_);
+            ++stats_.pop_streak[t.fetch_class].node_fetches;
+            ++stats_.node_fetches;
+            t.fetch_l1_miss = t.fetch_dram = false;
+            t.descriptor_read = read_in_two_steps(e.type, cfg_.leaf_descriptor_read);
+            t.chunks_left = t.descriptor_read ? kDescriptorChunks : chunks_of(e.type);
+        }
         const bool limit_study = (prefetcher_->hooks() & Prefetcher::LimitStudy) && prefetcher_->answered_as_l1_hit(t.fetch_class);
-        ++stats_.pop_streak[t.fetch_class].node_fetches;
-        t.fetch_l1_miss = t.fetch_dram = false;
-        t.chunks_left = chunks_of(e.type);
         set_status(t, ThreadStatus::WaitMemory, now);
-        ++stats_.node_fetches;
-        // Coalesce identical addresses (a limit-study hit does not merge with a real fetch).
-        const auto [g, fresh] = coalescer_.add(e.addr | (limit_study ? 1ull : 0ull));  // node addresses are 64 B aligned
+        // Coalesce identical reads (a limit-study hit does not merge with a real fetch, nor a
+        // descriptor read with a whole leaf's). Node addresses are 64 B aligned: the low bits are free.
+        const auto [g, fresh] = coalescer_.add(e.addr | (limit_study ? 1ull : 0ull) | (t.descriptor_read ? 2ull : 0ull));
         if (fresh) {
-            group_type_[g] = e.type;
+            group_chunks_[g] = t.chunks_left;
             group_size_[g] = 0;
         } else {
             ++stats_.coalesced_fetches;
@@ -261,8 +280,8 @@ void RtUnitCore::schedule_warp(uint64_t now) {
     for (uint32_t g = 0; g < coalescer_.groups(); ++g) {
         const uint16_t* members = group_members_[g].data();
         const bool limit_study = coalescer_.key(g) & 1ull;
-        const uint64_t node = coalescer_.key(g) & ~1ull;
-        for (uint32_t c = 0; c < chunks_of(group_type_[g]); ++c) {
+        const uint64_t node = coalescer_.key(g) & ~3ull;
+        for (uint32_t c = 0; c < group_chunks_[g]; ++c) {
             ChunkRequest r;
             r.id = next_id_++;
             r.addr = chunk_address(node, c);

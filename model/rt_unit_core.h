@@ -33,8 +33,11 @@
 
 namespace rtu {
 
-// Cycles of a node's tests in the RT unit's math pipelines (at least 1).
-uint32_t rt_math_latency(const RtLatency& lat, const StepInfo& s);
+// Cycles of a node's tests in the RT unit's math pipelines (at least 1). With
+// `leaf_descriptor_read` the descriptor's latency belongs to the first of a leaf's two reads
+// (model/node_fetch.h), and an instance leaf, read whole, costs its transform alone (the
+// authors' INSTANCE_LEAF latency).
+uint32_t rt_math_latency(const RtLatency& lat, const StepInfo& s, bool leaf_descriptor_read = false);
 
 class RtUnitCore {
 public:
@@ -95,6 +98,8 @@ private:
         uint32_t chunks_left = 0;
         uint8_t fetch_class = 0;   // pop-streak class of the node being fetched
         bool fetch_l1_miss = false, fetch_dram = false;
+        bool descriptor_read = false;  // a two-step leaf read: its descriptor is on the way (or being decoded)
+        bool leaf_read = false;        // a two-step leaf read: the descriptor is decoded, the leaf comes next
     };
     struct Warp {
         bool used = false;
@@ -155,7 +160,7 @@ private:
     // The warp being scheduled: its distinct node reads and the threads of each (a warp has at
     // most 32 threads: rt.warp_size).
     FetchCoalescer<uint64_t> coalescer_;
-    std::array<NodeType, 32> group_type_{};
+    std::array<uint32_t, 32> group_chunks_{};
     std::array<std::array<uint16_t, 32>, 32> group_members_{};
     std::array<uint8_t, 32> group_size_{};
     std::vector<RetiredRay> retired_;

@@ -680,7 +680,7 @@ TEST(RtsimConfig, EveryKeyOfEveryPresetIsRead) {
     const std::string ttp = "--prefetcher ttp", treelet = "--traversal treelet --prefetcher treelet";
     const std::vector<Case> cases = {
         {{"gpu.sms=2"}}, {{"gpu.core_clock_mhz=700"}}, {{"gpu.memory_clock_mhz=1000"}}, {{"rt.warp_size=8"}},
-        {{"rt.warp_buffer=1"}, "--set gpu.sms=2"}, {{"rt.l1_hit_latency=30"}}, {{"rt.response_fifo=1"}}, {{"rt.next_node_register=true"}},
+        {{"rt.warp_buffer=1"}, "--set gpu.sms=2"}, {{"rt.l1_hit_latency=30"}}, {{"rt.response_fifo=1"}}, {{"rt.next_node_register=true"}}, {{"rt.leaf_descriptor_read=true"}},
         {{"rt.latency.header=40"}}, {{"rt.latency.ray_box=40"}}, {{"rt.latency.transform=40"}},
         {{"rt.latency.leaf_descriptor=40"}}, {{"rt.latency.ray_triangle=40"}}, {{"rt.latency.triangle_hit=40"}},
         {{"rt.latency.procedural=40"}, "--scene wknd"}, {{"workload.shade_latency=5000"}},

@@ -390,3 +390,65 @@ TEST(FifoPeq, SameDeliveriesAsPeqWithGet) {
     EXPECT_EQ(bench.got, bench.want);
     EXPECT_TRUE(bench.refused);
 }
+
+namespace {
+// The ray of the hand-worked test above with rt.leaf_descriptor_read: the leaf is read in two
+// dependent steps. Worked by hand (mobile latencies, memory clock = core clock):
+//   229        the root is done (as above); the leaf's descriptor chunk (128) is queued
+//   230        it leaves: L1 and L2 line misses -> DRAM channel 1 at 390: ACT, column 410, data 430..438
+//   438        the descriptor is drained; decoding it takes leaf_descriptor = 4 -> 442
+//   442        the leaf's two chunks are queued; 128 leaves at 443 (an L1 hit now), 160 at 444:
+//              L1 and L2 sector misses -> DRAM 604, a row hit: column 604, data 624..632
+//   632        the leaf is whole: ray-triangle 8 + hit 8 = 16 -> the ray retires at 648
+constexpr uint64_t kTwoStepLeafCycles = 648;
+HwConfig two_step_config() {
+    Config c = Config::load("mobile");
+    c.set("gpu.memory_clock_mhz=1365");
+    c.set("rt.leaf_descriptor_read=true");
+    return c.resolve();
+}
+}  // namespace
+
+TEST(TimingAT, TwoStepLeafReadIsTheHandWorkedSum) {
+    FsResolution resolution;
+    const BvhImage image = one_triangle_image();
+    std::vector<RayFileEntry> rays(1);
+    rays[0].ray.org = {0, 0, -5};
+    rays[0].ray.dir = {0, 0, 1};
+    rays[0].valid = true;
+    auto w = make_ray_file_workload(rays);
+    const HwConfig hw = two_step_config();
+    const uint64_t L2 = hw.l2.latency, rcd = hw.dram.tRCD, cl = hw.dram.tCL, xfer = 32 / (2 * hw.dram.bus_bytes);
+    const uint64_t descriptor = 229 + 1 + L2 + rcd + cl + xfer;                    // 438
+    const uint64_t leaf = descriptor + hw.lat.leaf_descriptor + 2 + L2 + cl + xfer;  // 632 (row hit)
+    ASSERT_EQ(leaf + hw.lat.ray_triangle + hw.lat.triangle_hit, kTwoStepLeafCycles);
+    TimingOptions opt;
+    opt.check_protocol = true;
+    GpuPlatform platform(hw, image, *w, opt);
+    const TimingResult r = platform.run();
+    ASSERT_EQ(r.rays.size(), 1u);
+    EXPECT_TRUE(r.rays[0].hit.hit);
+    EXPECT_EQ(r.cycles, kTwoStepLeafCycles);
+    const RtUnitStats rt = total(r.counts.rt);
+    EXPECT_EQ(rt.node_fetches, 2u);    // two node reads: the root and the leaf
+    EXPECT_EQ(rt.chunk_requests, 5u);  // root 2 + descriptor 1 + leaf 2
+    EXPECT_EQ(total(r.counts.l1).demand.hits, 1u);  // the leaf's first chunk: the descriptor's sector
+    EXPECT_EQ(total(r.counts.dram).reads, 4u);
+    EXPECT_TRUE(r.protocol_violations.empty()) << r.protocol_violations.front();
+}
+
+TEST(TimingInterval, TwoStepLeafReadIsTheHandWorkedSum) {
+    const BvhImage image = one_triangle_image();
+    IntervalGpu gpu(two_step_config(), image, TraversalOrder::DFS);
+    WarpRay r;
+    r.ray.org = {0, 0, -5};
+    r.ray.dir = {0, 0, 1};
+    r.scale = scale_direction(r.ray);
+    std::vector<IntervalGpu::Finished> done;
+    gpu.start_trace(0, {r}, 0, done);
+    while (done.empty() && gpu.next_event() != ~0ull) gpu.run_next(done);
+    ASSERT_EQ(done.size(), 1u);
+    EXPECT_EQ(done[0].end, kTwoStepLeafCycles);
+    EXPECT_EQ(total(gpu.rt_stats()).node_fetches, 2u);
+    EXPECT_EQ(total(gpu.rt_stats()).chunk_requests, 5u);
+}
