@@ -38,6 +38,7 @@ const Key kSchema[] = {
     {"rt.latency.ray_triangle", "core cycles", Type::Int, 0, 1000, false, "ray-triangle test"},
     {"rt.latency.triangle_hit", "core cycles", Type::Int, 0, 1000, false, "triangle hit update"},
     {"rt.latency.procedural", "core cycles", Type::Int, 0, 1000, false, "procedural (sphere) test"},
+    {"workload.resident_warps", "shader warps", Type::Int, 0, 1 << 20, false, "shader warps an SM holds at once (CTAs of one warp); a finished warp's place goes to the next warp of the frame (0: every warp at once)"},
     {"workload.shade_latency", "core cycles", Type::Int, 0, 1e7, false, "cycles to shade a hit and issue the next ray"},
     {"l1.size_kb", "KiB", Type::Int, 1, 1 << 20, true, "L1 data cache per SM"},
     {"l1.assoc", "ways", Type::Int, 0, 1 << 16, false, "ways (0: fully associative)"},
@@ -58,6 +59,7 @@ const Key kSchema[] = {
     {"dram.banks", "banks", Type::Int, 1, 1024, true, "banks per channel"},
     {"dram.bus_bytes", "bytes", Type::Int, 1, 64, true, "data bus width per channel (bytes)"},
     {"dram.burst", "beats", Type::Int, 1, 64, true, "burst length: a transfer moves whole bursts of bus_bytes x burst bytes (two beats per memory cycle)"},
+    {"dram.frontend_latency", "core cycles", Type::Int, 0, 1e6, false, "cycles a request waits between the L2 and the DRAM scheduler's queue (GPGPU-Sim's dram_latency queue)"},
     {"dram.queue", "requests", Type::Int, 1, 1 << 16, false, "scheduler queue entries per channel"},
     {"dram.row_bytes", "bytes", Type::Int, 128, 1 << 20, true, "row (page) size"},
     {"dram.scheduler", "", Type::Text, 0, 0, false, "frfcfs or fcfs"},
@@ -249,6 +251,7 @@ HwConfig Config::resolve() const {
              u32("rt.latency.leaf_descriptor"), u32("rt.latency.ray_triangle"), u32("rt.latency.triangle_hit"),
              u32("rt.latency.procedural")};
     h.shade_latency = u32("workload.shade_latency");
+    h.resident_warps = u32("workload.resident_warps");
     // `latency`: what a hit costs the cache's requester (the RT unit at an L1).
     auto cache = [&](const std::string& p, uint64_t kb, uint32_t latency) {
         CacheConfig c;
@@ -282,6 +285,7 @@ HwConfig Config::resolve() const {
     d.bus_bytes = u32("dram.bus_bytes");
     d.burst = u32("dram.burst");
     d.queue = u32("dram.queue");
+    d.frontend_latency = u32("dram.frontend_latency");
     d.row_bytes = u32("dram.row_bytes");
     const std::string sched = values_.at("dram.scheduler").get<std::string>();
     if (sched != "frfcfs" && sched != "fcfs") throw ConfigError("key 'dram.scheduler' = '" + sched + "': allowed are frfcfs, fcfs");

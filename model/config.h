@@ -28,6 +28,7 @@ struct CacheConfig {
 
 struct DramConfig {
     uint32_t channels, banks, bus_bytes, burst, queue, row_bytes;
+    uint32_t frontend_latency;  // core cycles between the L2 and the scheduler's queue
     bool frfcfs;
     uint32_t tCL, tRCD, tRP, tRAS, tRC, tRRD, tCCD, tWL, tWR;  // memory clock cycles
 };
@@ -50,6 +51,7 @@ struct HwConfig {
     bool leaf_descriptor_read;  // a primitive leaf read in two dependent steps (model/node_fetch.h)
     RtLatency lat;
     uint32_t shade_latency;
+    uint32_t resident_warps;  // shader warps per SM at once (0: all)
     CacheConfig l1;
     uint32_t l2_slices;
     CacheConfig l2;  // per slice

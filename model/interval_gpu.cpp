@@ -67,8 +67,9 @@ IntervalGpu::Served IntervalGpu::read_l2(uint64_t addr, uint64_t cycle, ReqKind 
     CacheBookings& l2 = l2_[slice_of(addr)];
     const CacheBookings::Lookup l = l2.lookup(addr, cycle, kind);
     if (l.outcome != CacheBookings::Lookup::Miss) return {l.ready, false, l.dram};
-    // A miss: DRAM after the lookup's latency.
-    const uint64_t done = core_cycle(dram_.access(l2.tags().sector_of(addr), cfg_.l2.sector, memory_cycle(l.ready), memory_cycle(floor_)));
+    // A miss: DRAM after the lookup's latency and the front-end latency queue.
+    const uint64_t done = core_cycle(dram_.access(l2.tags().sector_of(addr), cfg_.l2.sector, memory_cycle(l.ready + cfg_.dram.frontend_latency),
+                                                  memory_cycle(floor_)));
     l2.fill(addr, l, done, true, kind);
     return {done, false, true};
 }

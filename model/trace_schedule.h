@@ -2,7 +2,9 @@
 // trace of a shader warp occupies one warp-buffer slot of its SM's RT unit for a known number of
 // cycles. Shader warps are bound to SMs round robin in the order given; a warp's next trace is
 // ready `shade` cycles after its previous one left the RT unit; an RT unit takes ready traces in
-// order of readiness (ties: the earlier warp) into its earliest free slot. Memory contention is
+// order of readiness (ties: the earlier warp) into its earliest free slot. With `resident` > 0 an
+// SM holds that many warps at once: the first sms x resident warps go round robin, and each later
+// warp (in order) starts on the SM where a warp finished its last trace, when it finished. Memory contention is
 // not modelled here: it is in the trace durations, which come from the detailed simulation.
 // Plain C++ (no SystemC).
 #pragma once
@@ -14,6 +16,7 @@ namespace rtu {
 struct ScheduleShape {
     uint32_t sms = 1, slots = 1;  // RT units, warp-buffer slots per RT unit
     uint64_t shade = 0;           // cycles between a warp's traces
+    uint32_t resident = 0;        // shader warps an SM holds at once (0: all of them from the start)
 };
 
 // `traces[w]`: the durations, in cycles, of shader warp w's traces in order. Returns the cycle

@@ -94,7 +94,7 @@ struct GpuPlatform::Impl {
           // Treelet traversal (and with it the Treelet prefetcher, which needs it) works on treelets.
           treelets(o.order == TraversalOrder::Treelet ? std::make_unique<Treelets>(form_treelets(img, c.prefetch.treelet_budget))
                                                       : nullptr),
-          driver(w, c.sms, c.warp_size, c.shade_latency, sampling_options(c, img, o, treelets.get())) {}
+          driver(w, c.sms, c.warp_size, c.shade_latency, c.resident_warps, sampling_options(c, img, o, treelets.get())) {}
 };
 
 GpuPlatform::GpuPlatform(const HwConfig& cfg, const BvhImage& image, Workload& workload, const TimingOptions& opt)
@@ -125,7 +125,7 @@ GpuPlatform::GpuPlatform(const HwConfig& cfg, const BvhImage& image, Workload& w
     }
     m.xbar.reset(new Crossbar("crossbar", cfg.l2_slices, cfg.l2.line, cfg.xbar_latency, m.core, opt.fidelity));
     for (uint32_t s = 0; s < cfg.sms; ++s) link(m.l1[s]->out, m.xbar->in, "l1_" + std::to_string(s) + "_crossbar");
-    m.dram.reset(new Dram("dram", cfg.dram, cfg.l2.line, m.mem, opt.fidelity));
+    m.dram.reset(new Dram("dram", cfg.dram, cfg.l2.line, m.mem, m.core.period(), opt.fidelity));
     for (uint32_t s = 0; s < cfg.l2_slices; ++s) {
         const std::string id = std::to_string(s);
         m.l2.emplace_back(new Cache(("l2_" + id).c_str(), CacheRole::L2, cfg.l2, cfg.l2.latency, m.pool, m.core, opt.fidelity));

@@ -9,7 +9,7 @@ namespace rtu {
 
 TimingResult run_interval(const HwConfig& cfg, const BvhImage& image, Workload& workload, const TimingOptions& opt) {
     IntervalGpu gpu(cfg, image, opt.order);
-    WorkloadDriver driver(workload, cfg.sms, cfg.warp_size, cfg.shade_latency, sampling_options(cfg, image, opt, nullptr));
+    WorkloadDriver driver(workload, cfg.sms, cfg.warp_size, cfg.shade_latency, cfg.resident_warps, sampling_options(cfg, image, opt, nullptr));
     driver.keep_rays(opt.keep_rays);
     // Sampled run: when a simulated cluster starts, the caches are warmed with the node fetches
     // of the clusters skipped before it.

@@ -29,6 +29,23 @@ TEST(ScheduleModel, RoundRobinSmsAndParallelSlots) {
     EXPECT_THROW(schedule_cycles({{1}}, {0, 4, 0}), std::invalid_argument);
 }
 
+// With resident warps, an SM holds that many shader warps; a finished warp's place goes to the
+// next warp of the frame, on the SM where it finished.
+//   2 SMs x 2 slots, one resident warp each: w0 (SM 0) 0..4, w1 (SM 1) 0..10; w2 takes w0's
+//   place on SM 0 at 4 (4..10), w3 takes w1's on SM 1 at 10 (10..13). Without the limit w0 and
+//   w2 share SM 0 and w1 and w3 share SM 1 from the start: 10.
+//   One slot, shading 5: w0 runs 0..2, shades to 7, runs 7..9; only then does w1 start (9..12).
+//   Without the limit w1 fills the gap (2..5): 9.
+TEST(ScheduleModel, ResidentWarpsHandWorked) {
+    EXPECT_DOUBLE_EQ(schedule_cycles({{4}, {10}, {6}, {3}}, {2, 2, 0, 1}), 13.0);
+    EXPECT_DOUBLE_EQ(schedule_cycles({{4}, {10}, {6}, {3}}, {2, 2, 0, 0}), 10.0);
+    EXPECT_DOUBLE_EQ(schedule_cycles({{2, 2}, {3}}, {1, 1, 5, 1}), 12.0);
+    EXPECT_DOUBLE_EQ(schedule_cycles({{2, 2}, {3}}, {1, 1, 5, 0}), 9.0);
+    // The first warp finishing (w1 on SM 1 at 4) takes w2, wherever w2 would have gone round robin.
+    EXPECT_DOUBLE_EQ(schedule_cycles({{10}, {4}, {6}}, {2, 1, 0, 1}), 10.0);
+    EXPECT_DOUBLE_EQ(schedule_cycles({{10}, {4}, {6}}, {2, 1, 0, 0}), 16.0);
+}
+
 // Conservation: with one RT unit, one slot and no shading the slot never idles, so the frame
 // takes exactly the sum of all durations, in any order of warps.
 TEST(ScheduleModel, OneBusySlotTakesTheSumOfAllWork) {

@@ -6,8 +6,10 @@ namespace rtu {
 
 using namespace sc_core;
 
-Dram::Dram(sc_module_name name, const DramConfig& cfg, uint32_t line, const ClockDomain& clock, Fidelity fidelity)
+Dram::Dram(sc_module_name name, const DramConfig& cfg, uint32_t line, const ClockDomain& clock, const sc_time& core_period,
+           Fidelity fidelity)
     : sc_module(name), in("from_l2"), cfg_(cfg), map_(cfg, line), clock_(clock), blocked_(cfg.channels),
+      frontend_(core_period * double(cfg.frontend_latency)), frontend_peq_("frontend_peq"), waiting_(cfg.channels),
       resp_peq_("resp_peq"), lt_(cfg, line) {
     for (uint32_t c = 0; c < cfg.channels; ++c) channels_.emplace_back(cfg);
     if (fidelity == Fidelity::AT) {
@@ -17,6 +19,9 @@ Dram::Dram(sc_module_name name, const DramConfig& cfg, uint32_t line, const Cloc
         dont_initialize();
         SC_METHOD(respond);
         sensitive << resp_peq_.get_event();
+        dont_initialize();
+        SC_METHOD(leave_frontend);
+        sensitive << frontend_peq_.get_event();
         dont_initialize();
     } else {
         in.register_b_transport(this, &Dram::b_transport);
@@ -55,6 +60,11 @@ tlm::tlm_sync_enum Dram::nb_transport_fw(int id, tlm::tlm_generic_payload& t, tl
     if (ph != tlm::BEGIN_REQ) SC_REPORT_FATAL(name(), "unexpected phase on the forward path");
     ext(t).source = uint32_t(id);
     t.acquire();
+    if (cfg_.frontend_latency) {  // the latency queue takes every request at once
+        frontend_peq_.notify(t, frontend_);
+        ph = tlm::END_REQ;
+        return tlm::TLM_UPDATED;
+    }
     wake_.notify(SC_ZERO_TIME);
     if (admit(t, clock_.cycle_at_or_after(sc_time_stamp()))) {
         ph = tlm::END_REQ;
@@ -62,6 +72,16 @@ tlm::tlm_sync_enum Dram::nb_transport_fw(int id, tlm::tlm_generic_payload& t, tl
     }
     blocked_[map_.map(t.get_address()).channel].push_back(&t);
     return tlm::TLM_ACCEPTED;
+}
+
+// Out of the latency queue, in arrival order, into the channel's queue (or behind the requests
+// of that channel still waiting for room).
+void Dram::leave_frontend() {
+    while (tlm::tlm_generic_payload* t = frontend_peq_.get_next_transaction()) {
+        const uint32_t c = map_.map(t->get_address()).channel;
+        if (!waiting_[c].empty() || !admit(*t, clock_.cycle_at_or_after(sc_time_stamp()))) waiting_[c].push_back(t);
+        wake_.notify(SC_ZERO_TIME);
+    }
 }
 
 void Dram::schedule() {
@@ -79,8 +99,11 @@ void Dram::schedule() {
         ch.schedule(now, &r, &done);
         auto* t = reinterpret_cast<tlm::tlm_generic_payload*>(r.token);
         resp_peq_.notify(*t, clock_.time_of(done) - sc_time_stamp());
-        // A queue slot freed: admit the oldest blocked request of this channel.
-        if (!blocked_[c].empty() && admit(*blocked_[c].front(), now)) {
+        // A queue slot freed: admit the oldest request waiting out of the latency queue, or the
+        // oldest blocked request of this channel.
+        if (!waiting_[c].empty() && admit(*waiting_[c].front(), now)) {
+            waiting_[c].pop_front();
+        } else if (!blocked_[c].empty() && admit(*blocked_[c].front(), now)) {
             tlm::tlm_generic_payload* b = blocked_[c].front();
             blocked_[c].pop_front();
             send_end_request(in[ext(*b).source], *b);
@@ -99,7 +122,7 @@ void Dram::respond() {
 }
 
 void Dram::b_transport(int id, tlm::tlm_generic_payload& t, sc_time& d) {
-    const uint64_t now = clock_.cycle_at_or_after(sc_time_stamp() + d);
+    const uint64_t now = clock_.cycle_at_or_after(sc_time_stamp() + d + frontend_);
     const uint64_t horizon = clock_.cycle_at_or_before(sc_time_stamp());
     const uint64_t done = lt_.access(t.get_address(), t.get_data_length(), now, horizon);
     ext(t).dram = true;

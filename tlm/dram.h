@@ -1,8 +1,10 @@
 // The DRAM: channels of banks (model/dram.h) behind one target socket per L2 slice. AT: each
 // channel's FR-FCFS scheduler runs in an SC_METHOD that sleeps until its next decision; a full
-// channel queue holds END_REQ. LT: the request's timestamp books its bank, the channel's command
-// sequence and its data bus in calendars (model/dram.h, DramBookings), so that the order of calls
-// does not matter.
+// channel queue holds END_REQ. With dram.frontend_latency a request first waits that many core
+// cycles in a latency queue (GPGPU-Sim's dram_latency queue, accepted at once), then enters its
+// channel's queue in arrival order when there is room. LT: the request's timestamp (plus the
+// front-end latency) books its bank, the channel's command sequence and its data bus in
+// calendars (model/dram.h, DramBookings), so that the order of calls does not matter.
 #pragma once
 #include <deque>
 #include <vector>
@@ -13,6 +15,7 @@
 #include <tlm_utils/peq_with_get.h>
 
 #include "clock.h"
+#include "fifo_peq.h"
 #include "model/dram.h"
 #include "model/fidelity.h"
 #include "payload.h"
@@ -23,7 +26,9 @@ class Dram : public sc_core::sc_module {
 public:
     tlm_utils::multi_passthrough_target_socket<Dram> in;
 
-    Dram(sc_core::sc_module_name name, const DramConfig& cfg, uint32_t line, const ClockDomain& clock, Fidelity fidelity);
+    // `core_period`: the core clock's, in which dram.frontend_latency counts.
+    Dram(sc_core::sc_module_name name, const DramConfig& cfg, uint32_t line, const ClockDomain& clock, const sc_core::sc_time& core_period,
+         Fidelity fidelity);
     SC_HAS_PROCESS(Dram);
 
     std::vector<DramStats> stats() const;  // per channel
@@ -34,6 +39,7 @@ private:
     void b_transport(int id, tlm::tlm_generic_payload& t, sc_core::sc_time& d);
     void schedule();   // SC_METHOD
     void respond();    // SC_METHOD on the response PEQ
+    void leave_frontend();  // SC_METHOD on the latency queue
     bool admit(tlm::tlm_generic_payload& t, uint64_t now);
 
     DramConfig cfg_;
@@ -41,6 +47,9 @@ private:
     const ClockDomain& clock_;
     std::vector<DramChannel> channels_;
     std::vector<std::deque<tlm::tlm_generic_payload*>> blocked_;  // per channel: END_REQ withheld
+    sc_core::sc_time frontend_;                                   // the front-end latency
+    FifoPeq<tlm::tlm_generic_payload> frontend_peq_;              // accepted, in the latency queue
+    std::vector<std::deque<tlm::tlm_generic_payload*>> waiting_;  // per channel: out of it, the channel queue full
     tlm_utils::peq_with_get<tlm::tlm_generic_payload> resp_peq_;
     sc_core::sc_event wake_;
     DramBookings lt_;  // LT

@@ -25,10 +25,11 @@ private:
     const std::vector<ShaderWarp>& warps_;
 };
 
-WorkloadDriver::WorkloadDriver(Workload& workload, uint32_t sms, uint32_t warp_size, uint32_t shade_latency,
+WorkloadDriver::WorkloadDriver(Workload& workload, uint32_t sms, uint32_t warp_size, uint32_t shade_latency, uint32_t resident_warps,
                                const SamplingOptions& sampling)
     : workload_(workload), shade_(shade_latency), ready_(sms),
-      estimator_({sms, std::max<uint32_t>(1, sampling.capacity / std::max<uint32_t>(1, sms)), shade_latency}, sampling.capacity) {
+      estimator_({sms, std::max<uint32_t>(1, sampling.capacity / std::max<uint32_t>(1, sms)), shade_latency, resident_warps},
+                 sampling.capacity) {
     std::vector<WorkRay> first;
     workload_.begin(first);
     // Paths in order; each run of warp_size paths (neighbouring pixels) is one shader warp.
@@ -84,7 +85,8 @@ WorkloadDriver::WorkloadDriver(Workload& workload, uint32_t sms, uint32_t warp_s
         for (uint32_t i = 0; i < warps_.size(); ++i)
             for (const Thread& t : warps_[i].threads) path_warp_[t.path] = i;
     }
-    for (uint32_t i = 0; i < warps_.size(); ++i) enqueue(i, 0);
+    launched_ = resident_warps ? std::min<size_t>(warps_.size(), size_t(sms) * resident_warps) : warps_.size();
+    for (uint32_t i = 0; i < launched_; ++i) enqueue(i, 0);
     live_warps_ = warps_.size();
 }
 
@@ -175,10 +177,15 @@ void WorkloadDriver::retire(uint32_t sm, const std::vector<RetiredRay>& rays, ui
             // warp-buffer slot), which is what the GPU's throughput is made of.
             estimator_.on_trace_done(wr, double(now - sw.issued_at));
             const bool more = std::any_of(sw.threads.begin(), sw.threads.end(), [](const Thread& t) { return !t.pending.empty(); });
-            if (more)
+            if (more) {
                 enqueue(rec.warp, now + shade_);
-            else
+            } else {
                 estimator_.on_warp_finished(--live_warps_, now);
+                if (launched_ < warps_.size()) {  // its place goes to the next warp of the frame
+                    warps_[launched_].sm = sw.sm;
+                    enqueue(uint32_t(launched_++), now);
+                }
+            }
         }
         if (!keep_rays_) free_records_.push_back(rr.key);  // reused by a later ray (next_trace)
     }

@@ -31,7 +31,11 @@ struct TracedRay {
 
 class WorkloadDriver : public TraceSource {
 public:
-    WorkloadDriver(Workload& workload, uint32_t sms, uint32_t warp_size, uint32_t shade_latency, const SamplingOptions& sampling = {});
+    // `resident_warps`: shader warps an SM holds at once (workload.resident_warps; 0: every warp
+    // of the frame from the start). The first sms x resident warps go to the SMs round robin; a
+    // warp that finishes gives its place to the next warp of the frame, on its SM.
+    WorkloadDriver(Workload& workload, uint32_t sms, uint32_t warp_size, uint32_t shade_latency, uint32_t resident_warps = 0,
+                   const SamplingOptions& sampling = {});
 
     std::optional<std::vector<WarpRay>> next_trace(uint32_t sm, uint64_t now) override;
     uint64_t earliest_ready(uint32_t sm) const override;
@@ -100,6 +104,7 @@ private:
     uint64_t issued_ = 0;
     RaySummary summary_;
     uint64_t live_warps_ = 0, last_progress_ = 0;
+    size_t launched_ = 0;  // warps given a place on an SM so far (in frame order)
     uint64_t warps_total_ = 0;
     bool sampled_ = false;
     SampleEstimator estimator_;
