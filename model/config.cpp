@@ -54,11 +54,14 @@ const Key kSchema[] = {
     {"l2.mshrs", "MSHRs", Type::Int, 1, 1 << 16, false, "MSHRs per slice"},
     {"l2.mshr_merge", "requests", Type::Int, 1, 1024, false, "requests merged into one MSHR"},
     {"l2.latency", "core cycles", Type::Int, 0, 100000, false, "L2 hit latency (core cycles)"},
+    {"l2.set_index", "", Type::Text, 0, 0, false, "how a slice picks a line's set from the slice's own address: linear, or ipoly (GPGPU-Sim's IPOLY hash; 16, 32 or 64 sets)"},
     {"xbar.latency", "core cycles", Type::Int, 0, 10000, false, "crossbar latency each way (core cycles)"},
     {"dram.channels", "channels", Type::Int, 1, 256, false, "channels"},
     {"dram.banks", "banks", Type::Int, 1, 1024, true, "banks per channel"},
     {"dram.bus_bytes", "bytes", Type::Int, 1, 64, true, "data bus width per channel (bytes)"},
-    {"dram.burst", "beats", Type::Int, 1, 64, true, "burst length: a transfer moves whole bursts of bus_bytes x burst bytes (two beats per memory cycle)"},
+    {"dram.burst", "beats", Type::Int, 1, 64, true, "burst length: a transfer moves whole bursts of bus_bytes x burst bytes"},
+    {"dram.beats_per_cycle", "beats", Type::Int, 1, 16, true, "data beats per memory (command) clock cycle: 2 for double data rate (GPGPU-Sim's dram_data_command_freq_ratio)"},
+    {"dram.address_map", "", Type::Text, 0, 0, false, "'line' (lines round robin over slices and channels; a channel's lines fill a row, then the next bank) or a GPGPU-Sim mapping 'dramid@<bit>;<64 letters of R B C S 0>' (model/address_map.h)"},
     {"dram.frontend_latency", "core cycles", Type::Int, 0, 1e6, false, "cycles a request waits between the L2 and the DRAM scheduler's queue (GPGPU-Sim's dram_latency queue)"},
     {"dram.queue", "requests", Type::Int, 1, 1 << 16, false, "scheduler queue entries per channel"},
     {"dram.row_bytes", "bytes", Type::Int, 128, 1 << 20, true, "row (page) size"},
@@ -284,6 +287,7 @@ HwConfig Config::resolve() const {
     d.banks = u32("dram.banks");
     d.bus_bytes = u32("dram.bus_bytes");
     d.burst = u32("dram.burst");
+    d.beats_per_cycle = u32("dram.beats_per_cycle");
     d.queue = u32("dram.queue");
     d.frontend_latency = u32("dram.frontend_latency");
     d.row_bytes = u32("dram.row_bytes");
@@ -300,6 +304,18 @@ HwConfig Config::resolve() const {
     d.tWL = u32("dram.tWL");
     d.tWR = u32("dram.tWR");
     if (d.row_bytes < h.l2.line) throw ConfigError("key 'dram.row_bytes' must be at least one cache line");
+    d.address_map = values_.at("dram.address_map").get<std::string>();
+    try {
+        h.l2.local = h.address_map().slice_local();
+    } catch (const std::invalid_argument& e) {
+        throw ConfigError(std::string("key ") + e.what());
+    }
+    const std::string set_index = values_.at("l2.set_index").get<std::string>();
+    if (set_index != "linear" && set_index != "ipoly") throw ConfigError("key 'l2.set_index' = '" + set_index + "': allowed are linear, ipoly");
+    h.l2.ipoly = set_index == "ipoly";
+    const uint64_t l2_sets = h.l2.size_bytes / h.l2.line / (h.l2.assoc ? h.l2.assoc : h.l2.size_bytes / h.l2.line);
+    if (h.l2.ipoly && l2_sets != 16 && l2_sets != 32 && l2_sets != 64)
+        throw ConfigError("key 'l2.set_index' = 'ipoly' needs 16, 32 or 64 sets per slice; the L2 slice has " + std::to_string(l2_sets));
     if (d.tRC < d.tRAS) throw ConfigError("key 'dram.tRC' (" + std::to_string(d.tRC) + ") must be at least 'dram.tRAS' (" + std::to_string(d.tRAS) + ")");
     try {
         h.prefetch.kind = parse_prefetcher(values_.at("prefetch.kind").get<std::string>());

@@ -11,6 +11,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "address_map.h"
 #include "prefetch_config.h"
 
 namespace rtu {
@@ -24,11 +25,14 @@ struct CacheConfig {
     uint32_t assoc;  // 0 = fully associative
     uint32_t line, sector, mshrs, mshr_merge;
     uint32_t latency;  // a hit's latency to the requester (L1: rt.l1_hit_latency)
+    SliceLocal local{};  // an L2 slice: its sets are indexed with the slice's own address
+    bool ipoly = false;  // sets by GPGPU-Sim's IPOLY hash (l2.set_index) instead of linearly
 };
 
 struct DramConfig {
-    uint32_t channels, banks, bus_bytes, burst, queue, row_bytes;
+    uint32_t channels, banks, bus_bytes, burst, beats_per_cycle, queue, row_bytes;
     uint32_t frontend_latency;  // core cycles between the L2 and the scheduler's queue
+    std::string address_map;    // "line" or a GPGPU-Sim mapping (model/address_map.h)
     bool frfcfs;
     uint32_t tCL, tRCD, tRP, tRAS, tRC, tRRD, tCCD, tWL, tWR;  // memory clock cycles
 };
@@ -60,6 +64,8 @@ struct HwConfig {
     uint64_t quantum, watchdog;  // core cycles
     PrefetchConfig prefetch;
     EnergyTable energy;
+    // Where addresses live (L2 slice, DRAM channel, bank, row); checked by Config::resolve.
+    AddressMap address_map() const { return AddressMap(dram.address_map, dram.channels, dram.banks, dram.row_bytes, l2_slices, l2.line); }
 };
 
 class Config {

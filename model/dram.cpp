@@ -4,20 +4,6 @@
 
 namespace rtu {
 
-DramAddressMap::DramAddressMap(const DramConfig& c, uint32_t line_bytes)
-    : channels_(c.channels), banks_(c.banks), line_(line_bytes), lines_per_row_(c.row_bytes / line_bytes) {}
-
-DramCoord DramAddressMap::map(uint64_t addr) const {
-    const uint64_t line = addr / line_;
-    DramCoord d;
-    d.channel = uint32_t(line % channels_);
-    const uint64_t in_channel = line / channels_;
-    const uint64_t row_block = in_channel / lines_per_row_;
-    d.bank = uint32_t(row_block % banks_);
-    d.row = row_block / banks_;
-    return d;
-}
-
 DramChannel::DramChannel(const DramConfig& c) : cfg_(c), banks_(c.banks) {}
 
 bool DramChannel::schedule(uint64_t now, DramRequest* out, uint64_t* done) {
@@ -74,11 +60,11 @@ bool DramChannel::schedule(uint64_t now, DramRequest* out, uint64_t* done) {
     return true;
 }
 
-DramBookings::DramBookings(const DramConfig& c, uint32_t line_bytes)
-    : cfg_(c), map_(c, line_bytes), banks_(c.channels, std::vector<Bank>(c.banks)), bus_(c.channels), commands_(c.channels), stats_(c.channels) {}
+DramBookings::DramBookings(const DramConfig& c, const AddressMap& map)
+    : cfg_(c), map_(map), banks_(c.channels, std::vector<Bank>(c.banks)), bus_(c.channels), commands_(c.channels), stats_(c.channels) {}
 
 uint64_t DramBookings::access(uint64_t addr, uint32_t bytes, uint64_t now, uint64_t horizon) {
-    const DramCoord at = map_.map(addr);
+    const DramCoord at = map_.dram(addr);
     Bank& b = banks_[at.channel][at.bank];
     DramStats& st = stats_[at.channel];
     const bool hit = b.open && b.row == at.row;

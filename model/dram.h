@@ -7,35 +7,22 @@
 #include <deque>
 #include <vector>
 
+#include "address_map.h"
 #include "calendar.h"
 #include "config.h"
 #include "stats.h"
 
 namespace rtu {
 
-struct DramCoord {
-    uint32_t channel, bank;
-    uint64_t row;
-};
-
-// Lines are interleaved across channels; within a channel consecutive lines fill a row, then
-// move to the next bank.
-class DramAddressMap {
-public:
-    DramAddressMap(const DramConfig& c, uint32_t line_bytes);
-    DramCoord map(uint64_t addr) const;
-
-private:
-    uint32_t channels_, banks_, line_, lines_per_row_;
-};
-
 // Data-bus cycles (memory clock) of one transfer of `bytes`: whole bursts of `burst` beats of
-// bus_bytes each, two beats per memory cycle (double data rate). 32 B on the mobile preset's
-// 2 B bus with bursts of 8: two bursts of 16 B, 16 beats, 8 cycles.
+// bus_bytes each, beats_per_cycle beats per memory cycle. 32 B on the mobile preset's 2 B bus
+// with bursts of 8 at 2 beats a cycle: two bursts of 16 B, 16 beats, 8 cycles (GPGPU-Sim: two
+// column commands of BL / dram_data_command_freq_ratio = 4 cycles each). The authors' desktop
+// (bursts of 16 at 4 beats a cycle): one burst of 32 B, 4 cycles.
 inline uint64_t dram_transfer_cycles(const DramConfig& c, uint32_t bytes) {
     const uint64_t burst_bytes = uint64_t(c.bus_bytes) * c.burst;
     const uint64_t beats = (bytes + burst_bytes - 1) / burst_bytes * c.burst;
-    return (beats + 1) / 2;
+    return (beats + c.beats_per_cycle - 1) / c.beats_per_cycle;
 }
 
 struct DramRequest {
@@ -109,7 +96,7 @@ private:
 // fast on the memory-bound scenes. No request queue, no FR-FCFS reordering, no tRAS/tRC/tRRD.
 class DramBookings {
 public:
-    DramBookings(const DramConfig& c, uint32_t line_bytes);
+    DramBookings(const DramConfig& c, const AddressMap& map);
     // A transfer of `bytes` arriving at memory cycle `now`; returns the memory cycle its data
     // transfer ends. No later call may be timestamped before `horizon` (memory cycles).
     uint64_t access(uint64_t addr, uint32_t bytes, uint64_t now, uint64_t horizon);
@@ -122,7 +109,7 @@ private:
         Calendar busy;
     };
     DramConfig cfg_;
-    DramAddressMap map_;
+    AddressMap map_;
     std::vector<std::vector<Bank>> banks_;  // per channel
     std::vector<Calendar> bus_, commands_;  // per channel: data bus, command sequence
     std::vector<DramStats> stats_;

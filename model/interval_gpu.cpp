@@ -17,7 +17,8 @@ IntervalGpu::IntervalGpu(const HwConfig& cfg, const BvhImage& image, TraversalOr
       issue_(cfg.sms),
       drain_(cfg.sms),
       prefetch_queue_(cfg.sms),
-      dram_(cfg.dram, cfg.l2.line),
+      map_(cfg.address_map()),
+      dram_(cfg.dram, map_),
       rt_(cfg.sms) {
     if (order == TraversalOrder::Treelet)
         throw std::invalid_argument("the interval fidelity models DFS and BFS traversal, not treelet traversal (use --fidelity at or lt)");
@@ -57,7 +58,7 @@ void IntervalGpu::advance(uint64_t floor) {
     for (PortCalendar& p : drain_) p.advance(floor);
 }
 
-uint32_t IntervalGpu::slice_of(uint64_t addr) const { return uint32_t((addr / cfg_.l2.line) % cfg_.l2_slices); }
+uint32_t IntervalGpu::slice_of(uint64_t addr) const { return map_.slice(addr); }
 
 void IntervalGpu::warm(uint32_t sm, uint64_t addr) {
     if (!l1_[sm].tags().warm(addr)) l2_[slice_of(addr)].tags().warm(addr);

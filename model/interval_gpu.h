@@ -111,6 +111,7 @@ private:
         uint32_t sm = 0;
     };
     Sink sink_{*this};
+    AddressMap map_;  // L2 slices and DRAM (model/address_map.h)
     DramBookings dram_;
     uint64_t floor_ = 0, ports_floor_ = 0;
     std::vector<RtUnitStats> rt_;  // per SM

@@ -5,11 +5,12 @@
 namespace rtu {
 
 SectorCache::SectorCache(const CacheConfig& c)
-    : line_(c.line), sector_(c.sector), mshrs_(c.mshrs), merge_(c.mshr_merge) {
+    : line_(c.line), sector_(c.sector), mshrs_(c.mshrs), merge_(c.mshr_merge), local_(c.local), ipoly_(c.ipoly) {
     const uint64_t lines = c.size_bytes / c.line;
     assoc_ = c.assoc ? c.assoc : uint32_t(lines);
     sets_ = uint32_t(lines / assoc_);
     if (line_ / sector_ > 32) throw std::invalid_argument("at most 32 sectors per line");
+    if (ipoly_ && sets_ != 16 && sets_ != 32 && sets_ != 64) throw std::invalid_argument("IPOLY set index needs 16, 32 or 64 sets");
     ways_.resize(lines);
     set_.resize(sets_);
     where_.reserve(lines * 2);
@@ -33,6 +34,14 @@ void SectorCache::touch(Way& w) {
     if (w.next != kNone) ways_[w.next].prev = w.prev;
     else s.tail = w.prev;
     link_front(s, i);
+}
+
+// An L2 slice indexes with its own address (the slice's digits taken out), so that every set
+// is used; the IPOLY hash then XORs higher bits into the linear index (GPGPU-Sim's 'P').
+uint32_t SectorCache::set_of(uint64_t line) const {
+    const uint64_t local = local_(line) / line_;
+    const uint32_t index = uint32_t(local % sets_);
+    return ipoly_ ? ipoly_index(local / sets_, index, sets_) : index;
 }
 
 SectorCache::Way* SectorCache::find(uint64_t line) {
@@ -101,7 +110,7 @@ SectorCache::Way* SectorCache::allocate(uint64_t line, CacheAccessCounts* st) {
     // Ways are taken into use in index order and never invalidated, so an unused way, if any, is
     // the set's next one; else the victim is the least recently used way, from the recency
     // list's tail, that has no pending sector.
-    const uint64_t set = (line / line_) % sets_;
+    const uint64_t set = set_of(line);
     Set& s = set_[set];
     Way* victim = nullptr;
     if (s.unused < assoc_) {

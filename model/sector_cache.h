@@ -132,7 +132,10 @@ private:
     Way* find(uint64_t line);
     Way* allocate(uint64_t line, CacheAccessCounts* st);
 
+    uint32_t set_of(uint64_t line) const;  // the set a line goes to
     uint32_t line_, sector_, assoc_, sets_, mshrs_, merge_;
+    SliceLocal local_;
+    bool ipoly_;
     std::vector<Way> ways_;  // set-major: set s owns ways [s*assoc, (s+1)*assoc)
     std::vector<Set> set_;
     absl::flat_hash_map<uint64_t, uint32_t> where_;  // line address -> way index

@@ -123,9 +123,9 @@ GpuPlatform::GpuPlatform(const HwConfig& cfg, const BvhImage& image, Workload& w
         m.l1.emplace_back(new Cache(("l1_" + id).c_str(), CacheRole::L1, cfg.l1, cfg.l1_hit_latency, m.pool, m.core, opt.fidelity));
         link(m.rt[s]->socket, m.l1[s]->in, "rt_unit_" + id + "_l1_" + id);
     }
-    m.xbar.reset(new Crossbar("crossbar", cfg.l2_slices, cfg.l2.line, cfg.xbar_latency, m.core, opt.fidelity));
+    m.xbar.reset(new Crossbar("crossbar", cfg.address_map(), cfg.l2_slices, cfg.xbar_latency, m.core, opt.fidelity));
     for (uint32_t s = 0; s < cfg.sms; ++s) link(m.l1[s]->out, m.xbar->in, "l1_" + std::to_string(s) + "_crossbar");
-    m.dram.reset(new Dram("dram", cfg.dram, cfg.l2.line, m.mem, m.core.period(), opt.fidelity));
+    m.dram.reset(new Dram("dram", cfg.dram, cfg.address_map(), m.mem, m.core.period(), opt.fidelity));
     for (uint32_t s = 0; s < cfg.l2_slices; ++s) {
         const std::string id = std::to_string(s);
         m.l2.emplace_back(new Cache(("l2_" + id).c_str(), CacheRole::L2, cfg.l2, cfg.l2.latency, m.pool, m.core, opt.fidelity));

@@ -78,6 +78,7 @@ TEST(Dram, TransfersAreWholeBursts) {
     DramConfig c{};
     c.bus_bytes = 2;
     c.burst = 8;
+    c.beats_per_cycle = 2;
     EXPECT_EQ(dram_transfer_cycles(c, 32), 8u);  // 2 bursts, 16 beats
     EXPECT_EQ(dram_transfer_cycles(c, 16), 4u);  // 1 burst
     EXPECT_EQ(dram_transfer_cycles(c, 8), 4u);   // still a whole burst
@@ -87,6 +88,12 @@ TEST(Dram, TransfersAreWholeBursts) {
     EXPECT_EQ(dram_transfer_cycles(c, 32), 8u);
     c.bus_bytes = 4;
     EXPECT_EQ(dram_transfer_cycles(c, 2), 1u);   // one beat, half a cycle, rounds up
+    // The TTP authors' desktop (RTVR_RTX2060): 2 B x 16 beats = 32 B, 4 beats per command cycle.
+    c.bus_bytes = 2;
+    c.burst = 16;
+    c.beats_per_cycle = 4;
+    EXPECT_EQ(dram_transfer_cycles(c, 32), 4u);
+    EXPECT_EQ(dram_transfer_cycles(c, 64), 8u);
 }
 
 namespace {
@@ -96,6 +103,7 @@ DramConfig dram() {
     d.banks = 4;
     d.bus_bytes = 2;
     d.burst = 8;
+    d.beats_per_cycle = 2;
     d.queue = 8;
     d.row_bytes = 2048;
     d.frfcfs = true;
@@ -109,12 +117,12 @@ DramConfig dram() {
 // earlier than ACT + tRAS, then tRP + tRCD + tCL + 8.
 TEST(Dram, RowHitRowMissAndConflictLatencies) {
     const DramConfig cfg = dram();
-    DramAddressMap map(cfg, 128);
+    AddressMap map("line", cfg.channels, cfg.banks, cfg.row_bytes, cfg.channels, 128);
     DramChannel ch(cfg);
     auto issue = [&](uint64_t addr, uint64_t now) {
         DramRequest r;
         r.addr = addr;
-        r.at = map.map(addr);
+        r.at = map.dram(addr);
         r.arrival = now;
         ch.enqueue(r);
         DramRequest out;
@@ -127,8 +135,8 @@ TEST(Dram, RowHitRowMissAndConflictLatencies) {
     // Row 1 of bank 0 is 16 lines x 4 banks further on: a conflict. ACT was at 0, so precharge
     // at 200 (>= tRAS), ACT 220, COL 240, data 260..268.
     const uint64_t conflict = 16ull * 128 * 4;
-    EXPECT_EQ(map.map(conflict).bank, 0u);
-    EXPECT_EQ(map.map(conflict).row, 1u);
+    EXPECT_EQ(map.dram(conflict).bank, 0u);
+    EXPECT_EQ(map.dram(conflict).row, 1u);
     EXPECT_EQ(issue(conflict, 200), 200u + 20 + 20 + 20 + 8);
     const DramStats& s = ch.stats();
     EXPECT_EQ(s.row_misses, 1u);
@@ -139,13 +147,13 @@ TEST(Dram, RowHitRowMissAndConflictLatencies) {
 
 TEST(Dram, FrFcfsPrefersRowHitsAndTrcHolds) {
     const DramConfig cfg = dram();
-    DramAddressMap map(cfg, 128);
+    AddressMap map("line", cfg.channels, cfg.banks, cfg.row_bytes, cfg.channels, 128);
     DramChannel ch(cfg);
     auto push = [&](uint64_t addr) {
         DramRequest r;
         r.addr = addr;
         r.token = addr;
-        r.at = map.map(addr);
+        r.at = map.dram(addr);
         ch.enqueue(r);
     };
     DramRequest out;
@@ -161,6 +169,97 @@ TEST(Dram, FrFcfsPrefersRowHitsAndTrcHolds) {
     EXPECT_EQ(out.addr, conflict);
     // ACT at 0; the next ACT of the same bank waits for tRC = 62 and tRAS + tRP = 70.
     EXPECT_EQ(done, 70u + 20 + 20 + 8);
+}
+
+// The TTP authors' mapping (MOBILE gpgpusim.config l.155): the channel is bits 8-9 (256 B
+// interleave); without them, bit 7 and bits 12-14 are the bank, bits 15-27 the row.
+//   0x000: channel 0, bank 0, row 0          0x080: bit 7 -> bank 1
+//   0x100: bit 8 -> channel 1                0x400: channel 0; without the channel 0x100 (column)
+//   0x4000: without the channel 0x1000 (bit 12) -> bank 2; 0x20000: 0x8000 (bit 15) -> row 1
+// With one slice per channel the slice is the channel.
+TEST(AddressMap, GpgpuSimMappingHandWorked) {
+    const std::string mobile = "dramid@8;00000000.00000000.00000000.00000000.0000RRRR.RRRRRRRR.RBBBCCCC.BCCSSSSS";
+    const AddressMap m(mobile, 4, 16, 2048, 4, 128);
+    auto at = [&](uint64_t a) {
+        const DramCoord d = m.dram(a);
+        return std::vector<uint64_t>{d.channel, d.bank, d.row, m.slice(a)};
+    };
+    EXPECT_EQ(at(0x000), (std::vector<uint64_t>{0, 0, 0, 0}));
+    EXPECT_EQ(at(0x080), (std::vector<uint64_t>{0, 1, 0, 0}));
+    EXPECT_EQ(at(0x100), (std::vector<uint64_t>{1, 0, 0, 1}));
+    EXPECT_EQ(at(0x300), (std::vector<uint64_t>{3, 0, 0, 3}));
+    EXPECT_EQ(at(0x400), (std::vector<uint64_t>{0, 0, 0, 0}));
+    EXPECT_EQ(at(0x4000), (std::vector<uint64_t>{0, 2, 0, 0}));
+    EXPECT_EQ(at(0x20000), (std::vector<uint64_t>{0, 0, 1, 0}));
+    // The slice's own address: the channel bits squeezed out.
+    EXPECT_EQ(m.slice_local()(0x4000 + 0x100 + 0x80), 0x1000u + 0x80u);
+    // The authors' desktop (RTVR_RTX2060): 12 channels (not a power of two: (addr >> 8) % 12),
+    // two sub-partitions each, told apart by the bank's lowest bit (bit 7): 24 slices.
+    const AddressMap d(mobile, 12, 16, 2048, 24, 128);
+    EXPECT_EQ(d.slice(0x000), 0u);
+    EXPECT_EQ(d.slice(0x080), 1u);
+    EXPECT_EQ(d.slice(0x100), 2u);
+    EXPECT_EQ(d.slice(0x100 * 11 + 0x80), 23u);
+    EXPECT_EQ(d.dram(0x100 * 12).channel, 0u);  // wraps: the rest is 0x100, a column bit
+    EXPECT_EQ(d.dram(0x100 * 12).bank, 0u);
+    EXPECT_EQ(d.slice_local()(0x100 * 12 + 0x80), 0x80u);  // channel digit out, then bit 7 (the sub-partition) out
+    // Refused, saying why.
+    auto refuses = [&](const std::string& spec, uint32_t ch, uint32_t slices, const std::string& why) {
+        try {
+            AddressMap(spec, ch, 16, 2048, slices, 128);
+            ADD_FAILURE() << spec << " accepted";
+        } catch (const std::invalid_argument& e) {
+            EXPECT_NE(std::string(e.what()).find(why), std::string::npos) << e.what();
+        }
+    };
+    refuses(mobile, 4, 6, "l2.slices (6) must be dram.channels (4) times a power of two");
+    refuses("dramid@8;0000RRRR.RBBBCCCC.BCCSSSSS", 4, 4, "letters; there must be 64");
+    refuses("dramid@x;" + mobile.substr(9), 4, 4, "not a number");
+    refuses("random", 4, 4, "allowed are 'line'");
+    refuses("dramid@8;00000000.00000000.00000000.00000000.0000RRRR.RRRRRRRR.RBBXCCCC.BCCSSSSS", 4, 4, "letter 'X'");
+    refuses("dramid@8;00000000.00000000.00000000.00000000.0000RRRR.RRRRRRRR.RRBBCCCC.BCCSSSSS", 4, 4, "3 bank bits");
+    refuses("dramid@6;00000000.00000000.00000000.00000000.0000RRRR.RRRRRRRR.RBBBCCCC.BCCSSSSS", 4, 4, "inside a 128 B line");
+}
+
+// An L2 slice indexes its sets with its own address. With the line map and 4 slices, slice 0
+// holds every 4th line; indexed with the full address, its 64 sets x 16 ways would take only 16
+// sets (the line number's low bits are the slice's), so 64 x 16 of its lines evict each other.
+// Indexed with the slice's own address they fit. IPOLY spreads them too (a permutation of the
+// linear index for each value of the bits above).
+TEST(SectorCache, AnL2SliceUsesAllItsSets) {
+    const HwConfig hw = Config::load("mobile").resolve();
+    const AddressMap map = hw.address_map();
+    auto evictions = [&](CacheConfig c) {
+        SectorCache l2(c);
+        uint64_t n = 0;
+        for (uint64_t line = 0; n < 64 * 16; ++line) {
+            const uint64_t a = line * 128;
+            if (map.slice(a) != 0) continue;
+            ++n;
+            if (l2.read(a, n, ReqKind::Demand) != CacheOutcome::Hit) l2.fill(a);
+        }
+        return l2.stats(ReqKind::Demand).evictions;
+    };
+    CacheConfig c = hw.l2;
+    EXPECT_EQ(evictions(c), 0u);
+    c.ipoly = true;
+    EXPECT_EQ(evictions(c), 0u);
+    c.ipoly = false;
+    c.local = SliceLocal{};  // the full address: set camping
+    EXPECT_EQ(evictions(c), 64u * 16 - 16 * 16);
+    for (uint32_t sets : {16u, 32u, 64u})
+        for (uint64_t higher : {0ull, 1ull, 0x5a5ull, 0x7ffffull}) {
+            std::set<uint32_t> seen;
+            for (uint32_t i = 0; i < sets; ++i) seen.insert(ipoly_index(higher, i, sets));
+            EXPECT_EQ(seen.size(), sets);
+            EXPECT_LT(*seen.rbegin(), sets);
+        }
+    // Hand-worked: higher = 1 (bit 0) flips index bits 0 and 1 for 64 sets (IPOLY(67)'s rows 0
+    // and 1 contain a[0]); for 16 sets, rows 0 and 1 as well.
+    EXPECT_EQ(ipoly_index(1, 0, 64), 3u);
+    EXPECT_EQ(ipoly_index(1, 0, 16), 3u);
+    EXPECT_EQ(ipoly_index(0, 5, 32), 5u);
+    EXPECT_THROW(ipoly_index(0, 0, 8), std::invalid_argument);
 }
 
 TEST(Config, PresetsLoadAndBadValuesAreRejectedByKey) {
@@ -299,12 +398,13 @@ TEST(EventWheel, HandsOutAsAHeapOnTimeThenSequence) {
 //   E ch0 bank1, closed: its ACT overlaps; first slot free from 20 is [36,44): column 36; data
 //     would start at 56, after B's transfer: 56..64
 TEST(DramBookings, HandWorkedCommandSequence) {
-    const DramConfig c = Config::load("mobile").resolve().dram;
+    const HwConfig hw = Config::load("mobile").resolve();
+    const DramConfig& c = hw.dram;
     ASSERT_EQ(c.tRCD, 20u);
     ASSERT_EQ(c.tCL, 20u);
     ASSERT_EQ(c.tRP, 20u);
     ASSERT_EQ(dram_transfer_cycles(c, 32), 8u);  // two bursts of 8 beats x 2 B, two beats per cycle
-    DramBookings d(c, 128);
+    DramBookings d(c, hw.address_map());
     EXPECT_EQ(d.access(0, 32, 0, 0), 48u);       // A
     EXPECT_EQ(d.access(32, 32, 0, 0), 56u);      // B
     EXPECT_EQ(d.access(131072, 32, 0, 0), 96u);  // C

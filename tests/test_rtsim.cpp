@@ -687,8 +687,9 @@ TEST(RtsimConfig, EveryKeyOfEveryPresetIsRead) {
         {{"l1.size_kb=2"}}, {{"l1.assoc=4"}}, {{"l1.line=64", "l2.line=64"}}, {{"l1.sector=64", "l2.sector=64"}},
         {{"l1.mshrs=2", "l1.mshr_merge=2"}}, {{"l1.mshr_merge=1"}},
         {{"l2.slices=1"}}, {{"l2.slice_kb=16"}}, {{"l2.assoc=1"}, "--set l2.slice_kb=16"}, {{"l2.mshrs=2", "l2.mshr_merge=2"}}, {{"l2.mshr_merge=1"}},
-        {{"l2.latency=20"}}, {{"xbar.latency=30"}},
-        {{"dram.channels=1"}}, {{"dram.banks=2"}}, {{"dram.bus_bytes=8"}}, {{"dram.burst=32"}}, {{"dram.queue=1"}}, {{"dram.frontend_latency=100"}},
+        {{"l2.latency=20"}}, {{"l2.set_index=ipoly", "l2.slice_kb=16", "l2.assoc=2"}}, {{"xbar.latency=30"}},
+        {{"dram.channels=1"}}, {{"dram.banks=2"}}, {{"dram.bus_bytes=8"}}, {{"dram.burst=32"}}, {{"dram.queue=1"}}, {{"dram.frontend_latency=100"}}, {{"dram.beats_per_cycle=4"}},
+        {{"dram.address_map=dramid@8;00000000.00000000.00000000.00000000.0000RRRR.RRRRRRRR.RBBBCCCC.BCCSSSSS", "l2.slices=4"}},
         {{"dram.row_bytes=256"}}, {{"dram.scheduler=fcfs"}}, {{"dram.tCL=40"}}, {{"dram.tRCD=40"}}, {{"dram.tRP=40"}},
         {{"dram.tRAS=60"}}, {{"dram.tRC=200"}}, {{"dram.tRRD=40"}}, {{"dram.tCCD=16"}},
         {{"prefetch.kind=ttp"}}, {{"prefetch.treelet_budget=4096"}, treelet}, {{"prefetch.treelet_threshold=0.25"}, treelet},
@@ -757,7 +758,7 @@ TEST(RtsimConfig, EveryKeyOfEveryPresetIsRead) {
             };
             if (!baselines.count(c.extra)) baselines[c.extra] = run("");
             std::string sets;
-            for (const std::string& s : c.sets) sets += " --set " + s;
+            for (const std::string& s : c.sets) sets += " --set '" + s + "'";
             const auto changed = run(sets);
             const auto& reference = baselines[c.extra];
             ASSERT_EQ(reference.first, 0) << preset << " " << c.extra;

@@ -4,9 +4,9 @@ namespace rtu {
 
 using namespace sc_core;
 
-Crossbar::Crossbar(sc_module_name name, uint32_t slices, uint32_t line, uint32_t latency, const ClockDomain& clock,
+Crossbar::Crossbar(sc_module_name name, const AddressMap& map, uint32_t slices, uint32_t latency, const ClockDomain& clock,
                    Fidelity fidelity)
-    : sc_module(name), in("from_l1"), out("to_l2"), slices_(slices), line_(line), latency_(latency), clock_(clock),
+    : sc_module(name), in("from_l1"), out("to_l2"), map_(map), latency_(latency), clock_(clock),
       outputs_(slices), req_peq_("req_peq"), resp_peq_("resp_peq") {
     if (fidelity == Fidelity::AT) {
         in.register_nb_transport_fw(this, &Crossbar::nb_transport_fw);

@@ -1,5 +1,5 @@
-// Crossbar between the SMs' L1s and the L2 slices: a request goes to slice (line index mod
-// slices); the response goes back to the L1 it came from. Each output serialises its requests
+// Crossbar between the SMs' L1s and the L2 slices: a request goes to its address's slice
+// (AddressMap::slice, model/address_map.h); the response goes back to the L1 it came from. Each output serialises its requests
 // (one BEGIN_REQ outstanding per socket, as the base protocol requires); both directions add
 // the configured latency.
 #pragma once
@@ -13,6 +13,7 @@
 
 #include "clock.h"
 #include "fifo_peq.h"
+#include "model/address_map.h"
 #include "model/fidelity.h"
 #include "payload.h"
 
@@ -23,10 +24,10 @@ public:
     tlm_utils::multi_passthrough_target_socket<Crossbar> in;      // from L1s
     tlm_utils::multi_passthrough_initiator_socket<Crossbar> out;  // to L2 slices
 
-    Crossbar(sc_core::sc_module_name name, uint32_t slices, uint32_t line, uint32_t latency, const ClockDomain& clock,
+    Crossbar(sc_core::sc_module_name name, const AddressMap& map, uint32_t slices, uint32_t latency, const ClockDomain& clock,
              Fidelity fidelity);
     SC_HAS_PROCESS(Crossbar);
-    uint32_t slice_of(uint64_t addr) const { return uint32_t((addr / line_) % slices_); }
+    uint32_t slice_of(uint64_t addr) const { return map_.slice(addr); }
 
 private:
     tlm::tlm_sync_enum nb_transport_fw(int id, tlm::tlm_generic_payload& t, tlm::tlm_phase& ph, sc_core::sc_time& d);
@@ -36,7 +37,8 @@ private:
     void forward_requests();
     void forward_responses();
 
-    uint32_t slices_, line_, latency_;
+    AddressMap map_;
+    uint32_t latency_;
     const ClockDomain& clock_;
     struct Output {
         std::deque<tlm::tlm_generic_payload*> queue;

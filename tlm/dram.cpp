@@ -6,11 +6,11 @@ namespace rtu {
 
 using namespace sc_core;
 
-Dram::Dram(sc_module_name name, const DramConfig& cfg, uint32_t line, const ClockDomain& clock, const sc_time& core_period,
+Dram::Dram(sc_module_name name, const DramConfig& cfg, const AddressMap& map, const ClockDomain& clock, const sc_time& core_period,
            Fidelity fidelity)
-    : sc_module(name), in("from_l2"), cfg_(cfg), map_(cfg, line), clock_(clock), blocked_(cfg.channels),
+    : sc_module(name), in("from_l2"), cfg_(cfg), map_(map), clock_(clock), blocked_(cfg.channels),
       frontend_(core_period * double(cfg.frontend_latency)), frontend_peq_("frontend_peq"), waiting_(cfg.channels),
-      resp_peq_("resp_peq"), lt_(cfg, line) {
+      resp_peq_("resp_peq"), lt_(cfg, map) {
     for (uint32_t c = 0; c < cfg.channels; ++c) channels_.emplace_back(cfg);
     if (fidelity == Fidelity::AT) {
         in.register_nb_transport_fw(this, &Dram::nb_transport_fw);
@@ -41,7 +41,7 @@ size_t Dram::queue_depth() const {
 }
 
 bool Dram::admit(tlm::tlm_generic_payload& t, uint64_t now) {
-    const DramCoord at = map_.map(t.get_address());
+    const DramCoord at = map_.dram(t.get_address());
     DramChannel& ch = channels_[at.channel];
     if (ch.full()) return false;
     DramRequest r;
@@ -70,7 +70,7 @@ tlm::tlm_sync_enum Dram::nb_transport_fw(int id, tlm::tlm_generic_payload& t, tl
         ph = tlm::END_REQ;
         return tlm::TLM_UPDATED;
     }
-    blocked_[map_.map(t.get_address()).channel].push_back(&t);
+    blocked_[map_.dram(t.get_address()).channel].push_back(&t);
     return tlm::TLM_ACCEPTED;
 }
 
@@ -78,7 +78,7 @@ tlm::tlm_sync_enum Dram::nb_transport_fw(int id, tlm::tlm_generic_payload& t, tl
 // of that channel still waiting for room).
 void Dram::leave_frontend() {
     while (tlm::tlm_generic_payload* t = frontend_peq_.get_next_transaction()) {
-        const uint32_t c = map_.map(t->get_address()).channel;
+        const uint32_t c = map_.dram(t->get_address()).channel;
         if (!waiting_[c].empty() || !admit(*t, clock_.cycle_at_or_after(sc_time_stamp()))) waiting_[c].push_back(t);
         wake_.notify(SC_ZERO_TIME);
     }

@@ -27,7 +27,7 @@ public:
     tlm_utils::multi_passthrough_target_socket<Dram> in;
 
     // `core_period`: the core clock's, in which dram.frontend_latency counts.
-    Dram(sc_core::sc_module_name name, const DramConfig& cfg, uint32_t line, const ClockDomain& clock, const sc_core::sc_time& core_period,
+    Dram(sc_core::sc_module_name name, const DramConfig& cfg, const AddressMap& map, const ClockDomain& clock, const sc_core::sc_time& core_period,
          Fidelity fidelity);
     SC_HAS_PROCESS(Dram);
 
@@ -43,7 +43,7 @@ private:
     bool admit(tlm::tlm_generic_payload& t, uint64_t now);
 
     DramConfig cfg_;
-    DramAddressMap map_;
+    AddressMap map_;
     const ClockDomain& clock_;
     std::vector<DramChannel> channels_;
     std::vector<std::deque<tlm::tlm_generic_payload*>> blocked_;  // per channel: END_REQ withheld
