@@ -70,7 +70,7 @@ struct HwConfig {
 
 class Config {
 public:
-    // A preset name (mobile, desktop) or a JSON file path. Throws ConfigError.
+    // A preset name (mobile, desktop, paper) or a JSON file path. Throws ConfigError.
     static Config load(const std::string& name_or_file);
     static std::vector<std::string> presets();
     // Every key: its name, unit and description.

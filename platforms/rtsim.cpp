@@ -204,7 +204,7 @@ int sc_main(int argc, char** argv) {
         ("seed", po::value(&a.seed)->default_value(a.seed), "random seed")
         ("traversal", po::value(&a.traversal)->default_value(a.traversal), "dfs, bfs or treelet")
         ("fidelity", po::value(&a.fidelity)->default_value(a.fidelity), "functional, at (reference timing), lt (loosely timed) or interval (fastest timing, one event per node fetch)")
-        ("config", po::value(&a.config)->default_value(a.config), "hardware preset (mobile, desktop) or JSON file")
+        ("config", po::value(&a.config)->default_value(a.config), "hardware preset (mobile: the paper's Table 2; paper: the TTP authors' MOBILE setup; desktop: their RTX 2060-like setup) or JSON file")
         ("set", po::value(&a.sets)->composing(), "override one configuration key, e.g. --set l1.size_kb=64 (repeatable)")
         ("quantum", po::value(&a.quantum), "LT quantum in core cycles (same as --set sim.quantum=N)")
         ("prefetcher", po::value(&a.prefetcher), "none, ttp, park, treelet, perfect-up, perfect-down (same as --set prefetch.kind=...; interval: none, ttp)")

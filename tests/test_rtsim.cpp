@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <set>
 #include <sstream>
@@ -664,6 +665,71 @@ nlohmann::json model_stats(const std::string& path) {
 }
 }  // namespace
 
+// docs/paper-preset.md gives the source of every key of the presets that follow the TTP
+// authors' setup: every configuration key has a row, and its paper, desktop and mobile columns
+// are the presets' values (so the table cannot drift from the JSON). Every key of paper.json and
+// desktop.json is written out (nothing silently inherited from mobile).
+TEST(RtsimConfig, PaperPresetTableMatchesTheJson) {
+    using namespace rtu;
+    const std::string doc = read_text(std::string(RTU_SOURCE_DIR) + "/docs/paper-preset.md");
+    ASSERT_FALSE(doc.empty());
+    std::map<std::string, std::vector<std::string>> rows;  // key -> cells after the key
+    for (const std::string& line : lines(doc)) {
+        if (line.rfind("| ", 0) != 0) continue;
+        std::vector<std::string> cells;
+        std::string cell;
+        for (size_t i = 1; i < line.size(); ++i) {
+            if (line[i] == '|') {
+                const size_t a = cell.find_first_not_of(' '), b = cell.find_last_not_of(' ');
+                cells.push_back(a == std::string::npos ? "" : cell.substr(a, b - a + 1));
+                cell.clear();
+            } else {
+                cell += line[i];
+            }
+        }
+        if (cells.size() == 5) rows[cells[0]] = {cells[1], cells[2], cells[3], cells[4]};
+    }
+    auto flat = [](const nlohmann::ordered_json& j) {
+        std::map<std::string, nlohmann::json> out;
+        std::function<void(const nlohmann::ordered_json&, const std::string&)> walk = [&](const nlohmann::ordered_json& o, const std::string& p) {
+            for (auto it = o.begin(); it != o.end(); ++it) {
+                if (!it.key().empty() && it.key()[0] == '_') continue;
+                const std::string k = p.empty() ? it.key() : p + "." + it.key();
+                if (it.value().is_object()) walk(it.value(), k);
+                else out[k] = it.value();
+            }
+        };
+        walk(j, "");
+        return out;
+    };
+    const std::vector<std::string> presets = {"paper", "desktop", "mobile"};
+    std::vector<std::map<std::string, nlohmann::json>> values;
+    for (const std::string& p : presets) values.push_back(flat(Config::load(p).to_json()));
+    for (const std::string& p : {"paper", "desktop"}) {
+        const auto file = flat(nlohmann::ordered_json::parse(read_text(std::string(RTU_SOURCE_DIR) + "/platforms/configs/" + p + ".json")));
+        for (const Config::KeyInfo& k : Config::keys()) EXPECT_TRUE(file.count(k.name)) << p << ".json does not write '" << k.name << "'";
+    }
+    for (const Config::KeyInfo& k : Config::keys()) {
+        auto row = rows.find(k.name);
+        if (row == rows.end()) {
+            ADD_FAILURE() << "docs/paper-preset.md has no row for '" << k.name << "'";
+            continue;
+        }
+        EXPECT_FALSE(row->second[3].empty()) << k.name << ": no source";
+        for (size_t i = 0; i < presets.size(); ++i) {
+            const nlohmann::json& v = values[i].at(k.name);
+            const std::string& cell = row->second[i];
+            if (v.is_number()) {
+                EXPECT_DOUBLE_EQ(std::stod(cell), v.get<double>()) << k.name << " (" << presets[i] << ")";
+            } else if (v.is_boolean()) {
+                EXPECT_EQ(cell, v.get<bool>() ? "true" : "false") << k.name << " (" << presets[i] << ")";
+            } else {
+                EXPECT_EQ(cell, v.get<std::string>()) << k.name << " (" << presets[i] << ")";
+            }
+        }
+    }
+}
+
 // Every configuration key of every preset is read. Changed alone (or with the keys it must agree
 // with), each changes the statistics of a small AT run, or (the watchdog) its exit status. The
 // DRAM's write timing and write energy change no run, because the modelled RT unit only reads:
@@ -680,17 +746,17 @@ TEST(RtsimConfig, EveryKeyOfEveryPresetIsRead) {
     const std::string ttp = "--prefetcher ttp", treelet = "--traversal treelet --prefetcher treelet";
     const std::vector<Case> cases = {
         {{"gpu.sms=2"}}, {{"gpu.core_clock_mhz=700"}}, {{"gpu.memory_clock_mhz=1000"}}, {{"rt.warp_size=8"}},
-        {{"rt.warp_buffer=1"}, "--set gpu.sms=2"}, {{"rt.l1_hit_latency=30"}}, {{"rt.response_fifo=1"}}, {{"rt.next_node_register=true"}}, {{"rt.leaf_descriptor_read=true"}},
+        {{"rt.warp_buffer=1"}, "--set gpu.sms=2"}, {{"rt.l1_hit_latency=30"}}, {{"rt.response_fifo=1"}}, {{"rt.next_node_register=flip"}}, {{"rt.leaf_descriptor_read=flip"}},
         {{"rt.latency.header=40"}}, {{"rt.latency.ray_box=40"}}, {{"rt.latency.transform=40"}},
         {{"rt.latency.leaf_descriptor=40"}}, {{"rt.latency.ray_triangle=40"}}, {{"rt.latency.triangle_hit=40"}},
         {{"rt.latency.procedural=40"}, "--scene wknd"}, {{"workload.shade_latency=5000"}}, {{"workload.resident_warps=1"}},
-        {{"l1.size_kb=2"}}, {{"l1.assoc=4"}}, {{"l1.line=64", "l2.line=64"}}, {{"l1.sector=64", "l2.sector=64"}},
+        {{"l1.size_kb=2"}}, {{"l1.assoc=4"}}, {{"l1.line=64", "l2.line=64", "l2.set_index=linear"}}, {{"l1.sector=64", "l2.sector=64"}},
         {{"l1.mshrs=2", "l1.mshr_merge=2"}}, {{"l1.mshr_merge=1"}},
-        {{"l2.slices=1"}}, {{"l2.slice_kb=16"}}, {{"l2.assoc=1"}, "--set l2.slice_kb=16"}, {{"l2.mshrs=2", "l2.mshr_merge=2"}}, {{"l2.mshr_merge=1"}},
+        {{"l2.slices=1", "dram.address_map=line"}}, {{"l2.slice_kb=16", "l2.set_index=linear"}}, {{"l2.assoc=1"}, "--set l2.slice_kb=16 --set l2.set_index=linear"}, {{"l2.mshrs=2", "l2.mshr_merge=2"}}, {{"l2.mshr_merge=1"}},
         {{"l2.latency=20"}}, {{"l2.set_index=ipoly", "l2.slice_kb=16", "l2.assoc=2"}}, {{"xbar.latency=30"}},
-        {{"dram.channels=1"}}, {{"dram.banks=2"}}, {{"dram.bus_bytes=8"}}, {{"dram.burst=32"}}, {{"dram.queue=1"}}, {{"dram.frontend_latency=100"}}, {{"dram.beats_per_cycle=4"}},
-        {{"dram.address_map=dramid@8;00000000.00000000.00000000.00000000.0000RRRR.RRRRRRRR.RBBBCCCC.BCCSSSSS", "l2.slices=4"}},
-        {{"dram.row_bytes=256"}}, {{"dram.scheduler=fcfs"}}, {{"dram.tCL=40"}}, {{"dram.tRCD=40"}}, {{"dram.tRP=40"}},
+        {{"dram.channels=1", "dram.address_map=line"}}, {{"dram.banks=2", "dram.address_map=line"}}, {{"dram.bus_bytes=1"}}, {{"dram.burst=32"}}, {{"dram.queue=1"}}, {{"dram.frontend_latency=50"}}, {{"dram.beats_per_cycle=8"}},
+        {{"dram.address_map=dramid@9;00000000.00000000.00000000.00000000.0000RRRR.RRRRRRRR.RBBBCCCC.BCCSSSSS", "l2.slices=4", "dram.channels=4"}},
+        {{"dram.row_bytes=256", "dram.address_map=line"}}, {{"dram.scheduler=fcfs"}}, {{"dram.tCL=40"}}, {{"dram.tRCD=40"}}, {{"dram.tRP=40"}},
         {{"dram.tRAS=60"}}, {{"dram.tRC=200"}}, {{"dram.tRRD=40"}}, {{"dram.tCCD=16"}},
         {{"prefetch.kind=ttp"}}, {{"prefetch.treelet_budget=4096"}, treelet}, {{"prefetch.treelet_threshold=0.25"}, treelet},
         {{"prefetch.ttp_depth_s1=4"}, ttp}, {{"prefetch.ttp_depth_s2=8"}, ttp}, {{"prefetch.ttp_depth_s3=2"}, ttp},
@@ -743,7 +809,8 @@ TEST(RtsimConfig, EveryKeyOfEveryPresetIsRead) {
     for (const Case& c : cases)
         for (const std::string& s : c.sets) covered.insert(s.substr(0, s.find('=')));
     for (const Config::KeyInfo& k : Config::keys()) EXPECT_TRUE(covered.count(k.name)) << "no case shows that '" << k.name << "' is read";
-    for (const std::string preset : {"mobile", "desktop"}) {
+    for (const std::string preset : {"mobile", "paper", "desktop"}) {
+        const nlohmann::ordered_json values = Config::load(preset).to_json();
         std::map<std::string, std::pair<int, nlohmann::json>> baselines;  // by `extra`
         int n = 0;
         for (const Case& c : cases) {
@@ -758,7 +825,14 @@ TEST(RtsimConfig, EveryKeyOfEveryPresetIsRead) {
             };
             if (!baselines.count(c.extra)) baselines[c.extra] = run("");
             std::string sets;
-            for (const std::string& s : c.sets) sets += " --set '" + s + "'";
+            for (std::string s : c.sets) {
+                const std::string key = s.substr(0, s.find('='));
+                if (s.substr(key.size() + 1) == "flip") {  // a boolean: the preset's opposite
+                    const nlohmann::json v = values.at(nlohmann::json::json_pointer("/" + key.substr(0, key.find('.')) + "/" + key.substr(key.find('.') + 1)));
+                    s = key + "=" + (v.get<bool>() ? "false" : "true");
+                }
+                sets += " --set '" + s + "'";
+            }
             const auto changed = run(sets);
             const auto& reference = baselines[c.extra];
             ASSERT_EQ(reference.first, 0) << preset << " " << c.extra;
