@@ -30,6 +30,7 @@ const Key kSchema[] = {
     {"rt.l1_hit_latency", "core cycles", Type::Int, 0, 1000, false, "extra cycles the RT unit waits on an L1 hit"},
     {"rt.next_node_register", "", Type::Bool, 0, 0, false, "stock Vulkan-sim's next-node register: the first hit child is read from it, not popped (false: every node read is a pop, as in the TTP authors' simulator)"},
     {"rt.leaf_descriptor_read", "", Type::Bool, 0, 0, false, "a primitive leaf is read in two dependent steps, its 8 B descriptor (one 32 B chunk) then the 64 B leaf, as in the TTP authors' simulator (false: both chunks at once)"},
+    {"rt.warp_scheduler", "", Type::Text, 0, 0, false, "which warp with ready threads the RT unit schedules each cycle: round_robin, or oldest_first (the TTP authors' RT unit)"},
     {"rt.response_fifo", "entries", Type::Int, 0, 1 << 20, false, "response FIFO entries (0: unbounded, as in Vulkan-sim); a full FIFO holds the L1's responses back"},
     {"rt.latency.header", "core cycles", Type::Int, 0, 1000, false, "BVH node header decode"},
     {"rt.latency.ray_box", "core cycles", Type::Int, 0, 1000, false, "ray-box tests of an internal node"},
@@ -82,6 +83,7 @@ const Key kSchema[] = {
     {"prefetch.ttp_depth_s2", "entries", Type::Int, 0, 64, false, "TTP (DFS): on the second consecutive pop"},
     {"prefetch.ttp_depth_s3", "entries", Type::Int, 0, 64, false, "TTP (DFS): on the third and later consecutive pops"},
     {"prefetch.bfs_n", "entries", Type::Int, 0, 64, false, "TTP (BFS): queue entries prefetched per pop"},
+    {"prefetch.queue", "chunks", Type::Int, 0, 1 << 20, false, "prefetch queue entries per RT unit (0: unbounded, as the TTP authors' RT unit); a chunk that finds it full is dropped"},
     {"prefetch.priority_after", "core cycles", Type::Int, 0, 1e6, false, "0: prefetch only in cycles without demand; X: prefetch first if none sent in X cycles"},
     {"energy.l1_access_pj", "pJ", Type::Real, 0, 1e6, false, "energy of one 32 B L1 access (pJ)"},
     {"energy.l2_access_pj", "pJ", Type::Real, 0, 1e6, false, "energy of one 32 B L2 access incl. crossbar (pJ)"},
@@ -248,6 +250,10 @@ HwConfig Config::resolve() const {
     h.warp_buffer = u32("rt.warp_buffer");
     h.l1_hit_latency = u32("rt.l1_hit_latency");
     h.response_fifo = u32("rt.response_fifo");
+    const std::string order = values_.at("rt.warp_scheduler").get<std::string>();
+    if (order != "round_robin" && order != "oldest_first")
+        throw ConfigError("key 'rt.warp_scheduler' = '" + order + "': allowed are round_robin, oldest_first");
+    h.warp_order = order == "oldest_first" ? WarpOrder::OldestFirst : WarpOrder::RoundRobin;
     h.next_node_register = values_.at("rt.next_node_register").get<bool>();
     h.leaf_descriptor_read = values_.at("rt.leaf_descriptor_read").get<bool>();
     h.lat = {u32("rt.latency.header"), u32("rt.latency.ray_box"), u32("rt.latency.transform"),
@@ -325,6 +331,7 @@ HwConfig Config::resolve() const {
     h.prefetch.depth = {u32("prefetch.ttp_depth_s1"), u32("prefetch.ttp_depth_s2"), u32("prefetch.ttp_depth_s3")};
     h.prefetch.bfs_n = u32("prefetch.bfs_n");
     h.prefetch.priority_after = u32("prefetch.priority_after");
+    h.prefetch.queue = u32("prefetch.queue");
     h.prefetch.treelet_budget = u32("prefetch.treelet_budget");
     h.prefetch.treelet_threshold = num("prefetch.treelet_threshold");
     h.energy = {num("energy.l1_access_pj"), num("energy.l2_access_pj"), num("energy.dram_read_pj"),

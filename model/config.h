@@ -37,6 +37,9 @@ struct DramConfig {
     uint32_t tCL, tRCD, tRP, tRAS, tRC, tRRD, tCCD, tWL, tWR;  // memory clock cycles
 };
 
+// The RT unit's warp scheduling (rt.warp_scheduler; model/warp_scheduler.h).
+enum class WarpOrder { RoundRobin, OldestFirst };
+
 struct RtLatency {
     uint32_t header, ray_box, transform, leaf_descriptor, ray_triangle, triangle_hit, procedural;
 };
@@ -51,6 +54,7 @@ struct HwConfig {
     uint32_t sms;
     double core_mhz, memory_mhz;
     uint32_t warp_size, warp_buffer, l1_hit_latency, response_fifo;
+    WarpOrder warp_order;       // which warp the RT unit's scheduler picks
     bool next_node_register;    // stock Vulkan-sim's register for the first hit child (default: every read a pop)
     bool leaf_descriptor_read;  // a primitive leaf read in two dependent steps (model/node_fetch.h)
     RtLatency lat;

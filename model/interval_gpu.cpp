@@ -16,7 +16,7 @@ IntervalGpu::IntervalGpu(const HwConfig& cfg, const BvhImage& image, TraversalOr
       memory_fs_(uint64_t(std::llround(1e9 / cfg.memory_mhz))),
       issue_(cfg.sms),
       drain_(cfg.sms),
-      prefetch_queue_(cfg.sms),
+      prefetch_queue_(cfg.sms, SmPrefetchQueue{PrefetchQueue(cfg.prefetch.queue), false}),
       map_(cfg.address_map()),
       dram_(cfg.dram, map_),
       rt_(cfg.sms) {
@@ -147,6 +147,10 @@ void IntervalGpu::Sink::prefetch(const StackEntry& node, uint64_t) {
             ++gpu.rt_[sm].prefetch_queue.duplicates_dropped;  // still waiting in the queue: dropped, as in AT
             continue;
         }
+        if (q.full()) {
+            ++gpu.rt_[sm].prefetch_queue.full_dropped;
+            continue;
+        }
         ChunkRequest r;
         r.addr = chunk;
         r.prefetch = true;
@@ -156,6 +160,10 @@ void IntervalGpu::Sink::prefetch(const StackEntry& node, uint64_t) {
 
 void IntervalGpu::send_prefetch(uint32_t sm, uint64_t cycle) {
     SmPrefetchQueue& q = prefetch_queue_[sm];
+    if (q.chunks.empty()) {  // demands took every waiting chunk out
+        q.scheduled = false;
+        return;
+    }
     PortCalendar& issue = issue_[sm];
     const uint64_t sent = issue.first_free(cycle);
     if (sent == cycle) {
@@ -218,6 +226,8 @@ void IntervalGpu::run_next(std::vector<Finished>& finished) {
         Fetch f{t.ready, false, false};
         for (uint32_t c = 0; c < chunks; ++c) {
             const uint64_t sent = issue.book(t.ready + 1);
+            // The demand takes a waiting prefetch of its chunk out of the prefetch queue, as in AT.
+            rt_[sm].prefetch_queue.removed_by_demand += prefetch_queue_[sm].chunks.remove(chunk_address(e.addr, c));
             const Served s = read(sm, chunk_address(e.addr, c), sent, ReqKind::Demand);
             // Drained from the response FIFO one per cycle, at the earliest in the cycle after
             // the request left (an L1 hit's answer comes in that same cycle).

@@ -34,6 +34,7 @@ struct ChunkRequest {
     uint32_t thread = 0;   // first thread waiting on the node (others coalesced onto it); prefetch: the thread that made it
     uint8_t streak = 0;    // pop-streak class of the node fetch (model/pop_streak.h)
     bool prefetch = false;
+    bool more = false;     // demand: another chunk of the same read follows
     uint64_t deadline = ~0ull;  // a prefetch not sent by this cycle is dropped (Park: the end of the leaf test)
 };
 

@@ -17,6 +17,7 @@ struct PrefetchConfig {
     uint32_t bfs_n = 1;                       // TTP BFS: entries prefetched per pop
     uint32_t priority_after = 0;              // 0: prefetch only in cycles without a demand request;
                                               // X: a prefetch goes first if none was sent in the last X cycles
+    uint32_t queue = 0;                       // prefetch queue entries per RT unit (0: unbounded)
     uint32_t treelet_budget = 512;            // Treelet: bytes per treelet
     double treelet_threshold = 0.75;          // Treelet: share of a warp's threads that must head for a treelet
 };

@@ -21,7 +21,8 @@ private:
 RtUnitCore::RtUnitCore(const HwConfig& cfg, const BvhImage& image, TraversalOrder order, const Treelets* treelets)
     : cfg_(cfg), image_(image), order_(order), treelets_(treelets),
       prefetcher_(make_prefetcher(cfg.prefetch, order, cfg.lat, treelets)), warps_(cfg.warp_buffer),
-      scheduler_(cfg.warp_buffer), maq_(cfg.prefetch.priority_after), fifo_(cfg.response_fifo) {
+      scheduler_(cfg.warp_buffer, cfg.warp_order), maq_(cfg.prefetch.priority_after, cfg.warp_order, cfg.warp_buffer, cfg.prefetch.queue),
+      fifo_(cfg.response_fifo) {
     if (order == TraversalOrder::Treelet && !treelets) throw std::logic_error("treelet traversal needs treelets");
 }
 
@@ -79,6 +80,7 @@ void RtUnitCore::accept_warp(const std::vector<WarpRay>& rays, uint64_t now) {
     w.prefetch = PrefetchWarpState{};
     w.threads.assign(rays.size(), Thread{});
     w.live = w.ready = 0;
+    w.age = ++warps_accepted_;
     for (size_t i = 0; i < rays.size(); ++i) {
         Thread& t = w.threads[i];
         t.since = now;
@@ -120,7 +122,7 @@ const ChunkRequest& RtUnitCore::front_request(uint64_t now) {
 }
 
 void RtUnitCore::pop_request(uint64_t now) {
-    const ChunkRequest r = maq_.pop(now);
+    const ChunkRequest r = maq_.pop(now, stats_.prefetch_queue.removed_by_demand);
     if (!r.prefetch) return;
     prefetch_ids_.insert(r.id);
     ++stats_.prefetch_queue.sent;
@@ -133,6 +135,10 @@ void RtUnitCore::Sink::prefetch(const StackEntry& e, uint64_t deadline) {
         ++core.stats_.prefetch_queue.generated;
         if (q.waiting(addr)) {
             ++core.stats_.prefetch_queue.duplicates_dropped;
+            continue;
+        }
+        if (q.full()) {
+            ++core.stats_.prefetch_queue.full_dropped;
             continue;
         }
         ChunkRequest r;
@@ -237,7 +243,7 @@ void RtUnitCore::finish_math(uint64_t now) {
 // Warp scheduler: one warp's ready threads go to the memory access queue, their node reads
 // coalesced and split into chunks.
 void RtUnitCore::schedule_warp(uint64_t now) {
-    const int picked = scheduler_.pick([&](uint32_t s) { return warps_[s].used && warps_[s].ready > 0; });
+    const int picked = scheduler_.pick([&](uint32_t s) { return warps_[s].used && warps_[s].ready > 0; }, [&](uint32_t s) { return warps_[s].age; });
     if (picked < 0) return;
     const uint32_t wi = uint32_t(picked);
     Warp& w = warps_[wi];
@@ -288,6 +294,7 @@ void RtUnitCore::schedule_warp(uint64_t now) {
             r.warp = wi;
             r.thread = members[0];
             r.streak = w.threads[members[0]].fetch_class;
+            r.more = c + 1 < group_chunks_[g];
             Pending& slot = claim_slot(r.id);
             slot.id = r.id;
             slot.warp = wi;
@@ -298,7 +305,7 @@ void RtUnitCore::schedule_warp(uint64_t now) {
                 limit_study_.push_back({now + std::max<uint64_t>(1, cfg_.l1_hit_latency) + c, r.id});
                 ++stats_.limit_study_hits;
             } else {
-                maq_.push(r);
+                maq_.push(r, w.age);
             }
         }
     }

@@ -107,6 +107,7 @@ private:
         std::vector<Thread> threads;
         uint32_t live = 0;  // threads not Idle
         uint32_t ready = 0; // threads in WaitSchedule
+        uint64_t age = 0;   // order of entering the warp buffer (oldest-first scheduling)
     };
     struct Pending {  // chunk in flight: which threads wait for it
         uint64_t id = 0;  // 0: slot free
@@ -165,6 +166,7 @@ private:
     std::array<uint8_t, 32> group_size_{};
     std::vector<RetiredRay> retired_;
     uint64_t next_id_ = 1;
+    uint64_t warps_accepted_ = 0;  // warps taken into the warp buffer so far (their age)
     RtUnitStats stats_;
 };
 

@@ -28,10 +28,12 @@ struct ThreadCycles {
 
 // The prefetch queue (model/prefetch_queue.h): what the prefetcher picked and what became of it.
 struct PrefetchQueueCounts {
-    uint64_t generated = 0, duplicates_dropped = 0, sent = 0, expired_unsent = 0, answered = 0;
+    uint64_t generated = 0, duplicates_dropped = 0, full_dropped = 0, removed_by_demand = 0, sent = 0, expired_unsent = 0, answered = 0;
     static constexpr Counter<PrefetchQueueCounts> kCounters[] = {
         {"generated", &PrefetchQueueCounts::generated, "chunks", "32 B prefetch chunks the prefetcher picked"},
         {"duplicates_dropped", &PrefetchQueueCounts::duplicates_dropped, "chunks", "picked while the same chunk waited in the queue: dropped"},
+        {"full_dropped", &PrefetchQueueCounts::full_dropped, "chunks", "picked while the queue was full (prefetch.queue): dropped"},
+        {"removed_by_demand", &PrefetchQueueCounts::removed_by_demand, "chunks", "taken out of the queue unsent because a demand read of the same chunk left"},
         {"sent", &PrefetchQueueCounts::sent, "requests", "prefetch requests sent to the L1"},
         {"expired_unsent", &PrefetchQueueCounts::expired_unsent, "chunks", "dropped unsent at their deadline (Park: the end of the leaf test)"},
         {"answered", &PrefetchQueueCounts::answered, "responses", "prefetch responses (the RT unit drops them: the data is in the caches)"},

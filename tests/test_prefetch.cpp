@@ -6,10 +6,12 @@
 #include <random>
 #include <set>
 
+#include "model/memory_access_queue.h"
 #include "model/prefetcher.h"
 #include "model/rt_unit_core.h"
 #include "model/sector_cache.h"
 #include "model/treelet.h"
+#include "model/warp_scheduler.h"
 #include "test_util.h"
 #include "workloads/bvh_builder.h"
 #include "workloads/scenes.h"
@@ -152,8 +154,12 @@ void prefetches_only_current_entries(TraversalOrder order) {
     }
     EXPECT_TRUE(core.idle());
     EXPECT_GT(prefetches, 10u);
-    EXPECT_EQ(generated, prefetches);  // every generated (non-duplicate) prefetch left the unit
-    EXPECT_EQ(core.stats().prefetch_queue.generated, generated + core.stats().prefetch_queue.duplicates_dropped);
+    // Every generated (non-duplicate) prefetch left the unit or was taken out by a demand read of
+    // its chunk.
+    const PrefetchQueueCounts& q = core.stats().prefetch_queue;
+    EXPECT_GT(q.removed_by_demand, 0u);
+    EXPECT_EQ(generated, prefetches + q.removed_by_demand);
+    EXPECT_EQ(q.generated, generated + q.duplicates_dropped);
     EXPECT_EQ(core.stats().prefetch_queue.sent, prefetches);
 }
 }  // namespace
@@ -223,4 +229,96 @@ TEST(Treelets, TraversalFindsTheDfsHitsAndFinishesATreeletBeforeLeaving) {
     }
     EXPECT_GT(hits, 500);
     EXPECT_GT(switches, 1000);
+}
+
+namespace {
+ChunkRequest chunk(uint64_t id, uint64_t addr, uint32_t warp, bool prefetch = false, bool more = false) {
+    ChunkRequest r;
+    r.id = id;
+    r.addr = addr;
+    r.warp = warp;
+    r.prefetch = prefetch;
+    r.more = more;
+    return r;
+}
+}  // namespace
+
+// A demand chunk that leaves takes a waiting prefetch of the same chunk out of the prefetch
+// queue (the TTP authors' RT unit); a bounded queue drops what finds it full; a removed chunk
+// never leaves and may be queued again.
+TEST(PrefetchQueue, DemandTakesTheSameChunkOutAndABoundDrops) {
+    MemoryAccessQueue maq(0, WarpOrder::RoundRobin, 1, 2);
+    PrefetchQueue& pq = maq.prefetches();
+    pq.push(chunk(1, 0x100, 0, true));
+    pq.push(chunk(2, 0x120, 0, true));
+    EXPECT_TRUE(pq.full());
+    maq.push(chunk(3, 0x120, 0), 1);  // a demand read of the second prefetch's chunk
+    uint64_t removed = 0, expired = 0;
+    ASSERT_TRUE(maq.has_request(0, expired));
+    EXPECT_FALSE(maq.front(0).prefetch);  // demand first
+    EXPECT_EQ(maq.pop(0, removed).id, 3u);
+    EXPECT_EQ(removed, 1u);
+    EXPECT_FALSE(pq.waiting(0x120));
+    EXPECT_EQ(pq.size(), 1u);
+    EXPECT_FALSE(pq.full());
+    pq.push(chunk(4, 0x140, 0, true));
+    EXPECT_TRUE(pq.full());
+    pq.pop();  // 1 leaves
+    pq.push(chunk(5, 0x120, 0, true));  // the removed chunk, queued again
+    EXPECT_EQ(pq.size(), 2u);
+    std::vector<uint64_t> left;
+    while (maq.has_request(1, expired)) left.push_back(maq.pop(1, removed).id);
+    EXPECT_EQ(left, (std::vector<uint64_t>{4, 5}));  // 2 was taken out and never left
+    EXPECT_EQ(removed, 1u);
+}
+
+// Oldest first: the oldest warp's reads leave before a younger warp's, even when the younger
+// warp's were queued earlier; the chunks of one read leave together even when an older warp's
+// read arrives between them. Round robin keeps queue order.
+TEST(MemoryAccessQueue, OldestFirstAndReadsKeptTogether) {
+    for (const WarpOrder order : {WarpOrder::RoundRobin, WarpOrder::OldestFirst}) {
+        MemoryAccessQueue maq(0, order, 3);
+        uint64_t removed = 0, expired = 0;
+        // Slot 2 holds the youngest warp (age 9): its read of two chunks is queued first.
+        maq.push(chunk(1, 0x000, 2, false, true), 9);
+        maq.push(chunk(2, 0x020, 2), 9);
+        maq.push(chunk(3, 0x100, 0), 5);  // slot 0, age 5
+        std::vector<uint64_t> left;
+        ASSERT_TRUE(maq.has_request(0, expired));
+        left.push_back(maq.pop(0, removed).id);
+        maq.push(chunk(4, 0x200, 1, false, true), 1);  // the oldest warp, two chunks
+        maq.push(chunk(5, 0x220, 1), 1);
+        while (maq.has_request(1, expired)) left.push_back(maq.pop(1, removed).id);
+        if (order == WarpOrder::RoundRobin)
+            EXPECT_EQ(left, (std::vector<uint64_t>{1, 2, 3, 4, 5}));
+        else  // 3 (age 5) first; then 4 and 5 (age 1); then the youngest's read
+            EXPECT_EQ(left, (std::vector<uint64_t>{3, 4, 5, 1, 2}));
+    }
+    // The rest of a read goes before an older warp's read that arrived meanwhile.
+    MemoryAccessQueue maq(0, WarpOrder::OldestFirst, 2);
+    uint64_t removed = 0, expired = 0;
+    maq.push(chunk(1, 0x000, 1, false, true), 7);
+    maq.push(chunk(2, 0x020, 1), 7);
+    ASSERT_TRUE(maq.has_request(0, expired));
+    EXPECT_EQ(maq.pop(0, removed).id, 1u);
+    maq.push(chunk(3, 0x100, 0), 2);
+    std::vector<uint64_t> left;
+    while (maq.has_request(1, expired)) left.push_back(maq.pop(1, removed).id);
+    EXPECT_EQ(left, (std::vector<uint64_t>{2, 3}));
+}
+
+TEST(WarpScheduler, RoundRobinAndOldestFirst) {
+    const std::vector<uint64_t> age = {7, 3, 9, 5};
+    const std::vector<bool> ready = {true, false, true, true};
+    auto has_ready = [&](uint32_t s) { return bool(ready[s]); };
+    auto age_of = [&](uint32_t s) { return age[s]; };
+    WarpScheduler rr(4, WarpOrder::RoundRobin);
+    EXPECT_EQ(rr.pick(has_ready, age_of), 0);
+    EXPECT_EQ(rr.pick(has_ready, age_of), 2);
+    EXPECT_EQ(rr.pick(has_ready, age_of), 3);
+    EXPECT_EQ(rr.pick(has_ready, age_of), 0);
+    WarpScheduler oldest(4, WarpOrder::OldestFirst);
+    EXPECT_EQ(oldest.pick(has_ready, age_of), 3);  // slot 1 (age 3) has no ready thread
+    EXPECT_EQ(oldest.pick(has_ready, age_of), 3);
+    EXPECT_EQ(oldest.pick([](uint32_t) { return false; }, age_of), -1);
 }

@@ -3,6 +3,7 @@
 
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <functional>
@@ -560,11 +561,15 @@ TEST(RtsimTiming, IntervalIsWithinTheStatedBoundOfAt) {
         EXPECT_LE(std::fabs(si / sa - 1.0), 0.08) << scene << ": TTP speed-up AT " << sa << " interval " << si;
         EXPECT_EQ(iv["nodes_visited"], at["nodes_visited"]);
         EXPECT_EQ(iv["hits"], at["hits"]);
-        // Every prefetch chunk generated is sent or dropped as a duplicate; every one sent reads L1
-        // once, and once more after a reservation fail.
+        // Every prefetch chunk generated is sent, dropped as a duplicate or taken out by a demand
+        // read of its chunk (the queue has no bound here); every one sent reads L1 once, and once
+        // more after a reservation fail.
         const auto& pf = iv_ttp["timing"]["rt_unit"]["prefetch_queue"];
         const auto& l1 = iv_ttp["timing"]["l1"];
-        EXPECT_EQ(pf["sent"].get<uint64_t>() + pf["duplicates_dropped"].get<uint64_t>(), pf["generated"].get<uint64_t>());
+        EXPECT_EQ(pf["full_dropped"].get<uint64_t>(), 0u);
+        EXPECT_GT(pf["removed_by_demand"].get<uint64_t>(), 0u);
+        EXPECT_EQ(pf["sent"].get<uint64_t>() + pf["duplicates_dropped"].get<uint64_t>() + pf["removed_by_demand"].get<uint64_t>(),
+                  pf["generated"].get<uint64_t>());
         EXPECT_EQ(l1["prefetch"]["accesses"].get<uint64_t>(), pf["sent"].get<uint64_t>() + l1["prefetch"]["reservation_fails"].get<uint64_t>());
         EXPECT_GT(l1["prefetched"]["useful"].get<uint64_t>(), 0u) << scene;
         EXPECT_EQ(run("iv2.json", "--fidelity interval"), iv) << scene;
@@ -746,7 +751,7 @@ TEST(RtsimConfig, EveryKeyOfEveryPresetIsRead) {
     const std::string ttp = "--prefetcher ttp", treelet = "--traversal treelet --prefetcher treelet";
     const std::vector<Case> cases = {
         {{"gpu.sms=2"}}, {{"gpu.core_clock_mhz=700"}}, {{"gpu.memory_clock_mhz=1000"}}, {{"rt.warp_size=8"}},
-        {{"rt.warp_buffer=1"}, "--set gpu.sms=2"}, {{"rt.l1_hit_latency=30"}}, {{"rt.response_fifo=1"}}, {{"rt.next_node_register=flip"}}, {{"rt.leaf_descriptor_read=flip"}},
+        {{"rt.warp_buffer=1"}, "--set gpu.sms=2"}, {{"rt.l1_hit_latency=30"}}, {{"rt.response_fifo=1"}}, {{"rt.next_node_register=flip"}}, {{"rt.leaf_descriptor_read=flip"}}, {{"rt.warp_scheduler=round_robin|oldest_first"}, "--set gpu.sms=2"},
         {{"rt.latency.header=40"}}, {{"rt.latency.ray_box=40"}}, {{"rt.latency.transform=40"}},
         {{"rt.latency.leaf_descriptor=40"}}, {{"rt.latency.ray_triangle=40"}}, {{"rt.latency.triangle_hit=40"}},
         {{"rt.latency.procedural=40"}, "--scene wknd"}, {{"workload.shade_latency=5000"}}, {{"workload.resident_warps=1"}},
@@ -760,7 +765,7 @@ TEST(RtsimConfig, EveryKeyOfEveryPresetIsRead) {
         {{"dram.tRAS=60"}}, {{"dram.tRC=200"}}, {{"dram.tRRD=40"}}, {{"dram.tCCD=16"}},
         {{"prefetch.kind=ttp"}}, {{"prefetch.treelet_budget=4096"}, treelet}, {{"prefetch.treelet_threshold=0.25"}, treelet},
         {{"prefetch.ttp_depth_s1=4"}, ttp}, {{"prefetch.ttp_depth_s2=8"}, ttp}, {{"prefetch.ttp_depth_s3=2"}, ttp},
-        {{"prefetch.bfs_n=4"}, ttp + " --traversal bfs"}, {{"prefetch.priority_after=5"}, ttp},
+        {{"prefetch.bfs_n=4"}, ttp + " --traversal bfs"}, {{"prefetch.priority_after=5"}, ttp}, {{"prefetch.queue=1"}, ttp},
         {{"energy.l1_access_pj=40"}}, {{"energy.l2_access_pj=160"}}, {{"energy.dram_read_pj=1000"}},
         {{"energy.dram_activate_pj=2000"}}, {{"energy.static_w=10"}},
         {{"sim.quantum=10"}, "--fidelity lt"},
@@ -827,9 +832,15 @@ TEST(RtsimConfig, EveryKeyOfEveryPresetIsRead) {
             std::string sets;
             for (std::string s : c.sets) {
                 const std::string key = s.substr(0, s.find('='));
-                if (s.substr(key.size() + 1) == "flip") {  // a boolean: the preset's opposite
-                    const nlohmann::json v = values.at(nlohmann::json::json_pointer("/" + key.substr(0, key.find('.')) + "/" + key.substr(key.find('.') + 1)));
-                    s = key + "=" + (v.get<bool>() ? "false" : "true");
+                const std::string value = s.substr(key.size() + 1);
+                std::string pointer = "/" + key;
+                std::replace(pointer.begin(), pointer.end(), '.', '/');
+                const nlohmann::json preset_value = values.at(nlohmann::json::json_pointer(pointer));
+                if (value == "flip") {  // a boolean: the preset's opposite
+                    s = key + "=" + (preset_value.get<bool>() ? "false" : "true");
+                } else if (value.find('|') != std::string::npos) {  // alternatives: the first that is not the preset's
+                    const std::string a = value.substr(0, value.find('|')), b = value.substr(value.find('|') + 1);
+                    s = key + "=" + (preset_value.get<std::string>() == a ? b : a);
                 }
                 sets += " --set '" + s + "'";
             }
