@@ -2,6 +2,8 @@
 // themselves are in model/prefetcher.h. Plain C++.
 #pragma once
 #include <array>
+#include <memory>
+#include <vector>
 #include <cstdint>
 #include <string>
 
@@ -11,6 +13,15 @@ enum class PrefetcherKind : uint8_t { None, Ttp, Park, Treelet, PerfectUp, Perfe
 PrefetcherKind parse_prefetcher(const std::string& name);  // throws std::invalid_argument
 const char* prefetcher_name(PrefetcherKind k);
 
+// What TTP saw and did, in order (tests and traces; observing changes nothing): each pop with the
+// popped node, the state after it (1..3 for S1..S3; BFS: 0) and the nodes it prefetched, and
+// each push with the stack's size after it.
+struct PrefetchObserver {
+    virtual ~PrefetchObserver() = default;
+    virtual void on_pop(uint64_t popped, int state, const std::vector<uint64_t>& prefetched) = 0;
+    virtual void on_push(size_t stack_size) = 0;
+};
+
 struct PrefetchConfig {
     PrefetcherKind kind = PrefetcherKind::None;
     std::array<uint32_t, 3> depth{1, 2, 16};  // TTP DFS depths of S1, S2, S3
@@ -18,6 +29,7 @@ struct PrefetchConfig {
     uint32_t priority_after = 0;              // 0: prefetch only in cycles without a demand request;
                                               // X: a prefetch goes first if none was sent in the last X cycles
     uint32_t queue = 0;                       // prefetch queue entries per RT unit (0: unbounded)
+    std::shared_ptr<PrefetchObserver> observer;  // not a configuration key: set by tests
     uint32_t treelet_budget = 512;            // Treelet: bytes per treelet
     double treelet_threshold = 0.75;          // Treelet: share of a warp's threads that must head for a treelet
 };

@@ -37,8 +37,16 @@ public:
             s.dfs.on_pop(st.size() - 1, cfg_.depth, picks_);
             for (size_t i : picks_) sink.prefetch(st[i], ~0ull);
         }
+        if (cfg_.observer) {
+            std::vector<uint64_t> picked;
+            for (size_t i : picks_) picked.push_back(bfs_ ? st[i + 1].addr : st[i].addr);
+            cfg_.observer->on_pop(bfs_ ? st.front().addr : st.back().addr, bfs_ ? 0 : s.dfs.state(), picked);
+        }
     }
-    void on_push(PrefetchThreadState& s, size_t size) override { s.dfs.on_push(size); }
+    void on_push(PrefetchThreadState& s, size_t size) override {
+        s.dfs.on_push(size);
+        if (cfg_.observer) cfg_.observer->on_push(size);
+    }
 
 private:
     PrefetchConfig cfg_;

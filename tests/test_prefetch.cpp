@@ -164,12 +164,13 @@ void prefetches_only_current_entries(TraversalOrder order) {
 }
 }  // namespace
 
-TEST(Ttp, RtUnitPrefetchesOnlyCurrentStackEntries) { prefetches_only_current_entries(TraversalOrder::DFS); }
-TEST(Ttp, RtUnitPrefetchesOnlyCurrentQueueEntries) { prefetches_only_current_entries(TraversalOrder::BFS); }
+TEST(Ttp, RtUnitPrefetchesOnlyCurrentStackEntries) { RTU_NEED_SHARED_SCENES(); prefetches_only_current_entries(TraversalOrder::DFS); }
+TEST(Ttp, RtUnitPrefetchesOnlyCurrentQueueEntries) { RTU_NEED_SHARED_SCENES(); prefetches_only_current_entries(TraversalOrder::BFS); }
 
 // Treelets: every node of the image in exactly one treelet, no treelet over the byte budget
 // (a single node may exceed a budget smaller than itself), each grown from its first node.
 TEST(Treelets, FormationRespectsTheBudgetAndCoversEveryNodeOnce) {
+    RTU_NEED_SHARED_SCENES();
     const Scene s = load_scene("ship", rtu::test::shared_dir() + "/scenes/ship");
     const BvhImage img = build_bvh_image(s);
     const uint64_t nodes = img.stats.internal_nodes + img.stats.triangle_leaves + img.stats.procedural_leaves + img.stats.instance_leaves;
@@ -198,6 +199,7 @@ TEST(Treelets, FormationRespectsTheBudgetAndCoversEveryNodeOnce) {
 // Treelet traversal finds the same closest hits as DFS, and finishes a treelet before it moves
 // on: no ray enters the same treelet twice (bunny has no BLAS instanced twice).
 TEST(Treelets, TraversalFindsTheDfsHitsAndFinishesATreeletBeforeLeaving) {
+    RTU_NEED_SHARED_SCENES();
     const Scene s = load_scene("bunny", rtu::test::shared_dir() + "/scenes/bunny");
     const BvhImage img = build_bvh_image(s);
     const Treelets t = form_treelets(img, 512);

@@ -271,6 +271,7 @@ TEST(RtsimTiming, VcdHasTheDocumentedSignals) {
 // Prefetchers change timing, never answers: the hits file is the same under every prefetcher
 // and both traversal orders; a TTP that prefetches nothing (all depths 0) costs exactly nothing.
 TEST(RtsimPrefetch, HitsIdenticalUnderEveryPrefetcherAndNoneIsTheBaseline) {
+    RTU_NEED_SHARED_SCENES();
     TempDir dir;
     const std::string bunny = rtu::test::shared_dir() + "/scenes/bunny";
     const std::string base = "--scene bunny --assets " + bunny + " --fidelity at --width 16 --height 16 ";
@@ -311,6 +312,7 @@ TEST(RtsimPrefetch, HitsIdenticalUnderEveryPrefetcherAndNoneIsTheBaseline) {
 // The interval fidelity under DFS and BFS, with and without TTP: the same hits as AT's (BFS: the
 // same hit/miss and t), and TTP with every depth 0 is the baseline, cycle for cycle.
 TEST(RtsimPrefetch, IntervalHitsIdenticalAndZeroDepthTtpIsTheBaseline) {
+    RTU_NEED_SHARED_SCENES();
     TempDir dir;
     const std::string base = "--scene bunny --assets " + rtu::test::shared_dir() + "/scenes/bunny --width 16 --height 16 ";
     for (const std::string traversal : {"dfs", "bfs"}) {
@@ -334,6 +336,7 @@ TEST(RtsimPrefetch, IntervalHitsIdenticalAndZeroDepthTtpIsTheBaseline) {
 }
 
 TEST(RtsimPrefetch, TreeletTraversalAndPrefetcher) {
+    RTU_NEED_SHARED_SCENES();
     TempDir dir;
     // Primary rays: each independent of the others (with path tracing a tie at one bounce,
     // resolved to another duplicated face, changes the next ray).
@@ -359,6 +362,7 @@ TEST(RtsimPrefetch, TreeletTraversalAndPrefetcher) {
 // sample reports its estimate with an interval and simulates about half the rays, whatever the
 // number of pre-pass threads.
 TEST(RtsimSampling, FullFrameSampleEqualsTheUnsampledRun) {
+    RTU_NEED_SHARED_SCENES();
     TempDir dir;
     const std::string base = "--scene bunny --assets " + rtu::test::shared_dir() + "/scenes/bunny --fidelity at --width 32 --height 32 ";
     ASSERT_EQ(rtsim(dir, base + "--stats " + dir.file("full.json")).status, 0);
@@ -403,6 +407,7 @@ TEST(RtsimSampling, FullFrameSampleEqualsTheUnsampledRun) {
 // fidelity's accuracy; without the caches' warming cornell's is 14 % off), and its 95 % interval
 // covers the full interval run's cycles.
 TEST(RtsimSampling, IntervalFidelitySampledAsAt) {
+    RTU_NEED_SHARED_SCENES();
     TempDir dir;
     for (const std::string& scene : {std::string("cornell"), "bunny --assets " + rtu::test::shared_dir() + "/scenes/bunny"}) {
         const std::string base = "--scene " + scene + " --workload pt --width 128 --height 128 --spp 2 --fidelity ";
@@ -443,6 +448,7 @@ TEST(RtsimSampling, IntervalFidelitySampledAsAt) {
 // within 10 % of them and the interval is not vacuous (narrower than +-25 %). On the bunny the
 // intervals of the node fetches' L1 and DRAM miss shares cover the full run's too.
 TEST(RtsimSampling, IntervalCoversTheFullRun) {
+    RTU_NEED_SHARED_SCENES();
     TempDir dir;
     for (const std::string& scene : {std::string("cornell"), "bunny --assets " + rtu::test::shared_dir() + "/scenes/bunny"}) {
         const std::string base = "--scene " + scene + " --fidelity at --workload pt --width 128 --height 128 --spp 2 ";
@@ -494,6 +500,7 @@ TEST(RtsimSampling, IntervalCoversTheFullRun) {
 // placed as it is (no instance leaves, same answers); a scene that needs its transforms (the
 // ship) is left exactly as it was, statistic for statistic.
 TEST(RtsimFlatten, SameAnswersAndNoChangeWhereTransformsAreNeeded) {
+    RTU_NEED_SHARED_SCENES();
     TempDir dir;
     write_text(dir.file("a.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nf 1 2 3\nf 2 4 3\n");
     write_text(dir.file("b.obj"), "v 0 0 -2\nv 3 0 -2\nv 0 3 -2\nf 1 2 3\n");
@@ -525,6 +532,7 @@ TEST(RtsimFlatten, SameAnswersAndNoChangeWhereTransformsAreNeeded) {
 // of L1 miss rate (measured: -0.5 % and < 0.1 points on bunny 32x32). The remaining gap is
 // structural (no FR-FCFS reordering in LT's DRAM, tag and row state in call order), not temporal.
 TEST(RtsimTiming, LtAtTheSmallestQuantumIsWithinTheStatedBoundOfAt) {
+    RTU_NEED_SHARED_SCENES();
     TempDir dir;
     const std::string base = "--scene bunny --assets " + rtu::test::shared_dir() + "/scenes/bunny --width 32 --height 32 --stats ";
     ASSERT_EQ(rtsim(dir, base + dir.file("at.json") + " --fidelity at").status, 0);
@@ -542,6 +550,7 @@ TEST(RtsimTiming, LtAtTheSmallestQuantumIsWithinTheStatedBoundOfAt) {
 // 1.343x; on the seven report scenes at 128x128 the cycle error is within 1.2 %, TTP's speed-up
 // within 2.7 %). Same inputs, same statistics.
 TEST(RtsimTiming, IntervalIsWithinTheStatedBoundOfAt) {
+    RTU_NEED_SHARED_SCENES();
     TempDir dir;
     for (const std::string scene : {"bunny", "ship"}) {
         const std::string base = "--scene " + scene + " --assets " + rtu::test::shared_dir() + "/scenes/" + scene +
@@ -583,6 +592,7 @@ TEST(RtsimTiming, IntervalIsWithinTheStatedBoundOfAt) {
 // against 1,165 and 17.5 % against 18.0 %). Before the shared cache timing, LT counted no late
 // prefetch and a DRAM share of 9.7 %.
 TEST(RtsimTiming, LtCountsLatePrefetchesAndDramFetchesAsAtDoes) {
+    RTU_NEED_SHARED_SCENES();
     TempDir dir;
     const std::string base = "--scene bunny --assets " + rtu::test::shared_dir() +
                              "/scenes/bunny --width 32 --height 32 --prefetcher ttp --stats ";
@@ -615,6 +625,7 @@ void flatten_keys(const nlohmann::json& j, const std::string& path, std::set<std
 // description, and nothing that no run writes: a functional run with --verify, a sampled AT run
 // with TTP and --verify, and an interval run together write every key of the schema.
 TEST(RtsimStats, SchemaListsEveryKeyWrittenAndNothingElse) {
+    RTU_NEED_SHARED_SCENES();
     TempDir dir;
     const Result schema = rtsim(dir, "--stats-schema");
     ASSERT_EQ(schema.status, 0);
@@ -669,6 +680,23 @@ nlohmann::json model_stats(const std::string& path) {
     return j;
 }
 }  // namespace
+
+// Every preset: TTP speeds a small AT path-tracing run of the bunny up (its direction, not its
+// digits: 32x32 measured 1.33x mobile, 1.47x paper, 1.55x desktop), with the same rays and hits.
+TEST(RtsimPresets, TtpSpeedsUpPathTracingOnEveryPreset) {
+    RTU_NEED_SHARED_SCENES();
+    TempDir dir;
+    for (const std::string preset : {"mobile", "paper", "desktop"}) {
+        const std::string base = "--scene bunny --assets " + rtu::test::shared_dir() + "/scenes/bunny --fidelity at --width 32 --height 32 --config " +
+                                 preset + " --stats ";
+        ASSERT_EQ(rtsim(dir, base + dir.file("base.json")).status, 0) << preset;
+        ASSERT_EQ(rtsim(dir, base + dir.file("ttp.json") + " --prefetcher ttp").status, 0) << preset;
+        const auto a = nlohmann::json::parse(read_text(dir.file("base.json"))), b = nlohmann::json::parse(read_text(dir.file("ttp.json")));
+        EXPECT_GT(a["cycles"].get<double>() / b["cycles"].get<double>(), 1.0) << preset;
+        EXPECT_EQ(a["hits"], b["hits"]) << preset;
+        EXPECT_EQ(a["nodes_visited"], b["nodes_visited"]) << preset;
+    }
+}
 
 // docs/paper-preset.md gives the source of every key of the presets that follow the TTP
 // authors' setup: every configuration key has a row, and its paper, desktop and mobile columns

@@ -330,6 +330,7 @@ TEST(BvhImage, TwoLevelImageForSeveralMeshes) {
 }
 
 TEST(BvhImage, SharedScenesBunnyAndShip) {
+    RTU_NEED_SHARED_SCENES();
     for (const std::string name : {"bunny", "ship"}) {
         const Scene s = load_scene(name, rtu::test::shared_dir() + "/scenes/" + name);
         const BvhImage img = build_bvh_image(s);

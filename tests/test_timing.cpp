@@ -15,6 +15,7 @@
 #include "tlm/payload.h"
 #include "tlm/protocol_checker.h"
 
+#include <glm/common.hpp>
 #include <tlm_utils/peq_with_get.h>
 #include "workloads/bvh_builder.h"
 #include "workloads/scenes.h"
@@ -86,19 +87,19 @@ void timing_equals_functional(const std::string& name, Model model, WorkloadKind
 
 }  // namespace
 
-TEST(TimingAT, BunnyPathTracingHitsEqualFunctional) { timing_equals_functional("bunny", Model::AT, WorkloadKind::PathTrace); }
+TEST(TimingAT, BunnyPathTracingHitsEqualFunctional) { RTU_NEED_SHARED_SCENES(); timing_equals_functional("bunny", Model::AT, WorkloadKind::PathTrace); }
 TEST(TimingAT, WkndAmbientOcclusionHitsEqualFunctional) { timing_equals_functional("wknd", Model::AT, WorkloadKind::AmbientOcclusion); }
-TEST(TimingAT, ShipShadowHitsEqualFunctional) { timing_equals_functional("ship", Model::AT, WorkloadKind::Shadow); }
+TEST(TimingAT, ShipShadowHitsEqualFunctional) { RTU_NEED_SHARED_SCENES(); timing_equals_functional("ship", Model::AT, WorkloadKind::Shadow); }
 // A one-entry response FIFO: a response that finds it full waits in the L1 (BEGIN_RESP accepted,
 // END_RESP when the FIFO has drained), within the base protocol, and the answers do not change.
 TEST(TimingAT, OneEntryResponseFifoHoldsResponsesBackWithinTheProtocol) {
     timing_equals_functional("cornell", Model::AT, WorkloadKind::PathTrace, 1);
 }
 TEST(TimingLT, OneEntryResponseFifo) { timing_equals_functional("cornell", Model::LT, WorkloadKind::PathTrace, 1); }
-TEST(TimingLT, BunnyPathTracingHitsEqualFunctional) { timing_equals_functional("bunny", Model::LT, WorkloadKind::PathTrace); }
+TEST(TimingLT, BunnyPathTracingHitsEqualFunctional) { RTU_NEED_SHARED_SCENES(); timing_equals_functional("bunny", Model::LT, WorkloadKind::PathTrace); }
 TEST(TimingLT, CornellPrimaryHitsEqualFunctional) { timing_equals_functional("cornell", Model::LT, WorkloadKind::Primary); }
-TEST(TimingInterval, BunnyPathTracingHitsEqualFunctional) { timing_equals_functional("bunny", Model::Interval, WorkloadKind::PathTrace); }
-TEST(TimingInterval, ShipShadowHitsEqualFunctional) { timing_equals_functional("ship", Model::Interval, WorkloadKind::Shadow); }
+TEST(TimingInterval, BunnyPathTracingHitsEqualFunctional) { RTU_NEED_SHARED_SCENES(); timing_equals_functional("bunny", Model::Interval, WorkloadKind::PathTrace); }
+TEST(TimingInterval, ShipShadowHitsEqualFunctional) { RTU_NEED_SHARED_SCENES(); timing_equals_functional("ship", Model::Interval, WorkloadKind::Shadow); }
 
 namespace {
 // One triangle at z = 0 under an identity instance: header [0,64), root internal node [64,128),
@@ -253,6 +254,7 @@ TEST(ProtocolChecker, DetectsViolations) {
 // this) must neither collide nor be lost: here the very first chunk is answered only after
 // 10,000 others, and every ray still gets the hit that functional traversal gives it.
 TEST(RtUnitCore, ResponseHeldBackPastTheTrackingRing) {
+    RTU_NEED_SHARED_SCENES();
     const Scene s = scene_named("bunny");
     const BvhImage img = build_bvh_image(s);
     const HwConfig hw = Config::load("mobile").resolve();
@@ -452,3 +454,182 @@ TEST(TimingInterval, TwoStepLeafReadIsTheHandWorkedSum) {
     EXPECT_EQ(total(gpu.rt_stats()).node_fetches, 2u);
     EXPECT_EQ(total(gpu.rt_stats()).chunk_requests, 5u);
 }
+
+// The paper's Figure 3 walk (section 3.2): a BVH with nodes A..P laid out by hand and one ray
+// that the paper's traversal sends A -> D -> I -> J -> M -> P -> O -> N, then up N -> L -> K -> H
+// -> B (and, our addition to finish the tree, B's leaves F and E). The ray hits O's triangle and
+// then E's, nearer; P, N, L, K, H and F are leaves whose boxes it enters but whose triangles it
+// misses; the boxes of C and G (internal nodes) it misses. TTP (depths 1, 2, 16) with every
+// node read a pop: popping P prefetches O (S1); popping O prefetches N and L (S2); popping N
+// prefetches K, H and B (S3, the entries not yet prefetched since the last push). The same
+// sequence of pushes, pops, states and prefetched nodes comes out of AT, LT and the interval
+// fidelity, with the paper preset's two-step leaf reads (the second read is no pop).
+namespace figure3 {
+
+struct Node {
+    char name;
+    bool internal;
+    std::vector<char> children;  // internal: in child order
+    Aabb box;
+    TriangleLeaf tri{};
+};
+
+// Miss: the bounding box in x, y contains the ray's line (x = y = 0), the triangle does not
+// (its long edge passes below the origin). Hit: a triangle around the origin. Off: far aside.
+TriangleLeaf tri(float z, bool hit) {
+    if (hit) return {{-1, -1, z}, {1, -1, z}, {0, 1, z}, 0, 0};
+    return {{-1, -1, z}, {1, -1, z}, {1, 0.5f, z}, 0, 0};
+}
+Aabb leaf_box(const TriangleLeaf& t) {
+    Aabb b;
+    b.lo = glm::min(glm::min(t.v0, t.v1), t.v2) - glm::vec3(0, 0, 0.1f);
+    b.hi = glm::max(glm::max(t.v0, t.v1), t.v2) + glm::vec3(0, 0, 0.1f);
+    return b;
+}
+
+struct Walk {
+    BvhImage image;
+    std::map<uint64_t, char> name_of;
+};
+
+Walk build() {
+    std::map<char, Node> n;
+    auto leaf = [&](char c, float z, bool hit) {
+        Node x{c, false, {}, {}, tri(z, hit)};
+        x.box = leaf_box(x.tri);
+        n[c] = x;
+    };
+    auto off = [&](char c) {
+        Node x{c, false, {}, {}, {{5, 5, 0}, {6, 5, 0}, {5, 6, 0}, 0, 0}};
+        x.box = leaf_box(x.tri);
+        n[c] = x;
+    };
+    // Leaves: the ray starts at z = -10 going +z, so t = z + 10.
+    leaf('E', 0, true);   // t = 10: the closest hit, found last
+    leaf('F', -1, false);
+    leaf('H', 1, false);
+    leaf('K', 2, false);
+    leaf('L', 3, false);
+    leaf('N', 4, false);
+    leaf('O', 5, true);   // t = 15: hit first
+    leaf('P', 6, false);
+    off('c');             // under C
+    off('g');             // under G
+    auto inner = [&](char c, std::vector<char> kids) {
+        Node x{c, true, kids, {}, {}};
+        for (char k : kids) {
+            x.box.lo = glm::min(x.box.lo, n[k].box.lo);
+            x.box.hi = glm::max(x.box.hi, n[k].box.hi);
+        }
+        n[c] = x;
+    };
+    inner('M', {'N', 'O', 'P'});
+    inner('J', {'L', 'M'});
+    inner('I', {'K', 'J'});
+    inner('D', {'H', 'I'});
+    inner('C', {'c'});
+    inner('G', {'g'});
+    inner('B', {'E', 'F', 'G'});
+    inner('A', {'B', 'C', 'D'});
+    // Layout: the header, then A, then each internal node's children side by side, breadth first.
+    std::map<char, uint64_t> addr;
+    std::vector<char> order = {'A'};
+    addr['A'] = kBlockBytes;
+    uint64_t next = 2 * kBlockBytes;
+    for (size_t i = 0; i < order.size(); ++i)
+        for (char k : n[order[i]].children) {
+            addr[k] = next;
+            next += kBlockBytes;
+            order.push_back(k);
+        }
+    std::vector<uint8_t> bytes(next, 0);
+    ImageHeader h;
+    h.root_box = n['A'].box;
+    h.root = addr['A'];
+    h.leaves = 10;
+    encode_header(h, bytes.data());
+    Walk w;
+    for (const auto& [c, x] : n) {
+        w.name_of[addr[c]] = c;
+        if (!x.internal) {
+            encode_triangle(x.tri, bytes.data() + addr[c]);
+            continue;
+        }
+        std::vector<NodeType> types;
+        std::vector<Aabb> boxes;
+        for (char k : x.children) {
+            types.push_back(n[k].internal ? NodeType::Internal : NodeType::Triangle);
+            boxes.push_back(n[k].box);
+        }
+        encode_internal(x.box, int(x.children.size()), types.data(), boxes.data(), addr[x.children[0]], bytes.data() + addr[c]);
+    }
+    w.image = BvhImage(std::move(bytes));
+    return w;
+}
+
+struct Recorder : PrefetchObserver {
+    const std::map<uint64_t, char>* name_of = nullptr;
+    std::vector<std::string> log;
+    void on_pop(uint64_t popped, int state, const std::vector<uint64_t>& prefetched) override {
+        std::string s = std::string("pop ") + name_of->at(popped) + " S" + std::to_string(state);
+        if (!prefetched.empty()) s += " prefetch";
+        for (uint64_t p : prefetched) s += std::string(" ") + name_of->at(p);
+        log.push_back(s);
+    }
+    void on_push(size_t size) override { log.push_back("push " + std::to_string(size)); }
+};
+
+const std::vector<std::string> kExpected = {
+    "pop A S1", "push 2",  // B, D
+    "pop D S1 prefetch B", "push 3",  // B, H, I
+    "pop I S1 prefetch H", "push 4",  // B, H, K, J
+    "pop J S1 prefetch K", "push 5",  // B, H, K, L, M
+    "pop M S1 prefetch L", "push 7",  // B, H, K, L, N, O, P
+    "pop P S1 prefetch O",            // the paper: O prefetched when P is popped (S1)
+    "pop O S2 prefetch N L",          // the paper: N and L prefetched when O is popped (S2)
+    "pop N S3 prefetch K H B",        // the rest of the stack, once
+    "pop L S3", "pop K S3", "pop H S3", "pop B S3", "push 2",  // E, F
+    "pop F S1 prefetch E", "pop E S2",
+};
+
+// Runs the walk in `fidelity` and checks the log, the hit and the reads.
+void check(Fidelity fidelity, bool interval) {
+    FsResolution resolution;
+    const Walk w = build();
+    std::vector<RayFileEntry> rays(1);
+    rays[0].ray.org = {0, 0, -10};
+    rays[0].ray.dir = {0, 0, 1};
+    rays[0].valid = true;
+    auto work = make_ray_file_workload(rays);
+    Config c = Config::load("paper");
+    c.set("prefetch.kind=ttp");
+    HwConfig hw = c.resolve();
+    auto rec = std::make_shared<Recorder>();
+    rec->name_of = &w.name_of;
+    hw.prefetch.observer = rec;
+    TimingOptions opt;
+    opt.fidelity = fidelity;
+    TimingResult r;
+    if (interval) {
+        r = run_interval(hw, w.image, *work, opt);
+    } else {
+        GpuPlatform platform(hw, w.image, *work, opt);
+        r = platform.run();
+    }
+    EXPECT_EQ(rec->log, kExpected);
+    ASSERT_EQ(r.rays.size(), 1u);
+    EXPECT_TRUE(r.rays[0].hit.hit);
+    EXPECT_NEAR(r.rays[0].hit.t, 10.0f, 1e-4f);  // E
+    EXPECT_EQ(r.rays[0].nodes_visited, 14u);      // A D I J M P O N L K H B F E
+    const RtUnitStats rt = total(r.counts.rt);
+    EXPECT_EQ(rt.node_fetches, 14u);
+    // 11 prefetched nodes (L, K, H and B twice: the pointer resets on a push), 64 B each: 2
+    // chunks each.
+    EXPECT_EQ(rt.prefetch_queue.generated, 22u);
+}
+
+}  // namespace figure3
+
+TEST(PaperFigure3, DfsWithTtpWalkInAt) { figure3::check(Fidelity::AT, false); }
+TEST(PaperFigure3, DfsWithTtpWalkInLt) { figure3::check(Fidelity::LT, false); }
+TEST(PaperFigure3, DfsWithTtpWalkInInterval) { figure3::check(Fidelity::AT, true); }

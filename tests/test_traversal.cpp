@@ -64,8 +64,8 @@ void check_against_embree(const std::string& name) {
 
 TEST(TraversalVsEmbree, Wknd) { check_against_embree("wknd"); }
 TEST(TraversalVsEmbree, Cornell) { check_against_embree("cornell"); }
-TEST(TraversalVsEmbree, Ship) { check_against_embree("ship"); }
-TEST(TraversalVsEmbree, Bunny) { check_against_embree("bunny"); }
+TEST(TraversalVsEmbree, Ship) { RTU_NEED_SHARED_SCENES(); check_against_embree("ship"); }
+TEST(TraversalVsEmbree, Bunny) { RTU_NEED_SHARED_SCENES(); check_against_embree("bunny"); }
 
 namespace {
 // Icosphere: a closed, watertight triangle mesh around the origin.
@@ -152,6 +152,7 @@ TEST(Traversal, NoLeakThroughVerticesAndEdgesOfAClosedMesh) {
 // traversal with none of them, with only the top of the tree, and with all of them visits the
 // same nodes and finds the same hits, DFS and BFS.
 TEST(Traversal, NodesDecodedUpFrontChangeNoResult) {
+    RTU_NEED_SHARED_SCENES();
     for (const std::string name : {"bunny", "wknd"}) {
         const Loaded l = load(name);
         const BvhImage none(l.image.bytes(), 0);
@@ -184,6 +185,7 @@ TEST(Traversal, NodesDecodedUpFrontChangeNoResult) {
 }
 
 TEST(Traversal, BfsVisitsAtLeastAsManyNodesAsDfs) {
+    RTU_NEED_SHARED_SCENES();
     for (const std::string name : {"bunny", "ship", "wknd"}) {
         const Loaded l = load(name);
         const FunctionalResult dfs = run(l, WorkloadKind::PathTrace, TraversalOrder::DFS, nullptr);
@@ -260,6 +262,7 @@ TEST(Traversal, DfsPushesEveryHitChildOrKeepsTheFirstInTheNextNodeRegister) {
 // Any-hit finds a hit exactly when closest-hit does, visits no more nodes, and its hit is a
 // real one inside [tnear, tfar].
 TEST(Traversal, AnyHitStopsAtARealHit) {
+    RTU_NEED_SHARED_SCENES();
     const Loaded l = load("bunny");
     const FunctionalResult ao = run(l, WorkloadKind::AmbientOcclusion, TraversalOrder::DFS, nullptr);
     int any_rays = 0;

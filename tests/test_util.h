@@ -47,4 +47,13 @@ inline std::string read_text(const std::string& path) {
 
 inline std::string shared_dir() { return RTU_SHARED_DIR; }
 
+// The real scenes of ../shared/scenes are optional: a test that needs them skips, saying so,
+// where they are absent (the built-in scenes need nothing).
+inline bool shared_scenes_present() { return std::filesystem::is_directory(shared_dir() + "/scenes/bunny"); }
+#define RTU_NEED_SHARED_SCENES()                                                                          \
+    do {                                                                                                  \
+        if (!rtu::test::shared_scenes_present())                                                          \
+            GTEST_SKIP() << "needs the shared scenes in " << rtu::test::shared_dir() << "/scenes, absent here"; \
+    } while (0)
+
 }  // namespace rtu::test
