@@ -78,7 +78,10 @@ const Key kSchema[] = {
     {"dram.tWR", "memory cycles", Type::Int, 0, 1000, false, "write recovery"},
     {"prefetch.kind", "", Type::Text, 0, 0, false, "none, ttp, park, treelet, perfect-up, perfect-down"},
     {"prefetch.treelet_budget", "bytes", Type::Int, 64, 1 << 24, false, "Treelet: bytes per treelet"},
-    {"prefetch.treelet_threshold", "ratio", Type::Real, 0, 1, false, "Treelet: share of a warp's threads heading for a treelet before it is prefetched"},
+    {"prefetch.treelet_threshold", "ratio", Type::Real, 0, 1, false, "Treelet, popularity heuristic: share of the RT unit's threads heading for the most popular treelet before it is prefetched"},
+    {"prefetch.treelet_heuristic", "", Type::Text, 0, 0, false, "Treelet: always (prefetch the RT unit's most popular treelet whenever it changes; the Treelet code's 0) or popularity (only above treelet_threshold; its 1)"},
+    {"prefetch.treelet_layout", "", Type::Text, 0, 0, false, "Treelet traversal: bvh (nodes where the BVH builder put them) or contiguous (each treelet in a block of its own, for the memory system)"},
+    {"prefetch.treelet_stride", "bytes", Type::Int, 0, 1 << 20, false, "Treelet, contiguous layout: bytes between treelet blocks beyond the budget (the Treelet code's treelet_remap_stride)"},
     {"prefetch.ttp_depth_s1", "entries", Type::Int, 0, 64, false, "TTP (DFS): entries prefetched on the first pop after a push"},
     {"prefetch.ttp_depth_s2", "entries", Type::Int, 0, 64, false, "TTP (DFS): on the second consecutive pop"},
     {"prefetch.ttp_depth_s3", "entries", Type::Int, 0, 64, false, "TTP (DFS): on the third and later consecutive pops"},
@@ -334,6 +337,14 @@ HwConfig Config::resolve() const {
     h.prefetch.queue = u32("prefetch.queue");
     h.prefetch.treelet_budget = u32("prefetch.treelet_budget");
     h.prefetch.treelet_threshold = num("prefetch.treelet_threshold");
+    const std::string heuristic = values_.at("prefetch.treelet_heuristic").get<std::string>();
+    if (heuristic != "always" && heuristic != "popularity")
+        throw ConfigError("key 'prefetch.treelet_heuristic' = '" + heuristic + "': allowed are always, popularity");
+    h.prefetch.treelet_heuristic = heuristic == "always" ? TreeletHeuristic::Always : TreeletHeuristic::Popularity;
+    const std::string layout = values_.at("prefetch.treelet_layout").get<std::string>();
+    if (layout != "bvh" && layout != "contiguous") throw ConfigError("key 'prefetch.treelet_layout' = '" + layout + "': allowed are bvh, contiguous");
+    h.prefetch.treelet_contiguous = layout == "contiguous";
+    h.prefetch.treelet_stride = u32("prefetch.treelet_stride");
     h.energy = {num("energy.l1_access_pj"), num("energy.l2_access_pj"), num("energy.dram_read_pj"),
                 num("energy.dram_write_pj"), num("energy.dram_activate_pj"), num("energy.static_w")};
     h.quantum = values_.at("sim.quantum").get<uint64_t>();

@@ -29,7 +29,8 @@ inline uint64_t chunk_address(uint64_t node, uint32_t c) { return node + uint64_
 // A 32 B read leaving the RT unit, demand or prefetch.
 struct ChunkRequest {
     uint64_t id = 0;       // unique per RT unit
-    uint64_t addr = 0;     // 32 B aligned
+    uint64_t addr = 0;     // 32 B aligned, in simulated memory
+    uint64_t image_addr = 0;  // the same chunk in the BVH image (differs under the contiguous treelet layout)
     uint32_t warp = 0;     // warp-buffer slot
     uint32_t thread = 0;   // first thread waiting on the node (others coalesced onto it); prefetch: the thread that made it
     uint8_t streak = 0;    // pop-streak class of the node fetch (model/pop_streak.h)

@@ -10,6 +10,8 @@
 namespace rtu {
 
 enum class PrefetcherKind : uint8_t { None, Ttp, Park, Treelet, PerfectUp, PerfectDown };
+// When the Treelet prefetcher submits the RT unit's most popular treelet (model/prefetcher.cpp).
+enum class TreeletHeuristic : uint8_t { Always, Popularity };
 PrefetcherKind parse_prefetcher(const std::string& name);  // throws std::invalid_argument
 const char* prefetcher_name(PrefetcherKind k);
 
@@ -31,7 +33,10 @@ struct PrefetchConfig {
     uint32_t queue = 0;                       // prefetch queue entries per RT unit (0: unbounded)
     std::shared_ptr<PrefetchObserver> observer;  // not a configuration key: set by tests
     uint32_t treelet_budget = 512;            // Treelet: bytes per treelet
-    double treelet_threshold = 0.75;          // Treelet: share of a warp's threads that must head for a treelet
+    double treelet_threshold = 0.75;          // Treelet (popularity): share of the RT unit's threads that must head for a treelet
+    TreeletHeuristic treelet_heuristic = TreeletHeuristic::Always;
+    bool treelet_contiguous = false;          // Treelet: each treelet laid out in a block of its own (model/treelet.h)
+    uint32_t treelet_stride = 256;            // Treelet, contiguous layout: bytes between blocks beyond the budget
 };
 
 }  // namespace rtu

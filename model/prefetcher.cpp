@@ -79,30 +79,41 @@ private:
     RtLatency lat_;
 };
 
-// Treelet (Chou et al.): when at least `treelet_threshold` of the warp's live threads head for
-// the same next treelet, the whole treelet is prefetched (once per warp).
+// Treelet (Chou et al.), as their published code runs with treelet_prefetch on (shader.cc of
+// branch treelet_traversal, l.3419-3640): each cycle, over every live thread of the RT unit,
+// the treelet of the node each will read next gets a vote; the most popular treelet (ties: the
+// smaller root address, as the code's map keyed by the root) is prefetched whole, unless it is
+// the one prefetched last. Heuristic `always` (the code's 0, which the TTP paper ran) always
+// submits it; `popularity` (1) only when its votes are at least treelet_threshold of all.
 class TreeletPrefetcher : public Prefetcher {
 public:
-    TreeletPrefetcher(const PrefetchConfig& c, const Treelets& t) : Prefetcher(OnWarpScheduled), threshold_(c.treelet_threshold), treelets_(t) {}
+    TreeletPrefetcher(const PrefetchConfig& c, const Treelets& t)
+        : Prefetcher(OnCycle), always_(c.treelet_heuristic == TreeletHeuristic::Always), threshold_(c.treelet_threshold), treelets_(t) {}
     PrefetcherKind kind() const override { return PrefetcherKind::Treelet; }
-    void on_warp_scheduled(PrefetchWarpState& ws, const WarpThreads& threads, uint32_t live, PrefetchSink& sink) override {
-        std::map<uint32_t, uint32_t> votes;
-        for (uint32_t i = 0; i < threads.size(); ++i)
-            if (const TraversalThread* t = threads.live(i)) {
-                const uint32_t n = t->next_treelet();
-                if (n != ~0u) ++votes[n];
-            }
+    void on_cycle(const UnitThreads& threads, PrefetchSink& sink) override {
+        votes_.clear();
+        uint32_t total = 0;
+        threads.for_each_live([&](const TraversalThread& t) {
+            const uint32_t id = treelets_.treelet_of(t.peek().addr);
+            if (id == ~0u) return;
+            ++votes_[id];
+            ++total;
+        });
         uint32_t best = ~0u, count = 0;
-        for (const auto& [id, c] : votes)
-            if (c > count) best = id, count = c;
-        if (best == ~0u || double(count) < threshold_ * double(live)) return;
-        if (!ws.treelets_prefetched.insert(best).second) return;
+        for (const auto& [id, c] : votes_)
+            if (c > count || (c == count && treelets_.nodes[id][0].addr < treelets_.nodes[best][0].addr)) best = id, count = c;
+        if (best == ~0u || best == last_) return;
+        if (!always_ && double(count) < threshold_ * double(total)) return;
+        last_ = best;
         for (const StackEntry& e : treelets_.nodes[best]) sink.prefetch(e, ~0ull);
     }
 
 private:
+    bool always_;
     double threshold_;
     const Treelets& treelets_;
+    std::map<uint32_t, uint32_t> votes_;
+    uint32_t last_ = ~0u;  // the treelet prefetched last
 };
 
 // The limit studies (paper section 6.1): node reads of some pop-streak classes always hit L1.

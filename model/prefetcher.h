@@ -19,9 +19,9 @@
 #include <cstddef>
 #include <cstdint>
 #include <deque>
+#include <functional>
 #include <memory>
 #include <string>
-#include <unordered_set>
 #include <vector>
 
 #include "config.h"
@@ -76,11 +76,6 @@ struct PrefetchThreadState {
     TtpBfs bfs;
 };
 
-// A prefetcher's state per warp (Treelet: the treelets already prefetched for the warp).
-struct PrefetchWarpState {
-    std::unordered_set<uint32_t> treelets_prefetched;
-};
-
 // Where a prefetcher's picks go: the RT unit splits each node into chunks and queues them.
 class PrefetchSink {
 public:
@@ -89,19 +84,18 @@ public:
     virtual void prefetch(const StackEntry& node, uint64_t deadline) = 0;
 };
 
-// A warp's threads as the Treelet prefetcher reads them when the warp is scheduled.
-class WarpThreads {
+// The RT unit's threads as the Treelet prefetcher reads them: every live thread of every warp
+// in the warp buffer.
+class UnitThreads {
 public:
-    virtual ~WarpThreads() = default;
-    virtual uint32_t size() const = 0;
-    // Thread i's traversal, or null if the thread is done.
-    virtual const TraversalThread* live(uint32_t i) const = 0;
+    virtual ~UnitThreads() = default;
+    virtual void for_each_live(const std::function<void(const TraversalThread&)>& f) const = 0;
 };
 
 class Prefetcher {
 public:
     // The hooks a prefetcher uses (a fidelity that does not call one refuses the prefetcher).
-    enum Hook : unsigned { OnPop = 1, OnNodeTest = 2, OnWarpScheduled = 4, LimitStudy = 8 };
+    enum Hook : unsigned { OnPop = 1, OnNodeTest = 2, OnCycle = 4, LimitStudy = 8 };
 
     explicit Prefetcher(unsigned hooks) : hooks_(hooks) {}
     virtual ~Prefetcher() = default;
@@ -117,9 +111,9 @@ public:
     // A thread's node arrived and its tests (`step`) start now and end at cycle `test_end`;
     // `stack` is the thread's stack after the step.
     virtual void on_node_test(const StepInfo& step, const std::deque<StackEntry>& stack, uint64_t test_end, PrefetchSink&) {}
-    // The warp scheduler moved a warp's ready threads to the memory access queue; `live`
-    // threads of the warp are not done.
-    virtual void on_warp_scheduled(PrefetchWarpState&, const WarpThreads& threads, uint32_t live, PrefetchSink&) {}
+    // A cycle of the RT unit in which some thread's next node changed (a warp came in, or a
+    // node's tests ran), before the warp scheduler picks: `threads` are the unit's live threads.
+    virtual void on_cycle(const UnitThreads& threads, PrefetchSink&) {}
     // Limit studies: a node fetch of pop-streak class `fetch_class` is answered as an L1 hit.
     virtual bool answered_as_l1_hit(uint8_t fetch_class) const { return false; }
 

@@ -3,19 +3,23 @@
 #include <algorithm>
 #include <stdexcept>
 
+#include "treelet.h"
+
 namespace rtu {
 
-// A warp's threads as the prefetcher reads them.
-class RtUnitCore::WarpView : public WarpThreads {
+// The unit's live threads as the prefetcher reads them.
+class RtUnitCore::UnitView : public UnitThreads {
 public:
-    explicit WarpView(const Warp& w) : w_(w) {}
-    uint32_t size() const override { return uint32_t(w_.threads.size()); }
-    const TraversalThread* live(uint32_t i) const override {
-        return w_.threads[i].status == ThreadStatus::Idle ? nullptr : &w_.threads[i].rt.trav;
+    explicit UnitView(const std::vector<Warp>& warps) : warps_(warps) {}
+    void for_each_live(const std::function<void(const TraversalThread&)>& f) const override {
+        for (const Warp& w : warps_)
+            if (w.used)
+                for (const Thread& t : w.threads)
+                    if (t.status != ThreadStatus::Idle && !t.rt.trav.done()) f(t.rt.trav);
     }
 
 private:
-    const Warp& w_;
+    const std::vector<Warp>& warps_;
 };
 
 RtUnitCore::RtUnitCore(const HwConfig& cfg, const BvhImage& image, TraversalOrder order, const Treelets* treelets)
@@ -77,7 +81,7 @@ void RtUnitCore::accept_warp(const std::vector<WarpRay>& rays, uint64_t now) {
     if (it == warps_.end()) throw std::logic_error("no free warp-buffer slot");
     Warp& w = *it;
     w.used = true;
-    w.prefetch = PrefetchWarpState{};
+    next_nodes_changed_ = true;
     w.threads.assign(rays.size(), Thread{});
     w.live = w.ready = 0;
     w.age = ++warps_accepted_;
@@ -112,6 +116,8 @@ uint32_t rt_math_latency(const RtLatency& lat, const StepInfo& s, bool leaf_desc
     return std::max<uint32_t>(l, 1);
 }
 
+uint64_t RtUnitCore::placed(uint64_t node) const { return treelets_ ? treelets_->placed(node) : node; }
+
 uint32_t RtUnitCore::math_latency(const StepInfo& s) const { return rt_math_latency(cfg_.lat, s, cfg_.leaf_descriptor_read); }
 
 bool RtUnitCore::has_request(uint64_t now) { return maq_.has_request(now, stats_.prefetch_queue.expired_unsent); }
@@ -131,7 +137,8 @@ void RtUnitCore::pop_request(uint64_t now) {
 void RtUnitCore::Sink::prefetch(const StackEntry& e, uint64_t deadline) {
     PrefetchQueue& q = core.maq_.prefetches();
     for (uint32_t c = 0; c < chunks_of(e.type); ++c) {
-        const uint64_t addr = chunk_address(e.addr, c);
+        const uint64_t addr = chunk_address(core.placed(e.addr), c);
+        const uint64_t image_addr = chunk_address(e.addr, c);
         ++core.stats_.prefetch_queue.generated;
         if (q.waiting(addr)) {
             ++core.stats_.prefetch_queue.duplicates_dropped;
@@ -144,6 +151,7 @@ void RtUnitCore::Sink::prefetch(const StackEntry& e, uint64_t deadline) {
         ChunkRequest r;
         r.id = core.next_id_++;
         r.addr = addr;
+        r.image_addr = image_addr;
         r.warp = warp;
         r.thread = thread;
         r.prefetch = true;
@@ -168,6 +176,11 @@ void RtUnitCore::cycle(uint64_t now) {
     answer_limit_study_fetches(now);
     drain_response(now);
     finish_math(now);
+    if ((prefetcher_->hooks() & Prefetcher::OnCycle) && next_nodes_changed_) {
+        next_nodes_changed_ = false;
+        sink_.warp = sink_.thread = 0;
+        prefetcher_->on_cycle(UnitView(warps_), sink_);
+    }
     schedule_warp(now);
 }
 
@@ -202,6 +215,7 @@ void RtUnitCore::drain_response(uint64_t now) {
             continue;
         }
         const StepInfo info = t.rt.complete_fetch(stats_, t.fetch_class, t.fetch_l1_miss, t.fetch_dram, image_, *prefetcher_);
+        next_nodes_changed_ = true;
         const uint64_t end = now + math_latency(info);
         sink_.warp = p.warp;
         sink_.thread = ti;
@@ -280,9 +294,6 @@ void RtUnitCore::schedule_warp(uint64_t now) {
         group_members_[g][group_size_[g]++] = ti;
     }
     w.ready = 0;
-    sink_.warp = wi;
-    sink_.thread = 0;
-    if (prefetcher_->hooks() & Prefetcher::OnWarpScheduled) prefetcher_->on_warp_scheduled(w.prefetch, WarpView(w), w.live, sink_);
     for (uint32_t g = 0; g < coalescer_.groups(); ++g) {
         const uint16_t* members = group_members_[g].data();
         const bool limit_study = coalescer_.key(g) & 1ull;
@@ -290,7 +301,8 @@ void RtUnitCore::schedule_warp(uint64_t now) {
         for (uint32_t c = 0; c < group_chunks_[g]; ++c) {
             ChunkRequest r;
             r.id = next_id_++;
-            r.addr = chunk_address(node, c);
+            r.addr = chunk_address(placed(node), c);
+            r.image_addr = chunk_address(node, c);
             r.warp = wi;
             r.thread = members[0];
             r.streak = w.threads[members[0]].fetch_class;

@@ -103,7 +103,6 @@ private:
     };
     struct Warp {
         bool used = false;
-        PrefetchWarpState prefetch;
         std::vector<Thread> threads;
         uint32_t live = 0;  // threads not Idle
         uint32_t ready = 0; // threads in WaitSchedule
@@ -126,7 +125,7 @@ private:
         RtUnitCore& core;
         uint32_t warp = 0, thread = 0;
     };
-    class WarpView;
+    class UnitView;
 
     // The steps of a cycle.
     void answer_limit_study_fetches(uint64_t now);
@@ -136,6 +135,8 @@ private:
 
     void set_status(Thread& t, ThreadStatus s, uint64_t now);
     uint32_t math_latency(const StepInfo& s) const;
+    // Where a node sits in simulated memory (treelet layout, model/treelet.h).
+    uint64_t placed(uint64_t node) const;
 
     HwConfig cfg_;
     const BvhImage& image_;
@@ -167,6 +168,7 @@ private:
     std::vector<RetiredRay> retired_;
     uint64_t next_id_ = 1;
     uint64_t warps_accepted_ = 0;  // warps taken into the warp buffer so far (their age)
+    bool next_nodes_changed_ = false;  // a thread's next node changed since the prefetcher last looked (OnCycle)
     RtUnitStats stats_;
 };
 

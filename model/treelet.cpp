@@ -1,5 +1,6 @@
 #include "treelet.h"
 
+#include <algorithm>
 #include <deque>
 
 namespace rtu {
@@ -19,7 +20,7 @@ void children(const BvhImage& img, const StackEntry& e, std::vector<StackEntry>&
 }
 }  // namespace
 
-Treelets form_treelets(const BvhImage& img, uint32_t budget) {
+Treelets form_treelets(const BvhImage& img, uint32_t budget, bool contiguous, uint32_t stride) {
     Treelets t;
     std::deque<StackEntry> roots = {{img.header().root, NodeType::Internal, kNoId}};
     std::vector<StackEntry> kids;
@@ -33,20 +34,39 @@ Treelets form_treelets(const BvhImage& img, uint32_t budget) {
         std::deque<StackEntry> frontier = {root};
         while (!frontier.empty()) {
             const StackEntry e = frontier.front();
-            frontier.pop_front();
-            if (t.of.count(e.addr)) continue;
-            const uint32_t size = node_bytes(e.type);
-            // The root always goes in; others only while the budget holds. Breadth-first order
-            // means a node that does not fit starts a treelet of its own.
-            if (!t.nodes[id].empty() && t.bytes[id] + size > budget) {
-                roots.push_back(e);
+            if (t.of.count(e.addr)) {
+                frontier.pop_front();
                 continue;
             }
+            const uint32_t size = node_bytes(e.type);
+            // The root always goes in; growth stops at the first node that does not fit, and the
+            // frontier from it on roots further treelets.
+            if (!t.nodes[id].empty() && t.bytes[id] + size > budget) {
+                for (const StackEntry& f : frontier) roots.push_back(f);
+                break;
+            }
+            frontier.pop_front();
             t.of[e.addr] = id;
             t.nodes[id].push_back(e);
             t.bytes[id] += size;
             children(img, e, kids);
             for (const StackEntry& k : kids) frontier.push_back(k);
+        }
+    }
+    if (contiguous) {
+        // Treelets in the order of their roots' addresses (the Treelet code walks a map keyed by
+        // the root), each in a block of budget + stride bytes.
+        std::vector<uint32_t> order(t.nodes.size());
+        for (uint32_t i = 0; i < order.size(); ++i) order[i] = i;
+        std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return t.nodes[a][0].addr < t.nodes[b][0].addr; });
+        const uint64_t base = (uint64_t(img.size()) + 4095) / 4096 * 4096;
+        const uint64_t block = (uint64_t(budget) + stride + kBlockBytes - 1) / kBlockBytes * kBlockBytes;  // nodes stay 64 B aligned
+        for (uint64_t k = 0; k < order.size(); ++k) {
+            uint64_t at = base + k * block;
+            for (const StackEntry& e : t.nodes[order[k]]) {
+                t.moved[e.addr] = at;
+                at += node_bytes(e.type);
+            }
         }
     }
     return t;

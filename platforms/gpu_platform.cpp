@@ -92,7 +92,8 @@ struct GpuPlatform::Impl {
     Impl(const HwConfig& c, const BvhImage& img, Workload& w, const TimingOptions& o)
         : cfg(c), image(img), opt(o), core(c.core_mhz), mem(c.memory_mhz),
           // Treelet traversal (and with it the Treelet prefetcher, which needs it) works on treelets.
-          treelets(o.order == TraversalOrder::Treelet ? std::make_unique<Treelets>(form_treelets(img, c.prefetch.treelet_budget))
+          treelets(o.order == TraversalOrder::Treelet ? std::make_unique<Treelets>(form_treelets(img, c.prefetch.treelet_budget, c.prefetch.treelet_contiguous,
+                                                                                                     c.prefetch.treelet_stride))
                                                       : nullptr),
           driver(w, c.sms, c.warp_size, c.shade_latency, c.resident_warps, sampling_options(c, img, o, treelets.get())) {}
 };
@@ -139,7 +140,7 @@ GpuPlatform::GpuPlatform(const HwConfig& cfg, const BvhImage& image, Workload& w
     m.driver.on_warm = [impl = impl_.get(), sector = cfg.l1.sector](const std::vector<WarmFetch>& fetches) {
         for (const WarmFetch& f : fetches)
             for (uint32_t o = 0; o < f.bytes; o += sector) {
-                const uint64_t a = f.addr + o;
+                const uint64_t a = (impl->treelets ? impl->treelets->placed(f.addr) : f.addr) + o;
                 if (!impl->l1[f.sm]->warm(a)) impl->l2[impl->xbar->slice_of(a)]->warm(a);
             }
     };

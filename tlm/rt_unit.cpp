@@ -28,7 +28,7 @@ void RtUnit::wake_at(uint64_t cycle) {
 
 tlm::tlm_generic_payload* RtUnit::make_payload(const ChunkRequest& r) {
     // Data comes straight from the backing store (the BVH image); timing from the transaction.
-    auto* t = pool_.acquire(r.addr, kChunkBytes, const_cast<unsigned char*>(image_.at(r.addr, kChunkBytes)));
+    auto* t = pool_.acquire(r.addr, kChunkBytes, const_cast<unsigned char*>(image_.at(r.image_addr, kChunkBytes)));
     RtExtension& e = ext(*t);
     e.sm = sm_;
     e.warp = r.warp;
