@@ -2,6 +2,9 @@
 // the BFS variant, and usefulness accounting in the cache.
 #include <gtest/gtest.h>
 
+#include <glm/geometric.hpp>
+
+#include <algorithm>
 #include <map>
 #include <random>
 #include <set>
@@ -194,6 +197,118 @@ TEST(Treelets, FormationRespectsTheBudgetAndCoversEveryNodeOnce) {
             EXPECT_GE(t.nodes.size(), nodes / 8);  // at most 8 nodes of 64 B per 512 B treelet
         }
     }
+}
+
+// The contiguous layout (the Treelet paper's): each treelet in a block of budget + stride bytes
+// past the image, root first, its nodes back to back, in the order of the roots' addresses; the
+// BVH layout moves nothing. Formation is the same either way.
+TEST(Treelets, ContiguousLayoutPutsEachTreeletInABlockOfItsOwn) {
+    RTU_NEED_SHARED_SCENES();
+    const BvhImage img = build_bvh_image(load_scene("ship", rtu::test::shared_dir() + "/scenes/ship"));
+    const Treelets bvh = form_treelets(img, 512);
+    EXPECT_TRUE(bvh.moved.empty());
+    EXPECT_EQ(bvh.placed(img.header().root), img.header().root);
+    const Treelets t = form_treelets(img, 512, true, 256);
+    ASSERT_EQ(t.nodes.size(), bvh.nodes.size());
+    const uint64_t base = (img.size() + 4095) / 4096 * 4096, block = 512 + 256;
+    std::vector<uint64_t> roots;
+    for (const auto& n : t.nodes) roots.push_back(n[0].addr);
+    std::sort(roots.begin(), roots.end());
+    std::set<uint64_t> seen;
+    for (size_t i = 0; i < t.nodes.size(); ++i) {
+        ASSERT_EQ(t.nodes[i].size(), bvh.nodes[i].size());
+        for (size_t j = 0; j < t.nodes[i].size(); ++j) EXPECT_EQ(t.nodes[i][j].addr, bvh.nodes[i][j].addr);
+        const uint64_t k = uint64_t(std::lower_bound(roots.begin(), roots.end(), t.nodes[i][0].addr) - roots.begin());
+        uint64_t at = base + k * block;
+        for (const StackEntry& e : t.nodes[i]) {
+            EXPECT_EQ(t.placed(e.addr), at);
+            EXPECT_TRUE(seen.insert(at).second);
+            at += node_bytes(e.type);
+        }
+        EXPECT_LE(at, base + (k + 1) * block);
+    }
+}
+
+namespace {
+// A hand-made RT unit for the Treelet prefetcher: threads whose next nodes are given.
+struct FakeUnit : UnitThreads {
+    std::vector<TraversalThread> threads;
+    void for_each_live(const std::function<void(const TraversalThread&)>& f) const override {
+        for (const TraversalThread& t : threads) f(t);
+    }
+};
+struct Recording : PrefetchSink {
+    std::vector<uint64_t> nodes;
+    void prefetch(const StackEntry& e, uint64_t) override { nodes.push_back(e.addr); }
+};
+}  // namespace
+
+// The Treelet prefetcher as the code the paper ran: the RT unit's most popular treelet (by the
+// treelet of each live thread's next node; ties: the smaller root address) is prefetched whole,
+// unless it was the last one; the popularity heuristic only above its share of the votes.
+// Threads are real treelet traversals of the bunny, stepped until their next node is outside the
+// root treelet.
+TEST(Treelets, PrefetcherPicksTheUnitsMostPopularTreeletOnce) {
+    RTU_NEED_SHARED_SCENES();
+    const Scene scene = load_scene("bunny", rtu::test::shared_dir() + "/scenes/bunny");
+    const BvhImage img = build_bvh_image(scene);
+    const Treelets t = form_treelets(img, 512);
+    // Rays from the camera, stepped; a copy of a thread is kept each time it heads for a treelet
+    // other than the root's and the ones kept so far, until there are two.
+    std::vector<TraversalThread> heading;
+    std::vector<uint32_t> target;
+    for (int i = 0; i < 64 && heading.size() < 2; ++i) {
+        Ray r;
+        r.org = scene.camera.eye;
+        r.dir = glm::normalize(scene.camera.lookat - scene.camera.eye) + glm::vec3(0.06f * float(i % 8 - 4), 0.06f * float(i / 8 - 4), 0);
+        scale_direction(r);
+        TraversalThread th;
+        th.start(r, img.header(), TraversalOrder::Treelet, &t, false);
+        while (!th.done() && heading.size() < 2) {
+            const uint32_t id = t.treelet_of(th.peek().addr);
+            if (id != 0 && std::find(target.begin(), target.end(), id) == target.end()) {
+                heading.push_back(th);
+                target.push_back(id);
+            }
+            th.step(img);
+        }
+    }
+    ASSERT_EQ(heading.size(), 2u) << "no two rays heading for different treelets; treelets " << t.nodes.size() << " eye " << scene.camera.eye.x << "," << scene.camera.eye.y << "," << scene.camera.eye.z << " at " << scene.camera.lookat.x << "," << scene.camera.lookat.y << "," << scene.camera.lookat.z;
+    auto whole = [&](uint32_t id) {
+        std::vector<uint64_t> v;
+        for (const StackEntry& e : t.nodes[id]) v.push_back(e.addr);
+        return v;
+    };
+    auto make = [&](TreeletHeuristic h, double threshold) {
+        PrefetchConfig c;
+        c.kind = PrefetcherKind::Treelet;
+        c.treelet_heuristic = h;
+        c.treelet_threshold = threshold;
+        return make_prefetcher(c, TraversalOrder::Treelet, RtLatency{}, &t);
+    };
+    FakeUnit unit;
+    unit.threads = {heading[0], heading[1], heading[1]};  // treelet B: 2 votes, A: 1
+    auto p = make(TreeletHeuristic::Always, 0.75);
+    EXPECT_EQ(p->hooks(), unsigned(Prefetcher::OnCycle));
+    Recording out;
+    p->on_cycle(unit, out);
+    EXPECT_EQ(out.nodes, whole(target[1]));
+    out.nodes.clear();
+    p->on_cycle(unit, out);
+    EXPECT_TRUE(out.nodes.empty());  // the last one prefetched: not again
+    // A tie goes to the treelet whose root has the smaller address.
+    unit.threads = {heading[0], heading[1]};
+    const uint32_t smaller = t.nodes[target[0]][0].addr < t.nodes[target[1]][0].addr ? target[0] : target[1];
+    auto q = make(TreeletHeuristic::Always, 0.75);
+    q->on_cycle(unit, out);
+    EXPECT_EQ(out.nodes, whole(smaller));
+    // Popularity: 2 of 3 votes (67 %) is below 75 %: nothing; at 60 % the winner goes.
+    unit.threads = {heading[0], heading[1], heading[1]};
+    out.nodes.clear();
+    make(TreeletHeuristic::Popularity, 0.75)->on_cycle(unit, out);
+    EXPECT_TRUE(out.nodes.empty());
+    make(TreeletHeuristic::Popularity, 0.6)->on_cycle(unit, out);
+    EXPECT_EQ(out.nodes, whole(target[1]));
 }
 
 // Treelet traversal finds the same closest hits as DFS, and finishes a treelet before it moves
