@@ -87,6 +87,7 @@ const Key kSchema[] = {
     {"prefetch.ttp_depth_s3", "entries", Type::Int, 0, 64, false, "TTP (DFS): on the third and later consecutive pops"},
     {"prefetch.bfs_n", "entries", Type::Int, 0, 64, false, "TTP (BFS): queue entries prefetched per pop"},
     {"prefetch.queue", "chunks", Type::Int, 0, 1 << 20, false, "prefetch queue entries per RT unit (0: unbounded, as the TTP authors' RT unit); a chunk that finds it full is dropped"},
+    {"prefetch.thread_window", "nodes", Type::Int, 0, 1024, false, "TTP: a node among the thread's last this many prefetches is not prefetched again (0: off; the TTP authors' RT unit: 16)"},
     {"prefetch.priority_after", "core cycles", Type::Int, 0, 1e6, false, "0: prefetch only in cycles without demand; X: prefetch first if none sent in X cycles"},
     {"energy.l1_access_pj", "pJ", Type::Real, 0, 1e6, false, "energy of one 32 B L1 access (pJ)"},
     {"energy.l2_access_pj", "pJ", Type::Real, 0, 1e6, false, "energy of one 32 B L2 access incl. crossbar (pJ)"},
@@ -335,6 +336,7 @@ HwConfig Config::resolve() const {
     h.prefetch.bfs_n = u32("prefetch.bfs_n");
     h.prefetch.priority_after = u32("prefetch.priority_after");
     h.prefetch.queue = u32("prefetch.queue");
+    h.prefetch.thread_window = u32("prefetch.thread_window");
     h.prefetch.treelet_budget = u32("prefetch.treelet_budget");
     h.prefetch.treelet_threshold = num("prefetch.treelet_threshold");
     const std::string heuristic = values_.at("prefetch.treelet_heuristic").get<std::string>();

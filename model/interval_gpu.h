@@ -107,6 +107,7 @@ private:
     struct Sink : PrefetchSink {
         explicit Sink(IntervalGpu& g) : gpu(g) {}
         void prefetch(const StackEntry& node, uint64_t deadline) override;
+        void window_drop() override { ++gpu.rt_[sm].prefetch_queue.window_dropped; }
         IntervalGpu& gpu;
         uint32_t sm = 0;
     };

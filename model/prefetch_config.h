@@ -31,6 +31,7 @@ struct PrefetchConfig {
     uint32_t priority_after = 0;              // 0: prefetch only in cycles without a demand request;
                                               // X: a prefetch goes first if none was sent in the last X cycles
     uint32_t queue = 0;                       // prefetch queue entries per RT unit (0: unbounded)
+    uint32_t thread_window = 0;               // TTP: a node among a thread's last this many prefetches is not prefetched again (0: off)
     std::shared_ptr<PrefetchObserver> observer;  // not a configuration key: set by tests
     uint32_t treelet_budget = 512;            // Treelet: bytes per treelet
     double treelet_threshold = 0.75;          // Treelet (popularity): share of the RT unit's threads that must head for a treelet

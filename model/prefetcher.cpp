@@ -1,5 +1,6 @@
 #include "prefetcher.h"
 
+#include <algorithm>
 #include <map>
 #include <stdexcept>
 
@@ -32,10 +33,10 @@ public:
         // The stack after the pop is the current one without its top (DFS) or head (BFS).
         if (bfs_) {
             s.bfs.on_pop(st.size() - 1, cfg_.bfs_n, picks_);
-            for (size_t pos : picks_) sink.prefetch(st[pos + 1], ~0ull);
+            for (size_t pos : picks_) send(s, st[pos + 1], sink);
         } else {
             s.dfs.on_pop(st.size() - 1, cfg_.depth, picks_);
-            for (size_t i : picks_) sink.prefetch(st[i], ~0ull);
+            for (size_t i : picks_) send(s, st[i], sink);
         }
         if (cfg_.observer) {
             std::vector<uint64_t> picked;
@@ -49,6 +50,20 @@ public:
     }
 
 private:
+    // With a thread window (the TTP authors' RT unit: a thread's prefetch records are dropped
+    // when the same node is among its last 16 prefetches, abstract_hardware_model.cc l.945-951,
+    // abstract_hardware_model.h l.1535), a pick of a recent node goes no further.
+    void send(PrefetchThreadState& s, const StackEntry& e, PrefetchSink& sink) {
+        if (cfg_.thread_window) {
+            if (std::find(s.recent.begin(), s.recent.end(), e.addr) != s.recent.end()) {
+                sink.window_drop();
+                return;
+            }
+            s.recent.push_back(e.addr);
+            if (s.recent.size() > cfg_.thread_window) s.recent.pop_front();
+        }
+        sink.prefetch(e, ~0ull);
+    }
     PrefetchConfig cfg_;
     bool bfs_;
     std::vector<size_t> picks_;

@@ -74,6 +74,7 @@ private:
 struct PrefetchThreadState {
     TtpDfs dfs;
     TtpBfs bfs;
+    std::deque<uint64_t> recent;  // the thread's last prefetched nodes (prefetch.thread_window)
 };
 
 // Where a prefetcher's picks go: the RT unit splits each node into chunks and queues them.
@@ -82,6 +83,8 @@ public:
     virtual ~PrefetchSink() = default;
     // `deadline`: the cycle after which an unsent chunk is dropped (~0: none).
     virtual void prefetch(const StackEntry& node, uint64_t deadline) = 0;
+    // A pick the thread's window dropped (prefetch.thread_window), for the statistics.
+    virtual void window_drop() = 0;
 };
 
 // The RT unit's threads as the Treelet prefetcher reads them: every live thread of every warp

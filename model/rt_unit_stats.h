@@ -28,8 +28,9 @@ struct ThreadCycles {
 
 // The prefetch queue (model/prefetch_queue.h): what the prefetcher picked and what became of it.
 struct PrefetchQueueCounts {
-    uint64_t generated = 0, duplicates_dropped = 0, full_dropped = 0, removed_by_demand = 0, sent = 0, expired_unsent = 0, answered = 0;
+    uint64_t window_dropped = 0, generated = 0, duplicates_dropped = 0, full_dropped = 0, removed_by_demand = 0, sent = 0, expired_unsent = 0, answered = 0;
     static constexpr Counter<PrefetchQueueCounts> kCounters[] = {
+        {"window_dropped", &PrefetchQueueCounts::window_dropped, "nodes", "TTP picks of a node among the thread's last prefetch.thread_window prefetches: dropped before the queue"},
         {"generated", &PrefetchQueueCounts::generated, "chunks", "32 B prefetch chunks the prefetcher picked"},
         {"duplicates_dropped", &PrefetchQueueCounts::duplicates_dropped, "chunks", "picked while the same chunk waited in the queue: dropped"},
         {"full_dropped", &PrefetchQueueCounts::full_dropped, "chunks", "picked while the queue was full (prefetch.queue): dropped"},

@@ -59,6 +59,7 @@ CacheOutcome SectorCache::read(uint64_t addr, uint64_t token, ReqKind kind) {
     if (w && (w->valid & bit)) {
         touch(*w);
         ++st.hits;
+        if (w->line_prefetched) w->way_accessed = true;  // any hit, demand or prefetch, as the authors
         if (kind == ReqKind::Demand && (w->prefetched & bit)) {
             w->prefetched &= ~bit;
             ++counts_.prefetched.useful;
@@ -130,12 +131,14 @@ SectorCache::Way* SectorCache::allocate(uint64_t line, CacheAccessCounts* st) {
         if (st) {
             if (victim->valid) ++st->evictions;
             counts_.prefetched.unused_evictions += uint64_t(__builtin_popcount(victim->prefetched));
+            counts_.prefetched.authors_unused_lines += victim->line_prefetched && !victim->way_accessed;
         }
     }
     victim->line = line;
     victim->valid = 0;
     victim->pending = 0;
     victim->prefetched = 0;
+    victim->line_prefetched = false;
     where_[line] = uint32_t(victim - ways_.data());
     return victim;
 }
@@ -169,6 +172,7 @@ SectorCache::Tokens SectorCache::fill(uint64_t sector_addr) {
     w->pending &= ~bit;
     w->valid |= bit;
     if (unused_prefetch) w->prefetched |= bit;
+    w->line_prefetched = by_prefetch;  // every fill sets or clears it (gpu-cache.cc l.412, l.420)
     ++counts_.fills;
     if (by_prefetch) ++counts_.prefetched.fills;
     return tokens;

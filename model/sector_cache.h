@@ -46,11 +46,14 @@ struct CacheAccessCounts {
 // Sectors brought in by prefetches, and whether demand reads used them.
 struct PrefetchedSectorCounts {
     uint64_t fills = 0, useful = 0, late = 0, unused_evictions = 0;
+    uint64_t authors_unused_lines = 0;
     static constexpr Counter<PrefetchedSectorCounts> kCounters[] = {
         {"fills", &PrefetchedSectorCounts::fills, "sectors", "sectors brought in by a prefetch"},
         {"useful", &PrefetchedSectorCounts::useful, "sectors", "of them, read by a demand request (at most once each)"},
         {"late", &PrefetchedSectorCounts::late, "sectors", "of the useful ones, the demand read came while the prefetch was on its way"},
         {"unused_evictions", &PrefetchedSectorCounts::unused_evictions, "sectors", "prefetched sectors evicted before any demand read"},
+        {"authors_unused_lines", &PrefetchedSectorCounts::authors_unused_lines, "lines",
+         "the TTP authors' count of unused prefetches (gpu-cache.cc l.1646): lines evicted whose last fill was a prefetch's and whose way never had a hit while its line was so marked"},
     };
 };
 
@@ -115,6 +118,10 @@ private:
         uint64_t line = ~0ull;  // line address; ~0 = invalid
         uint32_t valid = 0, pending = 0;  // sector bit masks
         uint32_t prefetched = 0;          // filled by a prefetch and not yet read by a demand
+        // The TTP authors' line flags (gpu-cache.h l.158-160): the line's last fill was a
+        // prefetch's; a hit found the line so marked. The second is never cleared, as theirs
+        // (set only in the constructor), so it stays with the way across lines.
+        bool line_prefetched = false, way_accessed = false;
         uint32_t prev = kNone, next = kNone;  // recency list of the set (front: most recently used)
     };
     struct Set {

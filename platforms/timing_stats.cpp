@@ -70,9 +70,13 @@ void write_hierarchy(StatsOut& out, const HwConfig& cfg, const HierarchyCounts& 
     write_cache(out.child("l1", "the SMs' L1 data caches, summed"), h.l1, "per_sm", "the same counters per SM", rt.node_fetches);
     write_cache(out.child("l2", "the L2 slices, summed"), h.l2, "per_slice", "the same counters per L2 slice", rt.node_fetches);
     {
-        // The paper's prefetch figures (section 6): accuracy = prefetched sectors later used by a
-        // demand read / sectors prefetched; efficiency = prefetches that missed both the cache
-        // and its MSHRs with an MSHR free / all prefetches.
+        // The paper's prefetch figures (section 6), ours: accuracy = prefetched sectors later read
+        // by a demand / sectors prefetched; efficiency = prefetches that missed both the cache and
+        // its MSHRs with an MSHR free / all prefetches. The authors' code (gpu-cache.cc l.833-838):
+        // accuracy = (sectors prefetched - unused lines) / sectors prefetched, coverage = (sectors
+        // prefetched - unused lines) / demand misses (line and sector) of the same run, where an
+        // unused line is one evicted with the flags of PrefetchedSectorCounts::authors_unused_lines
+        // (lines still in the cache at the end count as used).
         StatsOut p = out.child("prefetch", "the prefetcher's effect on the caches (paper section 6)");
         p.value("prefetcher", prefetcher_name(cfg.prefetch.kind), "", "none, ttp, park, treelet, perfect-up or perfect-down");
         for (const auto& [name, per] : {std::pair<const char*, const std::vector<CacheCounts>*>{"l1", &h.l1}, {"l2", &h.l2}}) {
@@ -82,6 +86,11 @@ void write_hierarchy(StatsOut& out, const HwConfig& cfg, const HierarchyCounts& 
                      "prefetched sectors later read by a demand request / sectors brought in by prefetches");
             lv.value("efficiency", ratio(double(c.prefetch.sector_misses + c.prefetch.line_misses), double(c.prefetch.accesses)), "ratio",
                      "prefetch lookups that missed cache and MSHRs with an MSHR free / prefetch lookups");
+            const double authors_useful = double(c.prefetched.fills) - double(std::min(c.prefetched.fills, c.prefetched.authors_unused_lines));
+            lv.value("authors_accuracy", ratio(authors_useful, double(c.prefetched.fills)), "ratio",
+                     "the TTP authors' code: (sectors prefetched - unused lines) / sectors prefetched");
+            lv.value("authors_coverage", ratio(authors_useful, double(c.demand.sector_misses + c.demand.line_misses)), "ratio",
+                     "the TTP authors' code: (sectors prefetched - unused lines) / demand line and sector misses of the same run");
         }
     }
     const DramStats dram = total(h.dram);

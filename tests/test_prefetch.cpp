@@ -240,6 +240,7 @@ struct FakeUnit : UnitThreads {
 struct Recording : PrefetchSink {
     std::vector<uint64_t> nodes;
     void prefetch(const StackEntry& e, uint64_t) override { nodes.push_back(e.addr); }
+    void window_drop() override {}
 };
 }  // namespace
 

@@ -795,7 +795,7 @@ TEST(RtsimConfig, EveryKeyOfEveryPresetIsRead) {
         {{"prefetch.treelet_heuristic=always|popularity"}, treelet}, {{"prefetch.treelet_layout=bvh|contiguous"}, treelet},
         {{"prefetch.treelet_stride=1024"}, treelet + " --set prefetch.treelet_layout=contiguous"},
         {{"prefetch.ttp_depth_s1=4"}, ttp}, {{"prefetch.ttp_depth_s2=8"}, ttp}, {{"prefetch.ttp_depth_s3=2"}, ttp},
-        {{"prefetch.bfs_n=4"}, ttp + " --traversal bfs"}, {{"prefetch.priority_after=5"}, ttp}, {{"prefetch.queue=1"}, ttp},
+        {{"prefetch.bfs_n=4"}, ttp + " --traversal bfs"}, {{"prefetch.priority_after=5"}, ttp}, {{"prefetch.queue=1"}, ttp}, {{"prefetch.thread_window=2"}, ttp},
         {{"energy.l1_access_pj=40"}}, {{"energy.l2_access_pj=160"}}, {{"energy.dram_read_pj=1000"}},
         {{"energy.dram_activate_pj=2000"}}, {{"energy.static_w=10"}},
         {{"sim.quantum=10"}, "--fidelity lt"},
