@@ -110,6 +110,33 @@ TEST(PrefetchAccounting, UsefulLateAndUnusedOnAHandBuiltSequence) {
     EXPECT_EQ(p.unused_evictions, 1u);
     // Accuracy = useful / prefetched = 2 / 3.
     EXPECT_DOUBLE_EQ(double(p.useful) / double(p.fills), 2.0 / 3.0);
+    // The authors' count: C's line (last fill a prefetch's, no hit while so marked) was evicted
+    // unused: 1 line. Their accuracy (3 - 1) / 3 here equals ours by chance.
+    EXPECT_EQ(p.authors_unused_lines, 1u);
+}
+
+// The TTP authors' unused-prefetch count and its quirks (gpu-cache.cc): a line whose last fill
+// was a demand's is not a prefetched line even if an earlier sector came by prefetch; a hit by a
+// prefetch marks the line accessed; and the mark stays with the way, so a later prefetched line
+// in the same way that is never read still counts as used.
+TEST(PrefetchAccounting, TheAuthorsUnusedLineCount) {
+    SectorCache c(CacheConfig{128, 0, 128, 32, 4, 4, 0});  // one line
+    EXPECT_EQ(c.read(0x000, 1, ReqKind::Prefetch), CacheOutcome::LineMiss);
+    c.fill(0x000);                                                            // line 0: prefetched
+    EXPECT_EQ(c.read(0x020, 2, ReqKind::Demand), CacheOutcome::SectorMiss);
+    c.fill(0x020);                                                            // last fill a demand's
+    EXPECT_EQ(c.read(0x080, 3, ReqKind::Prefetch), CacheOutcome::LineMiss);  // evicts line 0
+    c.fill(0x080);
+    EXPECT_EQ(c.counts().prefetched.authors_unused_lines, 0u);  // not "prefetched" any more
+    EXPECT_EQ(c.counts().prefetched.unused_evictions, 1u);      // ours: sector 0x000 never read
+    EXPECT_EQ(c.read(0x080, 4, ReqKind::Prefetch), CacheOutcome::Hit);  // a prefetch hit marks the way
+    EXPECT_EQ(c.read(0x100, 5, ReqKind::Prefetch), CacheOutcome::LineMiss);  // evicts line 0x080
+    c.fill(0x100);
+    EXPECT_EQ(c.counts().prefetched.authors_unused_lines, 0u);  // it had a (prefetch) hit
+    EXPECT_EQ(c.read(0x180, 6, ReqKind::Demand), CacheOutcome::LineMiss);  // evicts 0x100, never hit
+    c.fill(0x180);
+    EXPECT_EQ(c.counts().prefetched.authors_unused_lines, 0u);  // the way's mark stayed
+    EXPECT_EQ(c.counts().prefetched.unused_evictions, 3u);      // ours: 0x000, 0x080, 0x100 unread
 }
 
 namespace {
