@@ -23,6 +23,7 @@ struct RtThread {
     PopStreak streak;
     PrefetchThreadState prefetch;
     uint32_t l1_miss_nodes = 0, dram_nodes = 0;  // node fetches so far not served by L1 / served by DRAM
+    bool next_queued = false;  // the current fetch is a pop after which the stack (queue) was not empty
 
     void start(const WarpRay& r, const ImageHeader& header, const TraversalRule& rule, const Treelets* treelets) {
         key = r.key;
@@ -34,7 +35,9 @@ struct RtThread {
 
     // The fetch of trav.peek() is sent: returns its pop-streak class (0: not a pop).
     uint8_t begin_fetch(Prefetcher& prefetcher, PrefetchSink& sink) {
+        next_queued = false;
         if (!trav.next_is_pop()) return 0;
+        next_queued = trav.stack().size() > 1;
         const uint8_t c = streak.pop();
         if (prefetcher.hooks() & Prefetcher::OnPop) prefetcher.on_pop(prefetch, trav.stack(), sink);
         return c;
@@ -46,6 +49,7 @@ struct RtThread {
                             Prefetcher& prefetcher) {
         st.pop_streak[fetch_class].l1_misses += l1_miss;
         st.pop_streak[fetch_class].dram_misses += dram;
+        st.l1_misses_with_next_queued += l1_miss && next_queued;
         l1_miss_nodes += l1_miss;
         dram_nodes += dram;
         const StepInfo info = trav.step(image);

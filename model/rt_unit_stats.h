@@ -71,6 +71,7 @@ struct PopStreakStats {
 struct RtUnitStats {
     uint64_t warps = 0, rays = 0, node_fetches = 0, chunk_requests = 0, coalesced_fetches = 0, responses = 0;
     uint64_t limit_study_hits = 0, max_response_fifo = 0, max_memory_access_queue = 0;
+    uint64_t l1_misses_with_next_queued = 0;
     ThreadCycles thread_cycles;
     PrefetchQueueCounts prefetch_queue;
     PopStreakStats pop_streak;
@@ -83,6 +84,8 @@ struct RtUnitStats {
         {"coalesced_fetches", &RtUnitStats::coalesced_fetches, "node reads", "node reads that shared another thread's read of the same node in one scheduling (intra-warp coalescing)"},
         {"responses", &RtUnitStats::responses, "responses", "demand responses drained from the response FIFO"},
         {"limit_study_hits", &RtUnitStats::limit_study_hits, "requests", "32 B demand requests answered as L1 hits by a perfect-up/down limit study"},
+        {"l1_misses_with_next_queued", &RtUnitStats::l1_misses_with_next_queued, "node reads",
+         "pops whose node read missed L1 while the thread's stack (BFS: queue) still held a node after the pop: with BFS an accurate prefetch could follow (paper Figure 'bfs_trend')"},
         {"max_response_fifo", &RtUnitStats::max_response_fifo, "entries", "most responses waiting in the response FIFO at once", Merge::Max},
         {"max_memory_access_queue", &RtUnitStats::max_memory_access_queue, "requests", "most demand requests waiting in the memory access queue at once", Merge::Max},
     };

@@ -61,6 +61,8 @@ void write_hierarchy(StatsOut& out, const HwConfig& cfg, const HierarchyCounts& 
         const double nodes = double(std::max<uint64_t>(1, sum.nodes_visited));
         u.value("node_fetch_l1_miss_share", double(sum.l1_miss_nodes) / nodes, "ratio", "share of node reads not served by L1");
         u.value("node_fetch_dram_share", double(sum.dram_nodes) / nodes, "ratio", "share of node reads served by DRAM");
+        u.value("l1_misses_with_next_queued_share", ratio(double(rt.l1_misses_with_next_queued), double(sum.l1_miss_nodes)), "ratio",
+                "l1_misses_with_next_queued / node reads not served by L1 (paper Figure 'bfs_trend' with BFS: 70.42 % mean)");
         const double threads = double(rt.thread_cycles.total());
         StatsOut s = u.child("thread_status", "shares of the thread slots' resident cycles (paper Figure 1)");
         for (const Counter<ThreadCycles>& c : ThreadCycles::kCounters)
