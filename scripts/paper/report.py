@@ -39,6 +39,10 @@ PAPER = {
     "treelet_dram": 1.38,                                                   # Figure 'treelet_dram_reads'
     "park": 1.04, "park_max": 1.11,                                         # Figure 'parketal'
     "ao": 1.22, "sh": 1.18,                                                 # Figure 'speedupaosh'
+    "dram_bw_overhead": 0.1822,                                             # Section 1, Figure 'avg_dram_bw'
+    "bfs_l1_mpki_drop": 0.4410, "bfs_l2_mpki_drop": 0.9204,                 # Figure 'bfs_mpki' (BFS N=4)
+    "bfs_opportunity": 0.7042,                                              # Figure 'bfs_trend'
+    "bfs_nodes_diff": 0.429,                                                # Table 1, mean over its 16 scenes
     # Table 1: DFS / BFS nodes per ray.
     "nodes": {"wknd": (13.3, 13.3), "ship": (43.3, 46.6), "bunny": (11.3, 12.5), "ref": (11.3, 12.7), "bath": (18.4, 21.1),
               "party": (34.8, 37.4), "sprng": (31.4, 38.7)},
@@ -111,6 +115,25 @@ class Report(Markdown):
         return series, gms
 
 
+def gm_of(R, exp, base, scenes=None):
+    """Geometric mean over the paper's scenes of exp's speed-up over base (None without data)."""
+    sc = R.scenes_with(exp, base) if scenes is None else scenes
+    g = R.gm({s: R.speedup(exp, base, s) for s in sc})
+    return g if g == g else None
+
+
+def known(*xs):
+    """True when every figure exists (not None, not NaN)."""
+    return all(x is not None and x == x for x in xs)
+
+
+def check(R, targets, what, ours, figures, ok, detail=""):
+    """One row of the target checklist: the issue's target, our figure, whether it is met; `ok`
+    (a function) is asked only when every one of `figures` exists."""
+    status = ("met" if ok() else "**not met**") if known(*figures) else "no data"
+    targets.append([what, ours, status, detail])
+
+
 def main():
     results, outdir = pathlib.Path(sys.argv[1]), pathlib.Path(sys.argv[2])
     outdir.mkdir(parents=True, exist_ok=True)
@@ -118,16 +141,25 @@ def main():
     R = Report(data, outdir)
     d = R.d
     size = f"{meta['size']}x{meta['size']}"
+    preset = meta.get("config", "mobile")
     failed = [k for k, r in d.items() if r["exit"] not in ("0", 0, "")]
     missing = [k for k, r in d.items() if r["exit"] == ""]
     wall = sum(float(r["wall_s"] or 0) for r in d.values())
     scenes_run = sorted({s for (_, s) in d}, key=SCENES.index)
+    targets = []  # the issue's targets, checked as the sections compute them, printed near the top
     R.p("# The TTP paper's experiments, reproduced on rtunit")
     R.p()
     R.p(f"Generated {datetime.date.today()} by `scripts/paper.sh` from `{results.name}`: {len(d)} runs ({len(failed)} failed, "
-        f"{len(missing)} not run), {wall / 60:.1f} minutes of simulation summed. AT fidelity, {meta.get('config', 'mobile')} "
+        f"{len(missing)} not run), {wall / 60:.1f} minutes of simulation summed. AT fidelity, `{preset}` "
         f"preset unless stated, path tracing {size}, {meta['spp']} spp, DFS, seed 1. Scenes: {', '.join(scenes_run)}. "
         "Geometric means are over the paper's scenes among them (cornell is not one). Speed-up = baseline cycles / cycles.")
+    R.p()
+    R.p("The `paper` preset is the TTP authors' MOBILE setup key by key (docs/paper-preset.md gives every key's source); "
+        "the `mobile` column, where shown, is the paper's Table 2 alone, without the details of the authors' simulator "
+        "(two-step leaf read, 100-cycle DRAM front end, 16 resident warps per SM, their address mapping and set hashing, "
+        "oldest-first RT warp scheduling, a 16-entry per-thread prefetch window); the difference between the two columns is what "
+        "those details weigh. The paper's figures are over its 16 LumiBench scenes; ours are over the stand-ins we have "
+        "(see the gap table at the end).")
     R.p()
     if failed:
         R.p("Failed runs (see their .err files): " + ", ".join("/".join(k) for k in failed))
@@ -135,38 +167,118 @@ def main():
     if missing:
         R.p("Not run (yet): " + ", ".join("/".join(k) for k in missing) + ". Rerun scripts/paper.sh to resume.")
         R.p()
+    targets_at = len(R.lines)
 
-    # 1. Overall.
+    # 1. Overall, with the spread over ray seeds and the mobile preset beside it.
     R.p("## Speed-up, power and energy of TTP (paper Figure 'dfsspeeduppowerenergy_pt')")
     R.p()
     scenes = R.scenes_with("base", "ttp")
     sp = {s: R.speedup("ttp", "base", s) for s in scenes}
     pw = {s: R.val("ttp", s, "power_w") / R.val("base", s, "power_w") for s in scenes}
     en = {s: R.val("ttp", s, "energy_j") / R.val("base", s, "energy_j") for s in scenes}
-    rows = [[s, times(sp[s]), times(pw[s]), times(en[s]), f"{R.val('base', s, 'cycles'):.0f}", f"{R.val('ttp', s, 'cycles'):.0f}"]
-            for s in scenes]
+    seeds = {1: ("base", "ttp"), 2: ("seed2_base", "seed2_ttp"), 3: ("seed3_base", "seed3_ttp")}
+    by_seed = {k: {s: R.speedup(t, b, s) for s in R.scenes_with(b, t)} for k, (b, t) in seeds.items()}
+    mob = {s: R.speedup("mobile_ttp", "mobile_base", s) for s in R.scenes_with("mobile_base", "mobile_ttp")}
+
+    def seed_range(s):
+        v = [by_seed[k].get(s) for k in seeds if by_seed[k].get(s)]
+        return f"{min(v):.2f}-{max(v):.2f}" if len(v) > 1 else "-"
+    rows = [[s, times(sp[s]), seed_range(s), times(pw[s]), times(en[s]), times(mob.get(s)),
+             f"{R.val('base', s, 'cycles'):.0f}", f"{R.val('ttp', s, 'cycles'):.0f}"] for s in scenes]
     g_sp, g_pw, g_en = R.gm(sp), R.gm(pw), R.gm(en)
-    rows.append(["**geomean**", f"**{times(g_sp)}**", f"**{times(g_pw)}**", f"**{times(g_en)}**", "", ""])
-    rows.append(["paper", times(PAPER["ttp"]), times(PAPER["power"]), times(PAPER["energy"]), "", ""])
-    R.table(["scene", "speed-up", "power", "energy", "baseline cycles", "TTP cycles"], rows)
+    g_seed = [R.gm(v) for v in by_seed.values() if v]
+    g_seed = [g for g in g_seed if g == g]
+    g_mob = R.gm(mob) if mob else None
+    rows.append(["**geomean**", f"**{times(g_sp)}**", f"{min(g_seed):.2f}-{max(g_seed):.2f}" if len(g_seed) > 1 else "-",
+                 f"**{times(g_pw)}**", f"**{times(g_en)}**", times(g_mob), "", ""])
+    rows.append(["paper", times(PAPER["ttp"]), "", times(PAPER["power"]), times(PAPER["energy"]), "", "", ""])
+    R.table(["scene", "speed-up", "seeds 1-3", "power", "energy", "mobile preset", "baseline cycles", "TTP cycles"], rows)
     R.bars("overall", "TTP speed-up, power and energy (normalised to baseline)", {"speed-up": sp, "power": pw, "energy": en}, ylabel="x baseline")
-    peak_scene = max((s for s in sp if s in PAPER_SCENES), key=lambda s: sp[s], default=None)
-    low_scene = min((s for s in sp if s in PAPER_SCENES), key=lambda s: sp[s], default=None)
-    pu = R.gm({s: R.speedup("perfect_up", "base", s) for s in R.scenes_with("base", "perfect_up")})
+    paper_sp = {s: v for s, v in sp.items() if s in PAPER_SCENES}
+    peak_scene = max(paper_sp, key=paper_sp.get, default=None)
+    low_scene = min(paper_sp, key=paper_sp.get, default=None)
+    pu = gm_of(R, "perfect_up", "base")
+    widest = max(scenes, key=lambda s: max([by_seed[k].get(s) or 0 for k in seeds]) - min([by_seed[k].get(s) or 9 for k in seeds]),
+                 default=None)
     R.p(f"Ours: {times(g_sp, 2)} geomean, peak {times(sp.get(peak_scene), 2)} ({peak_scene}), least {times(sp.get(low_scene), 2)} "
         f"({low_scene}); paper: {times(PAPER['ttp'], 2)}, peak {times(PAPER['ttp_max'], 2)}, wknd least. Direction: speed-up "
         f"{direction(g_sp, PAPER['ttp'])}, power {direction(g_pw, PAPER['power'])}, energy {direction(g_en, PAPER['energy'])}. "
         f"Our TTP gain ({pct(g_sp - 1)}) is {share_words(g_sp - 1, PAPER['ttp'] - 1)} of the paper's ({pct(PAPER['ttp'] - 1)}); "
         f"the perfect-upward limit, which bounds it, is {times(pu, 2)} here against the paper's {times(PAPER['perfect_up'], 2)}, "
-        f"and TTP reaches {share_words(g_sp - 1, pu - 1)} of it (paper: {share_words(PAPER['ttp'] - 1, PAPER['perfect_up'] - 1)}).")
+        f"and TTP reaches {share_words(g_sp - 1, (pu or 1) - 1)} of it (paper: {share_words(PAPER['ttp'] - 1, PAPER['perfect_up'] - 1)}).")
+    if len(g_seed) > 1:
+        R.p(f"Seeds 1-3 draw other ray paths through the same frame: the geomean moves between {min(g_seed):.3f}x and "
+            f"{max(g_seed):.3f}x, one scene by up to {seed_range(widest)} ({widest}); a difference between two settings smaller "
+            "than a scene's seed range is within the noise of one frame.")
+    if g_mob:
+        R.p(f"Under the `mobile` preset (Table 2 alone) the geomean is {times(g_mob, 2)}: the authors' simulator details add "
+            f"{pct(g_sp / g_mob - 1)} to the speed-up.")
+    R.p()
+    check(R, targets, "TTP geomean >= 1.40 (paper 1.48)", times(g_sp, 2), [g_sp], lambda: g_sp >= 1.40)
+    mx = max(paper_sp.values(), default=float("nan"))
+    check(R, targets, "TTP max >= 1.7 (paper 1.89)", f"{times(mx, 2)} ({peak_scene})", [mx], lambda: mx >= 1.7)
+
+    # 2. Thread status (Figure 1) at 1 spp.
+    R.p("## Thread status in the RT unit (paper Figure 'rtcyclesdist'), 1 sample per pixel")
+    R.p()
+    st_keys = [("waiting_to_be_scheduled", "waiting for scheduling"), ("waiting_on_memory", "waiting on memory"),
+               ("in_math", "in math"), ("done_waiting_for_warp", "done, waiting for the warp")]
+    rows, mem_largest, n_st, mem_active = [], [], 0, {}
+    active_keys = [k for k, _ in st_keys if k != "done_waiting_for_warp"]
+    for s in R.scenes_with("spp1_base", "spp1_ttp"):
+        for exp, lbl in (("spp1_base", "baseline"), ("spp1_ttp", "TTP")):
+            v = {k: R.val(exp, s, f"status_{k}") for k, _ in st_keys}
+            if not known(*v.values()):
+                continue
+            active = sum(v[k] for k in active_keys)
+            rows.append([s, lbl] + [pct(v[k]) for k, _ in st_keys] + [pct(v["waiting_on_memory"] / active) if active else "-"])
+            if exp == "spp1_base" and s in PAPER_SCENES and active:
+                n_st += 1
+                mem_active[s] = v["waiting_on_memory"] / active
+                if max(active_keys, key=v.get) == "waiting_on_memory":
+                    mem_largest.append(s)
+    R.table(["scene", "run"] + [lbl for _, lbl in st_keys] + ["waiting on memory, of the traversing threads' cycles"], rows)
+    R.p("Shares of the thread slots' resident cycles (a slot holding a thread of a warp in the RT unit's warp buffer); the last "
+        "column leaves out the threads that are done and wait for their warp's last thread, as the paper's figure does (its "
+        "three classes; the authors' code counts them apart as trace_complete, ahm.cc l.892-915). The paper: threads spend "
+        f"most of their time waiting for memory. Ours, baseline: waiting on memory is the largest class of the traversing "
+        f"threads on {len(mem_largest)} of {n_st} of the paper's scenes"
+        f"{' (not on ' + ', '.join(s for s in mem_active if s not in mem_largest) + ')' if len(mem_largest) < n_st else ''}, "
+        f"{pct(min(mem_active.values(), default=None), 0)} to {pct(max(mem_active.values(), default=None), 0)} of their cycles.")
     R.p()
 
-    # 2. Limit studies.
-    R.speedups("Perfect upward and downward traversal (paper Figure 'perfectpref')",
-               {"perfect-up": "perfect_up", "perfect-down": "perfect_down", "TTP": "ttp"}, "base",
-               {"perfect-up": PAPER["perfect_up"], "perfect-down": PAPER["perfect_down"], "TTP": PAPER["ttp"]}, plot="perfect")
+    # 3. DRAM bandwidth and traffic (Figure 'dramstats').
+    R.p("## DRAM bandwidth and traffic with and without TTP (paper Figure 'dramstats')")
+    R.p()
+    rows, bw_ratio, traffic = [], {}, {}
+    for s in R.scenes_with("base", "ttp"):
+        b0, b1 = R.val("base", s, "dram_bw"), R.val("ttp", s, "dram_bw")
+        t0, t1 = R.val("base", s, "dram_bytes"), R.val("ttp", s, "dram_bytes")
+        bw_ratio[s] = b1 / b0 if b0 else None
+        traffic[s] = t1 / t0 if t0 else None
+        rows.append([s, pct(b0), pct(b1), times(bw_ratio[s]), f"{t0 / 1e6:.2f}", f"{t1 / 1e6:.2f}", times(traffic[s])])
+    R.table(["scene", "bandwidth use, baseline", "with TTP", "ratio", "traffic MB, baseline", "with TTP", "ratio"], rows)
+    m_bw = mean([v for s, v in bw_ratio.items() if s in PAPER_SCENES]) - 1
+    g_tr = R.gm(traffic)
+    top_bw = max((R.val("ttp", s, "dram_bw") or 0 for s in bw_ratio), default=0)
+    R.p(f"Bandwidth use = data-bus cycles / (memory cycles x channels). TTP raises it by {pct(m_bw)} on average (paper "
+        f"{pct(PAPER['dram_bw_overhead'])}); the traffic changes by {times(g_tr, 3)} (paper: nearly identical). The highest use "
+        f"with TTP is {pct(top_bw)}: the baseline {'leaves bandwidth unused' if top_bw < 0.5 else 'is near the bus limit'}, "
+        "as the paper finds (latency bound).")
+    R.p()
+    check(R, targets, "DRAM traffic about unchanged with TTP", f"{times(g_tr, 3)}", [g_tr], lambda: abs(g_tr - 1) <= 0.05,
+          "'about' read as within 5 %")
 
-    # 3. Larger L1.
+    # 4. Limit studies.
+    _, g_lim = R.speedups("Perfect upward and downward traversal (paper Figure 'perfectpref')",
+                          {"perfect-up": "perfect_up", "perfect-down": "perfect_down", "TTP": "ttp"}, "base",
+                          {"perfect-up": PAPER["perfect_up"], "perfect-down": PAPER["perfect_down"], "TTP": PAPER["ttp"]},
+                          plot="perfect")
+    gu, gd = g_lim.get("perfect-up"), g_lim.get("perfect-down")
+    check(R, targets, "perfect-up > perfect-down > 1 and perfect-up >= 1.6", f"up {times(gu, 3)}, down {times(gd, 3)}", [gu, gd],
+          lambda: gu > gd > 1 and gu >= 1.6)
+
+    # 5. Larger L1.
     R.p("## Larger L1 caches (paper Figure 'largedcache')")
     R.p()
     sc = R.scenes_with("l1_64_base", "l1_64_ttp", "l1_128_base", "l1_128_ttp", "base", "ttp")
@@ -184,19 +296,21 @@ def main():
             f"{direction(R.gm(s64), PAPER['l1_64'])}, {direction(R.gm(s128), PAPER['l1_128'])}.")
         R.p()
 
-    # 4. MPKI.
+    # 6. MPKI.
     R.p("## RT-read misses per kilo node fetch (paper Figure 'mpki', per kilo-instruction there)")
     R.p()
-    rows, r1, r2 = [], {}, {}
-    for s in R.scenes_with("base", "ttp"):
-        a1, b1 = R.val("base", s, "l1_mpkf"), R.val("ttp", s, "l1_mpkf")
-        a2, b2 = R.val("base", s, "l2_mpkf"), R.val("ttp", s, "l2_mpkf")
-        r1[s] = b1 / a1 if a1 else None
-        r2[s] = b2 / a2 if a2 else None
-        rows.append([s, f"{a1:.1f} -> {b1:.1f}", times(r1[s]), f"{a2:.1f} -> {b2:.1f}", times(r2[s])])
-    R.table(["scene", "L1 misses / 1000 node fetches", "ratio", "L2", "ratio"], rows)
-    drop1 = 1 - mean([v for s, v in r1.items() if s in PAPER_SCENES])
-    drop2 = 1 - mean([v for s, v in r2.items() if s in PAPER_SCENES])
+
+    def mpki_table(base, exp):
+        rows, r1, r2 = [], {}, {}
+        for s in R.scenes_with(base, exp):
+            a1, b1 = R.val(base, s, "l1_mpkf"), R.val(exp, s, "l1_mpkf")
+            a2, b2 = R.val(base, s, "l2_mpkf"), R.val(exp, s, "l2_mpkf")
+            r1[s] = b1 / a1 if a1 else None
+            r2[s] = b2 / a2 if a2 else None
+            rows.append([s, f"{a1:.1f} -> {b1:.1f}", times(r1[s]), f"{a2:.1f} -> {b2:.1f}", times(r2[s])])
+        R.table(["scene", "L1 misses / 1000 node fetches", "ratio", "L2", "ratio"], rows)
+        return (1 - mean([v for s, v in r1.items() if s in PAPER_SCENES]), 1 - mean([v for s, v in r2.items() if s in PAPER_SCENES]))
+    drop1, drop2 = mpki_table("base", "ttp")
     R.p(f"Mean fall (1 - mean of the ratios): L1 {pct(drop1, 2)}, L2 {pct(drop2, 2)}; paper {pct(PAPER['l1_mpki_drop'], 2)} and "
         f"{pct(PAPER['l2_mpki_drop'], 2)}. Direction: L1 {direction(1 - drop1, 1 - PAPER['l1_mpki_drop'])}, L2 "
         f"{direction(1 - drop2, 1 - PAPER['l2_mpki_drop'])}; ours is {share_words(drop1, PAPER['l1_mpki_drop'])} of the "
@@ -204,31 +318,47 @@ def main():
         "instruction (the RT unit is all we simulate); the ratio to the baseline does not depend on the unit.")
     R.p()
 
-    # 5. Accuracy and coverage.
+    # 7. Accuracy and coverage, three definitions.
     R.p("## Accuracy and coverage (paper Figure 'dfs_accuracy')")
     R.p()
-    rows, acc, cov = [], {"l1": {}, "l2": {}}, {"l1": {}, "l2": {}}
+    rows, acc, cov, aacc, acov = [], {"l1": {}, "l2": {}}, {"l1": {}, "l2": {}}, {"l1": {}, "l2": {}}, {"l1": {}, "l2": {}}
     for s in R.scenes_with("base", "ttp"):
         for lvl in ("l1", "l2"):
             acc[lvl][s] = R.val("ttp", s, f"{lvl}_pf_accuracy")
             m = R.val("base", s, f"{lvl}_demand_misses")
             cov[lvl][s] = R.val("ttp", s, f"{lvl}_pf_useful") / m if m else None
-        rows.append([s, pct(acc["l1"][s]), pct(acc["l2"][s]), pct(cov["l1"][s]), pct(cov["l2"][s])])
-    m_acc = {lvl: mean([v for s, v in acc[lvl].items() if s in PAPER_SCENES]) for lvl in acc}
-    m_cov = {lvl: mean([v for s, v in cov[lvl].items() if s in PAPER_SCENES]) for lvl in cov}
-    rows.append(["**mean**", f"**{pct(m_acc['l1'])}**", f"**{pct(m_acc['l2'])}**", f"**{pct(m_cov['l1'])}**", f"**{pct(m_cov['l2'])}**"])
-    rows.append(["paper", pct(PAPER["l1_accuracy"]), pct(PAPER["l2_accuracy"]), pct(PAPER["l1_coverage"]), pct(PAPER["l2_coverage"])])
-    R.table(["scene", "L1 accuracy", "L2 accuracy", "L1 coverage", "L2 coverage"], rows)
-    R.p("Definitions: accuracy = prefetched sectors later read by a demand request / sectors brought in by prefetches; "
-        "coverage = useful prefetches / baseline demand misses (sector, line and MSHR-hit misses) of the same cache.")
+            aacc[lvl][s] = R.val("ttp", s, f"{lvl}_pf_authors_accuracy")
+            acov[lvl][s] = R.val("ttp", s, f"{lvl}_pf_authors_coverage")
+        rows.append([s] + [pct(x[lvl][s]) for lvl in ("l1", "l2") for x in (acc, aacc)]
+                    + [pct(x[lvl][s]) for lvl in ("l1", "l2") for x in (cov, acov)])
+
+    def m(x, lvl):
+        return mean([v for s, v in x[lvl].items() if s in PAPER_SCENES])
+    rows.append(["**mean**"] + [f"**{pct(m(x, lvl))}**" for lvl in ("l1", "l2") for x in (acc, aacc)]
+                + [f"**{pct(m(x, lvl))}**" for lvl in ("l1", "l2") for x in (cov, acov)])
+    rows.append(["paper", "", pct(PAPER["l1_accuracy"]), "", pct(PAPER["l2_accuracy"]), "", pct(PAPER["l1_coverage"]), "",
+                 pct(PAPER["l2_coverage"])])
+    R.table(["scene", "L1 accuracy", "L1, authors' code", "L2 accuracy", "L2, authors' code",
+             "L1 coverage", "L1, authors' code", "L2 coverage", "L2, authors' code"], rows)
+    R.p("Three definitions. The paper's text: accuracy is the share of prefetches whose data a demand read uses; coverage the "
+        "share of the baseline's misses that prefetches remove. Ours follows the text by sector: accuracy = prefetched sectors "
+        "later read by a demand request / sectors brought in by prefetches; coverage = useful prefetches / the baseline's demand "
+        "misses (sector, line and MSHR-hit misses) of the same cache. The authors' code (gpu-cache.cc l.833-838), whose figures "
+        "the paper plots: accuracy = (sectors prefetched - unused lines) / sectors prefetched, where an unused line is one "
+        "evicted whose last fill was a prefetch's and whose way had no hit while so marked; lines still cached at the end count "
+        "as used, and a line counts once however many of its sectors were prefetched; coverage = the same numerator / the same "
+        "run's own demand line and sector misses.")
     R.p()
     R.p("Ours against the paper: " + "; ".join(
-        f"{lvl.upper()} accuracy {pct(m_acc[lvl])} ({'within' if abs(m_acc[lvl] - PAPER[lvl + '_accuracy']) <= 0.02 else 'outside'} "
-        f"2 points of {pct(PAPER[lvl + '_accuracy'])}), coverage {share_words(m_cov[lvl], PAPER[lvl + '_coverage'])} of the paper's"
+        f"{lvl.upper()} accuracy {pct(m(acc, lvl))} by the text, {pct(m(aacc, lvl))} by the authors' code against "
+        f"{pct(PAPER[lvl + '_accuracy'])}; coverage {pct(m(cov, lvl))} and {pct(m(acov, lvl))} against {pct(PAPER[lvl + '_coverage'])}"
         for lvl in ("l1", "l2")) + ".")
     R.p()
+    a_l1 = m(aacc, "l1")
+    check(R, targets, "TTP L1 accuracy >= 97 % (paper 98.9 %)", f"{pct(a_l1)} (authors' code), {pct(m(acc, 'l1'))} (text)", [a_l1],
+          lambda: a_l1 >= 0.97, "the paper plots the authors' code's figure")
 
-    # 6. Response breakdown.
+    # 8. Response breakdown.
     R.p("## Cache responses to prefetches (paper Figure 'cache_response_breakdown')")
     R.p()
     rows, eff = [], {"l1": {}, "l2": {}}
@@ -246,23 +376,49 @@ def main():
         f"{pct(PAPER['l1_efficiency'])}), L2 {pct(m_eff['l2'])} (paper {pct(PAPER['l2_efficiency'])}); ours is "
         f"{share_words(m_eff['l1'], PAPER['l1_efficiency'])} of the paper's at L1 and {share_words(m_eff['l2'], PAPER['l2_efficiency'])} "
         "at L2.")
+    gen = sum(R.val("ttp", s, "pf_generated") or 0 for s in R.scenes_with("ttp"))
+    win = sum(R.val("ttp", s, "pf_window_dropped") or 0 for s in R.scenes_with("ttp"))
+    rem = sum(R.val("ttp", s, "pf_removed_by_demand") or 0 for s in R.scenes_with("ttp"))
+    if gen:
+        R.p(f"Of the chunks TTP picked over all scenes, {pct(rem / gen)} left the prefetch queue unsent because a demand read "
+            f"of the same chunk went first (shader.cc l.3474-3479); the per-thread window dropped {win:,.0f} picks of nodes "
+            "among the thread's last 16 prefetches before the queue.")
     R.p()
 
-    # 7-8. 256x256, desktop.
-    if R.scenes_with("res256_base", "res256_ttp"):
-        _, g = R.speedups("256x256 (paper Figure 'highres')", {"TTP at 256x256": "res256_ttp"}, "res256_base",
-                          {"TTP at 256x256": PAPER["res256"]})
-        R.p(f"Our speed-up at 256x256 is {100 * (g['TTP at 256x256'] / g_sp - 1):+.1f} % from our {size} figure; the paper's is "
-            f"{100 * (PAPER['res256'] / PAPER['ttp'] - 1):+.1f} % from its 128x128 figure.")
+    # 9-10. 256x256, desktop: speed-up, power and energy.
+    def spe_section(title, base, exp, paper_sp):
+        R.p(f"## {title}")
         R.p()
-    _, g = R.speedups("Larger GPU: the desktop preset (paper Figure 'desktop_speedup')", {"TTP, desktop": "desktop_ttp"}, "desktop_base",
-                      {"TTP, desktop": PAPER["desktop"]})
-    R.p(f"Desktop against mobile: ours {times(g['TTP, desktop'], 2)} against {times(g_sp, 2)} "
-        f"({'above' if g['TTP, desktop'] > g_sp else 'below'}); paper {times(PAPER['desktop'], 2)} against {times(PAPER['ttp'], 2)} "
-        f"({'above' if PAPER['desktop'] > PAPER['ttp'] else 'below'}): {'agrees' if (g['TTP, desktop'] > g_sp) == (PAPER['desktop'] > PAPER['ttp']) else 'differs'}.")
+        sc = R.scenes_with(base, exp)
+        if not sc:
+            R.p("Not run.")
+            R.p()
+            return None
+        s_ = {s: R.speedup(exp, base, s) for s in sc}
+        p_ = {s: R.val(exp, s, "power_w") / R.val(base, s, "power_w") for s in sc}
+        e_ = {s: R.val(exp, s, "energy_j") / R.val(base, s, "energy_j") for s in sc}
+        rows = [[s, times(s_[s]), times(p_[s]), times(e_[s])] for s in sc]
+        rows.append(["**geomean**", f"**{times(R.gm(s_))}**", f"**{times(R.gm(p_))}**", f"**{times(R.gm(e_))}**"])
+        rows.append(["paper", times(paper_sp), "-", "-"])
+        R.table(["scene", "speed-up", "power", "energy"], rows)
+        R.p(f"Direction against the paper: {direction(R.gm(s_), paper_sp)}. The paper plots power and energy here without "
+            "quoting their means.")
+        return R.gm(s_)
+    g256 = spe_section("256x256 (paper Figure 'highres')", "res256_base", "res256_ttp", PAPER["res256"])
+    if g256:
+        R.p(f"Our speed-up at 256x256 is {100 * (g256 / g_sp - 1):+.1f} % from our {size} figure; the paper's is "
+            f"{100 * (PAPER['res256'] / PAPER['ttp'] - 1):+.1f} % from its 128x128 figure.")
+    R.p()
+    gdesk = spe_section("Larger GPU: the desktop preset, the authors' RTX 2060 setup (paper Figure 'desktop_speedup')",
+                        "desktop_base", "desktop_ttp", PAPER["desktop"])
+    if gdesk:
+        R.p(f"Desktop against the `{preset}` preset: ours {times(gdesk, 2)} against {times(g_sp, 2)} "
+            f"({'above' if gdesk > g_sp else 'below'}); paper {times(PAPER['desktop'], 2)} against {times(PAPER['ttp'], 2)} "
+            f"({'above' if PAPER['desktop'] > PAPER['ttp'] else 'below'}): "
+            f"{'agrees' if (gdesk > g_sp) == (PAPER['desktop'] > PAPER['ttp']) else 'differs'}.")
     R.p()
 
-    # 9-10. Arbitration and intensity.
+    # 11-12. Arbitration and intensity.
     _, g = R.speedups("Prefetch arbitration (paper Figure 'arbitration')",
                       {"free cycles only": "ttp", "X=25": "arb25", "X=50": "arb50", "X=100": "arb100"}, "base", plot="arbitration")
     spread = max(g.values()) / min(g.values()) - 1 if g else float("nan")
@@ -277,10 +433,27 @@ def main():
         f"({max(g, key=g.get)}) and the worst ({min(g, key=g.get)}) setting.")
     R.p()
 
-    # 11-12. BFS.
-    R.speedups("TTP with BFS, N = 1, 2, 4 (paper Figure 'bfsspeedup_pt'), over BFS without TTP",
-               {"N=1": "bfs_ttp_n1", "N=2": "bfs_ttp_n2", "N=4": "bfs_ttp_n4"}, "bfs_base",
-               {"N=1": PAPER["bfs_n1"], "N=2": PAPER["bfs_n2"], "N=4": PAPER["bfs_n4"]}, plot="bfs")
+    # 13-15. BFS.
+    _, g_bfs = R.speedups("TTP with BFS, N = 1, 2, 4 (paper Figure 'bfsspeedup_pt'), over BFS without TTP",
+                          {"N=1": "bfs_ttp_n1", "N=2": "bfs_ttp_n2", "N=4": "bfs_ttp_n4"}, "bfs_base",
+                          {"N=1": PAPER["bfs_n1"], "N=2": PAPER["bfs_n2"], "N=4": PAPER["bfs_n4"]}, plot="bfs")
+    R.p("### RT-read misses with BFS, N = 4 (paper Figure 'bfs_mpki')")
+    R.p()
+    bdrop1, bdrop2 = mpki_table("bfs_base", "bfs_ttp_n4")
+    R.p(f"Mean fall: L1 {pct(bdrop1, 2)}, L2 {pct(bdrop2, 2)}; paper {pct(PAPER['bfs_l1_mpki_drop'], 2)} and "
+        f"{pct(PAPER['bfs_l2_mpki_drop'], 2)}. The paper: both fall more than with DFS; ours: L1 "
+        f"{'more' if bdrop1 > drop1 else 'less'} ({pct(bdrop1)} against {pct(drop1)} with DFS), L2 "
+        f"{'more' if bdrop2 > drop2 else 'less'} ({pct(bdrop2)} against {pct(drop2)}).")
+    R.p()
+    R.p("### The BFS prefetch opportunity (paper Figure 'bfs_trend')")
+    R.p()
+    opp = {s: R.val("bfs_base", s, "l1_misses_with_next_queued_share") for s in R.scenes_with("bfs_base")}
+    R.table(["scene"] + list(opp), [["L1-missing node reads with the next node queued"] + [pct(v) for v in opp.values()]])
+    m_opp = mean([v for s, v in opp.items() if s in PAPER_SCENES])
+    R.p(f"The share of BFS node reads that missed L1 while the thread's queue still held a node after the pop (an accurate "
+        f"prefetch could follow): mean {pct(m_opp)} over the paper's scenes among ours; paper {pct(PAPER['bfs_opportunity'])} "
+        "over its 16. Ours counts L1 misses; the paper's caption says 'missed in caches'.")
+    R.p()
     series, g = R.speedups("BFS against DFS, with and without TTP (paper Figure 'bfsvsdfs'), normalised to DFS without TTP",
                            {"DFS+TTP": "ttp", "BFS": "bfs_base", "BFS+TTP N=4": "bfs_ttp_n4"}, "base")
     paper_scenes = [s for s in series["BFS"] if s in PAPER_SCENES]
@@ -292,30 +465,39 @@ def main():
         f"and above DFS+TTP on {', '.join(wins) or 'no scene'} (geomean {times(g['BFS+TTP N=4'], 2)} against "
         f"{times(g['DFS+TTP'], 2)}: {'above' if g['BFS+TTP N=4'] > g['DFS+TTP'] else 'below'}).")
     R.p()
+    n1, n2, n4 = g_bfs.get("N=1"), g_bfs.get("N=2"), g_bfs.get("N=4")
+    check(R, targets, "BFS: N=1 < N=2 < N=4", f"{times(n1, 2)}, {times(n2, 2)}, {times(n4, 2)}", [n1, n2, n4], lambda: n1 < n2 < n4)
+    check(R, targets, "BFS+TTP above DFS+TTP", f"{times(g['BFS+TTP N=4'], 2)} against {times(g['DFS+TTP'], 2)}",
+          [g["BFS+TTP N=4"], g["DFS+TTP"]], lambda: g["BFS+TTP N=4"] > g["DFS+TTP"])
 
-    # 13. Treelet.
+    # 16. Treelet.
     R.p("## Treelet prefetcher against TTP (paper Figures 'treeletvs_pt', 'treeletres', 'treelet_dram_reads')")
     R.p()
-    R.p("Treelet = treelet traversal (two stacks) with whole-treelet prefetching, 512 B treelets, threshold 0.75, "
-        "normalised to the DFS baseline at the same resolution, as in the paper.")
+    R.p("Treelet = treelet traversal (two stacks) with whole-treelet prefetching as the code the paper ran "
+        "(branch treelet_traversal): 512 B treelets formed until the first node that does not fit, the RT unit's most popular "
+        "next treelet prefetched each time it changes, in the BVH's own layout; normalised to the DFS baseline at the same "
+        "resolution, as in the paper. 'contiguous' moves each treelet into a block of its own (the Treelet paper's layout, "
+        "which the TTP paper did not use).")
     R.p()
-    rows, ser = [], {}
-    for label, key, (tl, ttp, base) in (("32x32", "32", ("res32_treelet", "res32_ttp", "res32_base")),
-                                         ("64x64", "64", ("res64_treelet", "res64_ttp", "res64_base")),
-                                         (size, "128", ("treelet", "ttp", "base"))):
-        sc = R.scenes_with(tl, ttp, base)
+    rows, ser, tl = [], {}, {}
+    for label, key, (t, tc, ttp, base) in (("32x32", "32", ("res32_treelet", "res32_treelet_contiguous", "res32_ttp", "res32_base")),
+                                            ("64x64", "64", ("res64_treelet", "res64_treelet_contiguous", "res64_ttp", "res64_base")),
+                                            (size, "128", ("treelet", "treelet_contiguous", "ttp", "base"))):
+        sc = R.scenes_with(t, ttp, base)
         if not sc:
             continue
-        t_sp = {x: R.speedup(tl, base, x) for x in sc}
+        t_sp = {x: R.speedup(t, base, x) for x in sc}
         p_sp = {x: R.speedup(ttp, base, x) for x in sc}
-        dram = {x: R.val(tl, x, "dram_reads") / R.val(base, x, "dram_reads") for x in sc if R.val(base, x, "dram_reads")}
+        c_sp = {x: R.speedup(tc, base, x) for x in R.scenes_with(tc, base)}
+        dram = {x: R.val(t, x, "dram_reads") / R.val(base, x, "dram_reads") for x in sc if R.val(base, x, "dram_reads")}
         ser[f"Treelet {label}"], ser[f"TTP {label}"] = t_sp, p_sp
         ours = {"Treelet": R.gm(t_sp), "TTP": R.gm(p_sp)}
+        tl[key] = ours["Treelet"]
         paper = {"Treelet": PAPER[f"treelet_{key}"], "TTP": PAPER[f"ttp_{key}"]}
-        rows.append([label, times(ours["Treelet"]), times(paper["Treelet"]), times(ours["TTP"]), times(paper["TTP"]),
-                     times(R.gm(dram), 2), order(ours, paper)])
-    R.table(["resolution", "Treelet (ours)", "Treelet (paper)", "TTP (ours)", "TTP (paper)", "Treelet DRAM reads vs baseline",
-             "TTP above Treelet, as in the paper"], rows)
+        rows.append([label, times(ours["Treelet"]), times(R.gm(c_sp) if c_sp else None), times(paper["Treelet"]),
+                     times(ours["TTP"]), times(paper["TTP"]), times(R.gm(dram), 2), order(ours, paper)])
+    R.table(["resolution", "Treelet (ours)", "Treelet, contiguous layout", "Treelet (paper)", "TTP (ours)", "TTP (paper)",
+             "Treelet DRAM reads vs baseline", "TTP above Treelet, as in the paper"], rows)
     R.bars("treelet", "Treelet and TTP speed-ups by resolution", ser)
     sc = R.scenes_with("treelet_trav", "base")
     if sc:
@@ -324,23 +506,33 @@ def main():
         R.p()
     R.p(f"Paper: Treelet raises DRAM reads {times(PAPER['treelet_dram'], 2)}.")
     R.p()
+    t128, t32 = tl.get("128"), tl.get("32")
+    check(R, targets, f"Treelet about 1.0 at {size} and better at 32x32", f"{times(t128, 2)} at {size}, {times(t32, 2)} at 32x32",
+          [t128, t32], lambda: abs(t128 - 1) <= 0.05 and t32 > t128, "'about' read as within 5 %")
 
-    # 14. Park.
+    # 17. Park.
     _, g = R.speedups("Park et al. (paper Figure 'parketal')", {"Park": "park", "TTP": "ttp"}, "base",
                       {"Park": PAPER["park"], "TTP": PAPER["ttp"]}, plot="park")
+    g_park = g["Park"]
+    park_share = (g["Park"] - 1) / (g["TTP"] - 1) if g["TTP"] and g["TTP"] != 1 else float("nan")
     R.p(f"The paper has Park far below TTP ({share_words(PAPER['park'] - 1, PAPER['ttp'] - 1)} of TTP's gain); ours: "
         f"{share_words(g['Park'] - 1, g['TTP'] - 1)}.")
     R.p()
+    check(R, targets, "Park far below TTP", f"{share_words(g['Park'] - 1, g['TTP'] - 1)} of TTP's gain", [park_share],
+          lambda: park_share <= 0.25, "'far below' read as at most a quarter of TTP's gain (paper: 8 %)")
 
-    # 15. AO and SH.
+    # 18. AO and SH.
     _, g_ao = R.speedups("Ambient occlusion (paper Figure 'speedupaosh')", {"AO": "ao_ttp"}, "ao_base", {"AO": PAPER["ao"]})
     _, g_sh = R.speedups("Shadow rays (paper Figure 'speedupaosh')", {"SH": "sh_ttp"}, "sh_base", {"SH": PAPER["sh"]})
+    aosh_ok = max(g_ao["AO"], g_sh["SH"]) < g_sp
     R.p(f"The paper's AO and SH gains are below path tracing's ({times(PAPER['ao'], 2)}, {times(PAPER['sh'], 2)} against "
         f"{times(PAPER['ttp'], 2)}); ours: {times(g_ao['AO'], 2)}, {times(g_sh['SH'], 2)} against {times(g_sp, 2)}: "
-        f"{'agrees' if max(g_ao['AO'], g_sh['SH']) < g_sp else 'differs'}.")
+        f"{'agrees' if aosh_ok else 'differs'}.")
     R.p()
+    check(R, targets, "AO and SH gains below path tracing's", f"AO {times(g_ao['AO'], 2)}, SH {times(g_sh['SH'], 2)}, PT {times(g_sp, 2)}",
+          [g_ao["AO"], g_sh["SH"], g_sp], lambda: aosh_ok)
 
-    # 16. Pop streaks.
+    # 19. Pop streaks.
     R.p("## Pop-streak analysis (paper Figure 'pop_miss_rates'), baseline DFS")
     R.p()
     rows, largest, later_share = [], {}, {}
@@ -362,21 +554,127 @@ def main():
         f"{pct(max(later_share.values()) if later_share else None, 0)} of the pops' DRAM misses.")
     R.p()
 
-    # 17. Table 1.
+    # 20. Table 1.
     R.p("## DFS and BFS nodes per ray (paper Table 1)")
     R.p()
-    rows, more = [], []
+    rows, more, diffs, pdiffs = [], [], [], []
     for s in R.scenes_with("base", "bfs_base"):
         a, b = R.val("base", s, "nodes_per_ray"), R.val("bfs_base", s, "nodes_per_ray")
         ma, mb = R.val("base", s, "max_nodes_per_ray"), R.val("bfs_base", s, "max_nodes_per_ray")
         pp = PAPER["nodes"].get(s)
         if s in PAPER_SCENES:
             more.append(b >= a)
+            if pp:
+                diffs.append(b / a - 1)
+                pdiffs.append(pp[1] / pp[0] - 1)
         rows.append([s, f"{a:.1f}", f"{b:.1f}", f"{100 * (b / a - 1):+.1f} %", f"{ma:.0f}", f"{mb:.0f}",
-                     f"{pp[0]} / {pp[1]}" if pp else "-", f"{100 * (a / pp[0] - 1):+.0f} %" if pp else "-"])
-    R.table(["scene", "DFS avg", "BFS avg", "diff", "DFS max", "BFS max", "paper DFS / BFS avg", "our DFS vs paper's"], rows)
-    R.p(f"BFS visits at least as many nodes as DFS on {sum(more)} of {len(more)} of the paper's scenes (the paper: on every scene).")
+                     f"{pp[0]} / {pp[1]}" if pp else "-", f"{100 * (pp[1] / pp[0] - 1):+.1f} %" if pp else "-",
+                     f"{100 * (a / pp[0] - 1):+.0f} %" if pp else "-"])
+    R.table(["scene", "DFS avg", "BFS avg", "diff", "DFS max", "BFS max", "paper DFS / BFS avg", "paper diff", "our DFS vs paper's"], rows)
+    R.p(f"BFS visits at least as many nodes as DFS on {sum(more)} of {len(more)} of the paper's scenes (the paper: on every scene). "
+        f"Mean difference over the scenes we share with Table 1: ours {pct(mean(diffs))}, the paper's on the same scenes "
+        f"{pct(mean(pdiffs))}; the paper's {pct(PAPER['bfs_nodes_diff'])} mean is over all 16 scenes, most of which we do not have "
+        "(its largest differences are on chsnt, robot, park and frst).")
     R.p()
+
+    # 21. What the authors' simulator details weigh: paper preset against mobile.
+    R.p("## The `paper` preset against `mobile` (Table 2 alone)")
+    R.p()
+    rows = []
+    for label, (exp, base), paper_fig in (("TTP", ("ttp", "base"), PAPER["ttp"]),
+                                          ("perfect-up", ("perfect_up", "base"), PAPER["perfect_up"]),
+                                          ("perfect-down", ("perfect_down", "base"), PAPER["perfect_down"]),
+                                          ("Park", ("park", "base"), PAPER["park"]),
+                                          ("BFS+TTP N=4 over BFS", ("bfs_ttp_n4", "bfs_base"), PAPER["bfs_n4"]),
+                                          (f"Treelet at {size}", ("treelet", "base"), PAPER["treelet_128"])):
+        a, b = gm_of(R, exp, base), gm_of(R, f"mobile_{exp}", f"mobile_{base}")
+        rows.append([label, times(a), times(b), times(paper_fig),
+                     "paper" if a and b and abs(a - paper_fig) < abs(b - paper_fig) else "mobile" if a and b else "-"])
+    R.table(["speed-up (geomean)", "`paper` preset", "`mobile` preset", "the paper", "nearer the paper"], rows)
+
+    # 22. The gap.
+    R.p("## The remaining gap and its causes")
+    R.p()
+    down_wins = [s for s in R.scenes_with("base", "perfect_up", "perfect_down") if s in later_share
+                 and R.speedup("perfect_down", "base", s) > R.speedup("perfect_up", "base", s)]
+    ship_nodes = [(s, R.val("base", s, "nodes_per_ray"), PAPER["nodes"][s][0]) for s in R.scenes_with("base") if s in PAPER["nodes"]]
+    small = [f"{s} {a:.1f}/{p}" for s, a, p in ship_nodes if abs(a / p - 1) > 0.2]
+    l1_hit_share = mean([R.val("ttp", x, "l1_pf_hit") / sum(R.val("ttp", x, f"l1_pf_{k}") or 0 for k in ("hit", "mshr_hit", "miss_free", "resfail"))
+                         for x in eff["l1"] if x in PAPER_SCENES])
+    rows = []
+
+    def gap(label, ours, paper, show, what):
+        """A row: our figure, the paper's, the relative difference, and what differs between the two setups."""
+        diff = ours / paper - 1 if known(ours, paper) and paper else None
+        close = diff is not None and abs(diff) <= 0.03
+        rows.append([label, show(ours), show(paper), f"{int(round(100 * diff)):+d} %" if diff is not None else "-",
+                     ("within 3 %; " if close else "") + what])
+    gap("TTP geomean", g_sp, PAPER["ttp"], lambda x: times(x, 2),
+        "the means are over different scenes: the paper's 16 against our " + str(len(paper_sp)) + ", and our stand-ins differ "
+        "(nodes per DFS ray where they differ by more than 20 %, ours/paper: " + (", ".join(small) if small else "none") + f"); wknd's baseline L1 "
+        f"miss rate is {pct(R.val('base', 'wknd', 'l1_miss_rate'))}, so TTP has little to hide there (measured)")
+    gap("TTP max", mx, PAPER["ttp_max"], lambda x: times(x, 2), f"ours on {peak_scene}; the paper's peak is on a scene we do not have")
+    gap("perfect-up limit", gu, PAPER["perfect_up"], lambda x: times(x, 2),
+        "not modelled: the 64 B BVH header read at ray start and after each instance leaf (vrt.cc ~l.848, ~l.1060) and the "
+        "hit-result stores, which take priority over demand reads (abstract_hardware_model.cc ~l.855-887); both add memory "
+        "time to every ray in the authors' simulator (effect not measured)")
+    gap("perfect-down limit", gd, PAPER["perfect_down"], lambda x: times(x, 2),
+        "measured: perfect-down beats perfect-up on " + (", ".join(f"{x} ({pct(1 - later_share[x], 0)})" for x in down_wins) or "no scene") +
+        ", the share of the pops' DRAM misses that are first pops in brackets: where first pops carry most misses, making them "
+        "hit is worth more. Our stand-ins for bunny, ref and sprng are smaller than the paper's (suspected link)")
+    gap("DRAM bandwidth rise with TTP", m_bw, PAPER["dram_bw_overhead"], pct,
+        f"measured: our traffic changes by {times(g_tr, 3)}, so our bandwidth rises with the speed-up; the paper's rises less "
+        "than its speed-up with traffic unchanged too, so its figure must include time or traffic TTP does not change, such as "
+        "the shader cores' own loads and kernel launch, which rtunit does not model (reasoned)")
+    gap("L1 accuracy (authors' code)", a_l1, PAPER["l1_accuracy"], pct,
+        f"measured: the same runs give {pct(m(acc, 'l1'))} by the text's definition; the authors' code counts a line used unless "
+        "it is evicted unread, and lines still cached at the end as used")
+    gap("L2 accuracy (authors' code)", m(aacc, "l2"), PAPER["l2_accuracy"], pct,
+        f"measured: {pct(m(acc, 'l2'))} by the text's definition. A TTP prefetch fills L2 and then L1; the demand read that "
+        "follows hits L1, so the L2 copy is never read by a demand: unused by sectors, used by the authors' line count (reasoned)")
+    gap("L1 efficiency", m_eff["l1"], PAPER["l1_efficiency"], pct,
+        f"measured: {pct(l1_hit_share)} of our L1 prefetches find the line present (mean over scenes); why the authors' find it "
+        "less often is not known")
+    gap("desktop speed-up", gdesk, PAPER["desktop"], lambda x: times(x, 2),
+        "the scenes, as in the first row")
+    tl_bw = [(x, R.val("base", x, "dram_bw"), R.val("treelet", x, "dram_bw")) for x in R.scenes_with("base", "treelet") if x in PAPER_SCENES]
+    tl_top = max(tl_bw, key=lambda t: t[2] or 0, default=None)
+    gap(f"Treelet at {size}", t128, PAPER["treelet_128"], lambda x: times(x, 2),
+        "rtunit's Treelet follows the code the paper ran (formation, popularity vote, BVH layout). The paper blames "
+        "Treelet's loss at 128x128 on saturated DRAM bandwidth (spnza 58 % -> 80 %); ours peaks at " +
+        (f"{pct(tl_top[1], 0)} -> {pct(tl_top[2], 0)} ({tl_top[0]})" if tl_top else "-") +
+        ", far from the bus limit, so its excess prefetches cost little here (measured; our stand-in scenes are smaller)")
+    gap("Park", g_park, PAPER["park"], lambda x: times(x, 2),
+        "the authors' Park code is not public ('to the best of our ability'); ours prefetches from the stack during a leaf's "
+        "test, one 32 B chunk a cycle for the test's 8 cycles, next pop first, and drops the rest. Why ours gains more is "
+        "not known")
+    R.table(["figure", "ours", "paper", "difference", "what differs (measured, or suspected and why)"], rows)
+    R.p("What the authors' simulator does that no key of the `paper` preset covers (docs/paper-preset.md), behind every row; "
+        "their weight is not measured:")
+    R.p()
+    for item in (
+            "the 64 B BVH header read at a ray's start and after each instance leaf (vrt.cc ~l.848, ~l.1060): one more "
+            "dependent read per ray, mostly an L1 hit;",
+            "a 32 B store for every triangle hit and the traversal results, which take precedence over new demand reads and "
+            "which a warp waits for before it leaves (ahm.cc l.855-887, shader.cc l.3283-3291): more memory time per ray in "
+            "both runs;",
+            "the L1's streaming allocation (cfg l.101 `s`: a line is taken when its data arrives, not at the miss) and the L1 "
+            "filled when the RT unit drains its response FIFO rather than when the data arrives (shader.cc l.3025-3030): "
+            "these change how long a prefetched line waits to be useful;",
+            "the shader code between trace calls and the kernel launch latency of 5,000 cycles (cfg l.13); rtunit charges a "
+            "fixed shading latency (docs/timing.md). Time TTP cannot shorten lowers a speed-up, so this pushes the paper's "
+            "figures below ours, not above (reasoned);",
+            "the DRAM's read-to-precharge time (RTPL=4) and write-to-read turn (CDLR=9); reads alone do not reach the "
+            "second, and the RT unit's stores are not modelled."):
+        R.p("- " + item)
+    R.p()
+
+    # The targets, near the top.
+    block = ["## The issue's targets, checked", "",
+             "Computed from the runs below; a target not met is explained by a measurement in its section or in the gap table.", "",
+             "| target | ours | status | note |", "|---|---|---|---|"]
+    block += ["| " + " | ".join(str(c) for c in r) + " |" for r in targets] + [""]
+    R.lines[targets_at:targets_at] = block
     (outdir / "README.md").write_text(R.text())
     print(f"report: {outdir / 'README.md'}", file=sys.stderr)
 

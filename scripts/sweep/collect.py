@@ -16,6 +16,7 @@ import sys
 
 HERE = pathlib.Path(__file__).resolve().parent
 STREAK = ["not_a_pop", "pop_1", "pop_2", "pop_3", "pop_4_or_more"]
+THREAD_STATUS = ["waiting_to_be_scheduled", "waiting_on_memory", "in_math", "done_waiting_for_warp"]
 
 # (column, statistic); every timing run has these.
 TIMING = [
@@ -29,7 +30,13 @@ TIMING = [
     ("l1_pf_useful", "timing.l1.prefetched.useful"), ("l2_pf_useful", "timing.l2.prefetched.useful"),
     ("l1_pf_efficiency", "timing.prefetch.l1.efficiency"), ("l2_pf_efficiency", "timing.prefetch.l2.efficiency"),
     ("energy_j", "timing.energy.total_j"), ("power_w", "timing.energy.average_power_w"),
-] + [(f"{lvl}_pf_{name}", f"timing.{lvl}.prefetch.{key}") for lvl in ("l1", "l2")
+    ("pf_generated", "timing.rt_unit.prefetch_queue.generated"),
+    ("pf_window_dropped", "timing.rt_unit.prefetch_queue.window_dropped"),
+    ("pf_removed_by_demand", "timing.rt_unit.prefetch_queue.removed_by_demand"),
+    ("l1_misses_with_next_queued_share", "timing.rt_unit.l1_misses_with_next_queued_share"),
+] + [(f"{lvl}_pf_authors_{k}", f"timing.prefetch.{lvl}.authors_{k}") for lvl in ("l1", "l2") for k in ("accuracy", "coverage")] \
+  + [(f"status_{k}", f"timing.rt_unit.thread_status.{k}") for k in THREAD_STATUS] \
+  + [(f"{lvl}_pf_{name}", f"timing.{lvl}.prefetch.{key}") for lvl in ("l1", "l2")
      for name, key in (("hit", "hits"), ("mshr_hit", "mshr_hits"), ("resfail", "reservation_fails"),
                        ("sector_miss", "sector_misses"), ("line_miss", "line_misses"))] \
   + [(f"{lvl}_demand_{name}", f"timing.{lvl}.demand.{name}") for lvl in ("l1", "l2")

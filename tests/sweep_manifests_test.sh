@@ -1,0 +1,33 @@
+#!/usr/bin/env bash
+# The sweep definitions as rtsim sees them: every line of the paper and speed-vs-error manifests,
+# written for the built-in wknd scene at a tiny frame, runs to exit 0 through the sweep worker and
+# the collector finds every column it needs. A renamed option or key in an experiment list fails
+# here rather than an hour into a sweep.
+# Usage: sweep_manifests_test.sh RTSIM SOURCE_DIR
+set -euo pipefail
+export RTSIM=$1
+src=$2
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+status=0
+for exp in paper speed_error; do
+  out=$work/$exp
+  mkdir -p "$out"
+  extra=()
+  [ "$exp" = paper ] && extra=(--no-256)
+  python3 "$src/scripts/$exp/experiments.py" "$out/manifest.tsv" --size 8 --spp 1 --scenes wknd "${extra[@]}"
+  n=$(($(wc -l <"$out/manifest.tsv") - 1))
+  failed=0
+  for i in $(seq 1 "$n"); do
+    if ! "$src/scripts/sweep/worker.sh" "$out/manifest.tsv" "$i" "$out" 2>/dev/null; then
+      failed=$((failed + 1))
+      line=$(awk -F'\t' -v i="$i" 'NR == i + 1 { print $1 ": " $2 }' "$out/manifest.tsv")
+      echo "FAIL $exp line $i: $line" >&2
+      sed 's/^/    /' "$out/$(awk -F'\t' -v i="$i" 'NR == i + 1 { print $3 }' "$out/manifest.tsv").err" >&2 || true
+    fi
+  done
+  if ! python3 "$src/scripts/sweep/collect.py" "$out/manifest.tsv" "$out"; then failed=$((failed + 1)); fi
+  echo "$exp: $n runs, $failed failed"
+  [ "$failed" = 0 ] || status=1
+done
+exit $status
