@@ -16,7 +16,7 @@ sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent.parent / "sweep")
 from experiments import EXTRA_SEEDS, FIDELITIES, SAMPLE_RATES  # noqa: E402
 from report_util import load, number  # noqa: E402
 
-SCENES = ["wknd", "cornell", "ship", "bunny", "ref", "bath", "sprng"]
+SCENES = ["wknd", "cornell", "ship", "bunny", "ref", "bath", "sprng", "party"]
 LABEL = {"at": "AT (reference)", "lt_q100": "LT, quantum 100", "lt_q1000": "LT, quantum 1000", "lt_q10000": "LT, quantum 10000",
          "interval": "interval",
          "at_s50": "AT, sample 50 %", "at_s25": "AT, sample 25 %", "at_s10": "AT, sample 10 %",
