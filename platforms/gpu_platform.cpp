@@ -19,15 +19,13 @@ using namespace sc_core;
 
 namespace {
 
-// Watchdog, progress and windowed waveforms. It wakes every `period` cycles only while rays are
+// Watchdog and progress. It wakes every `period` cycles only while rays are
 // still in flight, so an idle platform has no pending events and sc_start() returns.
 class Monitor : public sc_module {
 public:
     SC_HAS_PROCESS(Monitor);
-    Monitor(sc_module_name n, WorkloadDriver& driver, const ClockDomain& clock, uint64_t watchdog, bool show_progress,
-            uint64_t period, std::function<void(uint64_t)> sample)
-        : sc_module(n), progress(show_progress), driver_(driver), clock_(clock), watchdog_(watchdog), period_(period),
-          sample_(std::move(sample)) {
+    Monitor(sc_module_name n, WorkloadDriver& driver, const ClockDomain& clock, uint64_t watchdog, bool show_progress, uint64_t period)
+        : sc_module(n), progress(show_progress), driver_(driver), clock_(clock), watchdog_(watchdog), period_(period) {
         SC_METHOD(check);
     }
     bool stuck = false;
@@ -38,7 +36,6 @@ public:
 private:
     void check() {
         const uint64_t c = clock_.cycle_at_or_before(sc_time_stamp());
-        if (sample_) sample_(c);
         if (driver_.finished()) return;
         if (c > driver_.last_progress() + watchdog_) {
             stuck = true;
@@ -56,7 +53,6 @@ private:
     const ClockDomain& clock_;
     uint64_t watchdog_;
     uint64_t period_;
-    std::function<void(uint64_t)> sample_;
 };
 
 }  // namespace
@@ -88,6 +84,11 @@ struct GpuPlatform::Impl {
     double dram_bw = 0;
     uint64_t dram_prev_busy = 0;
     std::vector<int> stack_depth;
+    // The windowed values (caches, DRAM) are sampled by the first RT unit to tick at or after a
+    // window's end, so that tracing adds no event of its own: an extra timed event at the same
+    // time as the model's would reorder the kernel's same-time processes and change the results.
+    std::function<void(uint64_t)> sample_windows;
+    uint64_t last_sample = 0, next_sample = 0;
 
     Impl(const HwConfig& c, const BvhImage& img, Workload& w, const TimingOptions& o)
         : cfg(c), image(img), opt(o), core(c.core_mhz), mem(c.memory_mhz),
@@ -145,7 +146,6 @@ GpuPlatform::GpuPlatform(const HwConfig& cfg, const BvhImage& image, Workload& w
             }
     };
 
-    std::function<void(uint64_t)> sample;
     if (!opt.vcd.empty()) {
         m.tf = sc_create_vcd_trace_file(opt.vcd.c_str());
         m.tf->set_time_unit(1, SC_FS);  // the kernel resolution: clock periods are not whole ps
@@ -165,7 +165,11 @@ GpuPlatform::GpuPlatform(const HwConfig& cfg, const BvhImage& image, Workload& w
                     sc_trace(m.tf, m.stack_depth[t], p + "warp" + std::to_string(opt.trace_warp) + ".thread" + std::to_string(t) + ".stack_depth");
             }
             Impl* impl = &m;
-            unit->on_cycle = [unit, tr, traced_warp, impl](uint64_t) {
+            unit->on_cycle = [unit, tr, traced_warp, impl](uint64_t cycle) {
+                if (cycle >= impl->next_sample) {
+                    impl->sample_windows(cycle);
+                    impl->next_sample = (cycle / impl->opt.trace_window + 1) * impl->opt.trace_window;
+                }
                 const RtUnitCore& c = unit->core();
                 tr->warps = int(c.warp_buffer_occupancy());
                 tr->maq = int(c.memory_access_queue_depth());
@@ -191,7 +195,9 @@ GpuPlatform::GpuPlatform(const HwConfig& cfg, const BvhImage& image, Workload& w
         sc_trace(m.tf, m.dram_queue, "dram.queue_depth");
         sc_trace(m.tf, m.dram_bw, "dram.bandwidth_utilisation_window");
         Impl* impl = &m;
-        sample = [impl](uint64_t) {
+        m.next_sample = opt.trace_window;
+        m.sample_windows = [impl](uint64_t cycle) {
+            if (cycle <= impl->last_sample) return;
             auto upd = [](const std::vector<std::unique_ptr<Cache>>& caches, std::vector<int>& mshr, std::vector<double>& rate,
                           std::vector<CacheAccessCounts>& prev) {
                 for (size_t i = 0; i < caches.size(); ++i) {
@@ -209,13 +215,15 @@ GpuPlatform::GpuPlatform(const HwConfig& cfg, const BvhImage& image, Workload& w
             upd(impl->l2, impl->l2_mshr, impl->l2_missrate, impl->l2_prev);
             impl->dram_queue = int(impl->dram->queue_depth());
             const uint64_t busy = total(impl->dram->stats()).data_cycles;
-            const double window_mem = double(impl->opt.trace_window) * impl->core.period_fs() / double(impl->mem.period_fs());
+            const double window_mem = double(cycle - impl->last_sample) * impl->core.period_fs() / double(impl->mem.period_fs());
             impl->dram_bw = double(busy - impl->dram_prev_busy) / (window_mem * impl->cfg.dram.channels);
             impl->dram_prev_busy = busy;
+            impl->last_sample = cycle;
         };
     }
-    const uint64_t period = m.tf ? opt.trace_window : std::max<uint64_t>(1, std::min<uint64_t>(cfg.watchdog / 4, 100000));
-    m.monitor.reset(new Monitor("monitor", m.driver, m.core, cfg.watchdog, opt.progress, period, sample));
+    // The monitor's period does not depend on tracing (see sample_windows).
+    const uint64_t period = std::max<uint64_t>(1, std::min<uint64_t>(cfg.watchdog / 4, 100000));
+    m.monitor.reset(new Monitor("monitor", m.driver, m.core, cfg.watchdog, opt.progress, period));
     m.monitor->describe_stuck = [this]() {
         std::string s;
         for (const auto& u : impl_->rt) {
