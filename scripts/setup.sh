@@ -25,7 +25,48 @@ if [ ${#missing[@]} -eq 0 ]; then
 fi
 echo "setup: installing ${missing[*]}" >&2
 SUDO=""
-if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+if [ "$(id -u)" -ne 0 ]; then
+  if ! command -v sudo >/dev/null; then
+    echo "setup: failed: installing packages needs root, and sudo is not installed." >&2
+    echo "setup: what to do: run as root, or install these yourself: apt-get install ${missing[*]}" >&2
+    exit 1
+  fi
+  SUDO="sudo"
+fi
 export DEBIAN_FRONTEND=noninteractive
-$SUDO apt-get update -qq
-$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+# Another apt or dpkg (unattended upgrades, a second terminal) holds its lock: wait for it, up to
+# RTU_APT_WAIT seconds (default 600) in all, saying so, rather than failing at once. Any other
+# failure names the step and what to do.
+wait_limit=${RTU_APT_WAIT:-600}
+waited=0 start=$SECONDS
+apt_step() {  # apt_step NAME ARGS...: runs apt-get ARGS, retrying while a lock is held
+  local name=$1 log rc
+  shift
+  log=$(mktemp)
+  while true; do
+    rc=0
+    $SUDO apt-get -o DPkg::Lock::Timeout=10 "$@" >"$log" 2>&1 || rc=$?
+    if [ $rc -eq 0 ]; then rm -f "$log"; return 0; fi
+    if grep -q -e "Could not get lock" -e "Unable to acquire the dpkg frontend lock" -e "Unable to lock directory" "$log" \
+       && [ "$waited" -lt "$wait_limit" ]; then
+      echo "setup: $name: another package manager holds apt's lock ($(grep -o -a -m1 'process [0-9][0-9]*' "$log" || echo 'process unknown')); waiting (${waited} of ${wait_limit} s)" >&2
+      sleep 10
+      waited=$((SECONDS - start))
+      continue
+    fi
+    echo "setup: failed at step '$name' (apt-get $*, exit $rc). Its last lines:" >&2
+    tail -n 8 "$log" | sed 's/^/  /' >&2
+    rm -f "$log"
+    if [ "$waited" -ge "$wait_limit" ]; then
+      echo "setup: what to do: apt's lock was still held after ${wait_limit} s; wait for the other package manager to finish (or set RTU_APT_WAIT=SECONDS) and rerun." >&2
+    elif [ "$name" = "update" ]; then
+      echo "setup: what to do: check the network and /etc/apt/sources.list, then rerun." >&2
+    else
+      echo "setup: what to do: install the packages by hand to see the full error: apt-get install ${missing[*]}" >&2
+    fi
+    exit 1
+  done
+}
+apt_step update update -qq
+apt_step install install -y -qq --no-install-recommends "${missing[@]}"
+echo "setup: installed ${#missing[@]} packages" >&2
