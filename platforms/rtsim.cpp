@@ -181,14 +181,23 @@ int run(const Args& a) {
 int sc_main(int argc, char** argv) {
     sc_core::sc_set_time_resolution(1, sc_core::SC_FS);
     Args a;
-    po::options_description desc(
+    // Every option is in the usage lines (a test checks it against the option table).
+    const std::string usage =
         "rtsim: ray-tracing unit model\n"
         "usage: rtsim --scene NAME|PATH [--assets DIR] [--workload primary|pt|ao|sh] [--rays FILE] [--hits FILE]\n"
-        "             [--width W --height H --spp N --bounces B --seed S] [--traversal dfs|bfs|treelet]\n"
+        "             [--width W --height H --spp N --bounces B --seed S] [--traversal dfs|bfs|treelet] [--flatten]\n"
         "             [--fidelity functional|at|lt|interval] [--config NAME|FILE] [--set KEY=VALUE]... [--quantum CYCLES]\n"
-        "             [--prefetcher none|ttp|park|treelet|perfect-up|perfect-down] [--sample RATE [--sample-seed S]]\n"
+        "             [--prefetcher none|ttp|park|treelet|perfect-up|perfect-down]\n"
+        "             [--sample RATE [--sample-seed S] [--threads N]]\n"
         "             [--stats FILE.json] [--image FILE.png] [--vcd FILE] [--trace-warp SM:WARP] [--verify] [--quiet]\n"
-        "exit status: 0 ok, 1 a check failed (--verify mismatches), 2 bad input, 3 internal error\noptions");
+        "       rtsim --stats-schema | --help\n"
+        "exit status: 0 ok, 1 a check failed (--verify mismatches), 2 bad input, 3 internal error\n";
+    if (argc <= 1) {
+        std::cerr << usage << "example: rtsim --scene wknd --fidelity at --prefetcher ttp --stats out.json\n"
+                  << "rtsim --help describes every option\n";
+        return 2;
+    }
+    po::options_description desc(usage + "options");
     desc.add_options()
         ("help,h", "this help")
         ("stats-schema", "print every key --stats can write (key, unit, description; tab-separated) and exit")

@@ -141,6 +141,34 @@ TEST(Rtsim, BadInputExitsWithStatus2AndWritesNothing) {
     EXPECT_NE(r.err.find("nodir/h.csv"), std::string::npos);
 }
 
+// rtsim with no arguments runs nothing: it prints the usage and exits 2; the usage lines name
+// every option of the --help table.
+TEST(Rtsim, NoArgumentsPrintsAUsageThatNamesEveryOption) {
+    TempDir dir;
+    const Result none = rtsim(dir, "");
+    EXPECT_EQ(none.status, 2);
+    EXPECT_TRUE(none.out.empty()) << none.out;
+    EXPECT_NE(none.err.find("usage: rtsim --scene"), std::string::npos) << none.err;
+    EXPECT_NE(none.err.find("rtsim --help"), std::string::npos) << none.err;
+    const Result help = rtsim(dir, "--help");
+    ASSERT_EQ(help.status, 0);
+    const size_t table = help.out.find("\noptions");
+    ASSERT_NE(table, std::string::npos);
+    const std::string usage = help.out.substr(0, table), options = help.out.substr(table);
+    int named = 0;
+    for (const std::string& l : lines(options)) {
+        // An option's line starts "  --name" or "  -h [ --help ]"; its wrapped description lines
+        // start further in.
+        const size_t at = l.find("--"), first = l.find_first_not_of(' ');
+        if (at == std::string::npos || first != 2) continue;
+        std::string opt = l.substr(at);
+        opt = opt.substr(0, opt.find_first_of(" ]"));
+        ++named;
+        EXPECT_NE(usage.find(opt), std::string::npos) << opt << " is not in the usage lines";
+    }
+    EXPECT_GE(named, 25);
+}
+
 TEST(Rtsim, MainJobWritesStatsAndImage) {
     TempDir dir;
     const std::string stats = dir.file("s.json"), png = dir.file("f.png");
