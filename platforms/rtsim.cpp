@@ -1,6 +1,8 @@
 // rtsim: runs a ray workload over a scene's BVH image on the RT-unit model, at any fidelity.
 // It parses its command line into a RunSpec, runs it (platforms/simulation.h) and writes the
 // statistics, hits, frame and summary.
+#include <algorithm>
+#include <cmath>
 #include <cinttypes>
 #include <cstdio>
 #include <iostream>
@@ -31,6 +33,7 @@ struct Args {
     uint64_t seed = 1, quantum = 0;
     double sample = 1.0;
     std::optional<uint64_t> sample_seed;  // which clusters a sampled run simulates (default: --seed)
+    bool sample_unchecked = false;
     unsigned threads = std::max(1u, std::thread::hardware_concurrency());  // sampling pre-pass
     bool verify = false, quiet = false, flatten = false;
 };
@@ -85,6 +88,7 @@ RunSpec spec_of(const Args& a) {
         throw InputError("--vcd, --trace-warp and --quantum need --fidelity at or lt (the interval fidelity has no "
                          "SystemC signals or quantum)");
     if (a.sample_seed && a.sample == 1.0) throw InputError("--sample-seed needs --sample RATE below 1");
+    if (a.sample_unchecked && a.sample == 1.0) throw InputError("--sample-unchecked needs --sample RATE below 1");
     if (a.threads == 0) throw InputError("--threads 0: the sampling pre-pass needs at least 1 thread");
     if (!(a.sample > 0.0 && a.sample <= 1.0))
         throw InputError("--sample " + std::to_string(a.sample) + ": the share of the frame to simulate must be in (0, 1]");
@@ -111,6 +115,7 @@ RunSpec spec_of(const Args& a) {
     spec.params = WorkloadParams{a.width, a.height, a.spp, a.bounces, a.seed};
     spec.sample_rate = a.sample;
     spec.sample_seed = a.sample_seed.value_or(a.seed);
+    spec.sample_unchecked = a.sample_unchecked;
     spec.threads = a.threads;
     spec.vcd = a.vcd;
     if (spec.vcd.size() > 4 && spec.vcd.compare(spec.vcd.size() - 4, 4, ".vcd") == 0) spec.vcd.resize(spec.vcd.size() - 4);
@@ -128,11 +133,18 @@ void print_summary(const Args& a, const RunResult& r) {
               << a.fidelity << ", " << j["time_s"]["run"].get<double>() << " s\n";
     if (j.contains("timing")) {
         const auto& t = j["timing"];
-        if (t.contains("sampling"))
-            std::cout << "sampled " << t["sampling"]["warps_simulated"] << " of " << t["sampling"]["warps_total"]
-                      << " warps: " << t["sampling"]["cycles_simulated"] << " cycles simulated, frame estimate "
-                      << j["cycles"] << " (95 % interval " << uint64_t(t["sampling"]["cycles_ci95"][0].get<double>())
-                      << ".." << uint64_t(t["sampling"]["cycles_ci95"][1].get<double>()) << ")\n";
+        if (t.contains("sampling")) {
+            const auto& sm = t["sampling"];
+            std::cout << "sampled " << sm["warps_simulated"] << " of " << sm["warps_total"] << " warps ("
+                      << double(std::llround(1000 * sm["rate_simulated"].get<double>())) / 10 << " % of the frame; "
+                      << double(std::llround(1000 * sm["rate"].get<double>())) / 10 << " % asked): " << sm["cycles_simulated"]
+                      << " cycles simulated, frame estimate " << j["cycles"];
+            if (sm["cycles_ci95"].is_array())
+                std::cout << " (95 % interval " << std::llround(sm["cycles_ci95"][0].get<double>()) << ".."
+                          << std::llround(sm["cycles_ci95"][1].get<double>()) << ")\n";
+            else
+                std::cout << " (no interval: fewer than 2 strata, --sample-unchecked)\n";
+        }
         std::cout << "cycles " << j["cycles"] << ", L1 miss rate " << t["l1"]["demand"]["miss_rate"].get<double>()
                   << ", L2 miss rate " << t["l2"]["demand"]["miss_rate"].get<double>() << ", DRAM reads "
                   << t["dram"]["reads"] << " (bandwidth " << t["dram"]["bandwidth_utilisation"].get<double>() * 100
@@ -188,7 +200,7 @@ int sc_main(int argc, char** argv) {
         "             [--width W --height H --spp N --bounces B --seed S] [--traversal dfs|bfs|treelet] [--flatten]\n"
         "             [--fidelity functional|at|lt|interval] [--config NAME|FILE] [--set KEY=VALUE]... [--quantum CYCLES]\n"
         "             [--prefetcher none|ttp|park|treelet|perfect-up|perfect-down]\n"
-        "             [--sample RATE [--sample-seed S] [--threads N]]\n"
+        "             [--sample RATE [--sample-seed S] [--sample-unchecked] [--threads N]]\n"
         "             [--stats FILE.json] [--image FILE.png] [--vcd FILE] [--trace-warp SM:WARP] [--verify] [--quiet]\n"
         "       rtsim --stats-schema | --help\n"
         "exit status: 0 ok, 1 a check failed (--verify mismatches), 2 bad input, 3 internal error\n";
@@ -220,6 +232,8 @@ int sc_main(int argc, char** argv) {
         ("sample", po::value(&a.sample), "simulate this share (0..1] of the frame's warps, stratified, and extrapolate (at, lt, interval)")
         ("sample-seed", po::value<uint64_t>()->notifier([&a](uint64_t v) { a.sample_seed = v; }),
          "which clusters --sample draws (default: --seed, which also seeds the rays)")
+        ("sample-unchecked", po::bool_switch(&a.sample_unchecked),
+         "run a sample too small for a 95 % interval (fewer than 2 strata) and report no interval")
         ("threads", po::value(&a.threads)->default_value(a.threads),
          "threads for --sample's functional pre-pass (the simulation itself runs on one; results do not depend on it)")
         ("vcd", po::value(&a.vcd), "write waveforms to this VCD file (at, lt)")

@@ -259,6 +259,7 @@ RunResult run_simulation(const RunSpec& spec, std::ostream* log) {
         to.vcd = spec.vcd;
         to.sample_rate = spec.sample_rate;
         to.sample_seed = spec.sample_seed;
+        to.sample_unchecked = spec.sample_unchecked;
         // A sampled run traces the whole frame functionally first, with fresh instances of the
         // workload (the run's own one accumulates the simulated image).
         if (spec.sample_rate < 1.0) {

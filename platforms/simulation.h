@@ -33,6 +33,7 @@ struct RunSpec {
     HwConfig hw{};
     double sample_rate = 1.0;  // < 1: sampled simulation (docs/sampling.md)
     uint64_t sample_seed = 1;
+    bool sample_unchecked = false;  // --sample-unchecked
     unsigned threads = 1;      // the sampling pre-pass's threads
     std::string vcd;           // AT, LT: waveforms into this file (without the .vcd SystemC adds)
     int trace_sm = -1, trace_warp = -1;

@@ -30,6 +30,7 @@ struct TimingOptions {
     bool check_protocol = false;      // AT: a base-protocol checker on every socket
     double sample_rate = 1.0;         // < 1: sampled simulation of this share of the frame's warps
     uint64_t sample_seed = 1;
+    bool sample_unchecked = false;    // run a sample too small for an interval, and report none
     // Sampled runs: makes fresh instances of the workload for the functional pre-pass
     // (docs/sampling.md), one per thread; empty: the plain stratified estimate.
     std::function<std::unique_ptr<Workload>()> sample_workload;

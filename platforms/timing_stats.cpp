@@ -153,9 +153,15 @@ void TimingProgress::finish() {
 
 void write_sampling(StatsOut& out, const SampleEstimate& est, double rate, uint64_t cycles, uint64_t cycles_simulated) {
     // Cycles and their 95 % interval: SampleEstimate (docs/sampling.md).
+    // The interval is never below the cycles already simulated: the frame holds the sample's
+    // work and more, so a symmetric interval reaching below them only says the estimate is
+    // uncertain upward. Fewer than 2 strata (--sample-unchecked) leave no variance: no interval.
     const double c = double(cycles), h = c * est.relative_half_width(double(cycles_simulated));
+    const bool has_interval = est.variance_pairs > 0;
     StatsOut s = out.child("sampling", "a sampled run's estimate of the frame (docs/sampling.md)");
     s.value("rate", rate, "ratio", "the share of the frame asked for (--sample)");
+    s.value("rate_simulated", est.warps_total ? double(est.warps_simulated) / double(est.warps_total) : 0.0, "ratio",
+            "the share of the frame's warps simulated (whole clusters, one per stratum)");
     s.value("warps_total", est.warps_total, "shader warps", "of the frame");
     s.value("warps_simulated", est.warps_simulated, "shader warps", "simulated");
     s.value("cycles_simulated", cycles_simulated, "cycles", "of the simulated sample");
@@ -178,7 +184,8 @@ void write_sampling(StatsOut& out, const SampleEstimate& est, double rate, uint6
     }
     s.value("saturated_until_cycle", est.saturated_until, "cycles", "while at least as many shader warps as the GPU holds were unfinished");
     s.value("work_done_saturated", est.work_saturated, "slot-cycles", "residence done by then");
-    s.value("cycles_ci95", nlohmann::ordered_json{c - h, c + h}, "cycles", "95 % interval of the frame's cycles [low, high]");
+    s.value("cycles_ci95", has_interval ? nlohmann::ordered_json{std::max(c - h, double(cycles_simulated)), c + h} : nlohmann::ordered_json(),
+            "cycles", "95 % interval of the frame's cycles [low, high], low at least cycles_simulated; null without one (--sample-unchecked, fewer than 2 strata)");
     s.value("relative_se", est.relative_se, "ratio", "standard error of the work estimate / the estimate");
     s.value("variance_pairs", est.variance_pairs, "pairs", "collapsed stratum pairs behind relative_se");
     for (const auto& [name, share, what] :

@@ -25,6 +25,10 @@ namespace rtu {
 struct SamplingOptions {
     double rate = 1.0;
     uint64_t seed = 1;
+    // false: a sample too small for a 95 % interval (fewer than 2 strata) is refused with an
+    // InputError naming the smallest rate that works; true (--sample-unchecked): it runs and
+    // reports no interval.
+    bool unchecked = false;
     uint32_t cluster = 1;
     uint32_t capacity = 32;  // shader warps the GPU keeps in flight at once (for the estimator)
     // Functional pre-pass of the schedule estimator: a maker of fresh instances of the run's

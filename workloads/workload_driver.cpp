@@ -2,9 +2,41 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
+#include <string>
+
+#include "input_error.h"
 
 namespace rtu {
+
+namespace {
+
+std::string percent(double x) {
+    char b[32];
+    std::snprintf(b, sizeof b, "%.3g", 100.0 * x);
+    return b;
+}
+
+// A sample of fewer than 2 strata has no pair to estimate its variance from, and its interval
+// would shrink to the schedule model's term alone: refuse it, naming what works.
+void check_sample_size(const SampleDesign& d, uint64_t warps, const SamplingOptions& o) {
+    if (d.strata() >= 2 || o.unchecked) return;
+    const uint64_t cluster = std::max<uint32_t>(1, o.cluster), clusters = (warps + cluster - 1) / cluster;
+    std::string msg = "--sample " + percent(o.rate) + " % draws " + std::to_string(d.strata()) + " cluster of " +
+                      std::to_string(cluster) + " shader warps from this frame's " + std::to_string(clusters) + " (" +
+                      std::to_string(warps) + " warps); a 95 % interval needs at least 2 strata: ";
+    if (clusters >= 2) {
+        // The smallest rate that rounds to 2 strata: 1.5 / clusters, rounded up to a permille.
+        const double rate = std::ceil(1000.0 * 1.5 / double(clusters)) / 1000.0;
+        msg += "use --sample " + percent(rate) + " % or more (--sample " + std::to_string(rate).substr(0, 5) + "), ";
+    }
+    msg += "a frame of at least " + std::to_string(uint64_t(std::ceil(1.5 / std::max(o.rate, 1e-9))) * cluster) +
+           " shader warps at this rate, or --sample-unchecked for an estimate without an interval";
+    throw InputError(msg);
+}
+
+}  // namespace
 
 class WorkloadDriver::Frame : public FrameWarps {
 public:
@@ -55,11 +87,24 @@ WorkloadDriver::WorkloadDriver(Workload& workload, uint32_t sms, uint32_t warp_s
     if (sampling.rate < 1.0 && !warps_.empty()) {
         sampled_ = true;
         const SampleDesign design(warps_.size(), sampling.cluster, sampling.rate, sampling.seed);
+        check_sample_size(design, warps_.size(), sampling);
         // The pre-pass also records, for each simulated cluster, the last node fetches of the
         // clusters skipped before it, to warm the caches with when it starts.
         std::vector<std::vector<uint32_t>> trace_nodes;
         if (sampling.make_workload && sampling.trace) {
             PrepassResult p = run_prepass(Frame(warps_), sampling, design.feeds(), design.strata());
+            // Never an estimate of 0 cycles for a frame with work: if the drawn clusters read no
+            // node while the frame reads some, say so before simulating.
+            double drawn = 0;
+            for (uint64_t h = 0; h < design.strata(); ++h)
+                for (uint64_t w = design.first_warp(h); w < design.end_warp(h); ++w)
+                    for (uint32_t n : p.trace_nodes[w]) drawn += n;
+            if (drawn == 0 && p.critical_nodes_total > 0)
+                throw InputError("--sample " + percent(sampling.rate) + " %: the " + std::to_string(design.strata()) +
+                                 " drawn cluster(s) read no BVH node while the frame reads " +
+                                 std::to_string(uint64_t(p.critical_nodes_total)) +
+                                 " along its traces' longest rays, so the estimate would be 0 cycles; draw others "
+                                 "(--sample-seed) or sample more (--sample)");
             trace_nodes = p.trace_nodes;
             warm_ = std::move(p.warm);
             estimator_.set_prepass(std::move(p));

@@ -45,7 +45,8 @@ TIMING = [
 # Every run has these.
 ALWAYS = [("rays", "rays"), ("nodes_per_ray", "nodes_per_ray"), ("max_nodes_per_ray", "max_nodes_per_ray"), ("sim_s", "time_s.run")]
 # Sampled runs only.
-SAMPLED = [("cycles_simulated", "timing.sampling.cycles_simulated"), ("ci95", "timing.sampling.cycles_ci95")]
+SAMPLED = [("cycles_simulated", "timing.sampling.cycles_simulated"), ("rate_simulated", "timing.sampling.rate_simulated"),
+           ("ci95", "timing.sampling.cycles_ci95")]
 # Columns computed from others.
 DERIVED = ["l1_demand_misses", "l2_demand_misses", "l1_pf_miss_free", "l2_pf_miss_free", "ci95_lo", "ci95_hi"]
 
@@ -90,8 +91,8 @@ def main():
                     row[name] = get(j, path)
                 except KeyError:
                     missing.append(f"{rid}: {path}")
-            if "ci95" in row:
-                row["ci95_lo"], row["ci95_hi"] = row.pop("ci95")
+            if "ci95" in row:  # null: a --sample-unchecked run without an interval
+                row["ci95_lo"], row["ci95_hi"] = row.pop("ci95") or ("", "")
             for lvl in ("l1", "l2"):
                 if f"{lvl}_demand_sector_misses" in row:
                     row[f"{lvl}_demand_misses"] = sum(row[f"{lvl}_demand_{k}"] for k in ("sector_misses", "line_misses", "mshr_hits"))
@@ -100,7 +101,7 @@ def main():
     if missing:
         sys.exit("collect: runs lack statistics they must have:\n  " + "\n  ".join(missing[:20]))
     fields = ["id", "experiment", "scene", "exit", "wall_s"] + [c for c, _ in ALWAYS + TIMING] + \
-             ["cycles_simulated"] + DERIVED
+             ["cycles_simulated", "rate_simulated"] + DERIVED
     with open(outdir / "results.csv", "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=fields)
         w.writeheader()
