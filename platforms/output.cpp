@@ -14,6 +14,18 @@
 
 namespace rtu {
 
+void check_writable_folder(const std::string& option, const std::string& path) {
+    namespace fs = std::filesystem;
+    const fs::path target(path);
+    const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
+    std::error_code ec;
+    if (!fs::is_directory(dir, ec))
+        throw InputError(option + " " + path + ": the folder " + dir.string() + " does not exist (rtsim makes no folders)");
+    if (::access(dir.c_str(), W_OK) != 0)
+        throw InputError(option + " " + path + ": cannot write in " + dir.string() + ": " + std::strerror(errno));
+    if (fs::is_directory(target, ec)) throw InputError(option + " " + path + ": is a folder, not a file");
+}
+
 void write_file_atomic(const std::string& path, const std::string& content) {
     namespace fs = std::filesystem;
     const fs::path target(path);

@@ -30,11 +30,15 @@ struct Args {
     std::string stats, image, config = "mobile", vcd, trace_warp, prefetcher;
     std::vector<std::string> sets;
     int width = 128, height = 128, spp = 2, bounces = 16;
-    uint64_t seed = 1, quantum = 0;
+    uint64_t seed = 1;
+    std::optional<uint64_t> quantum;  // LT's quantum (given, even as 0, or not)
     double sample = 1.0;
     std::optional<uint64_t> sample_seed;  // which clusters a sampled run simulates (default: --seed)
     bool sample_unchecked = false;
-    unsigned threads = std::max(1u, std::thread::hardware_concurrency());  // sampling pre-pass
+    // The sampling pre-pass's threads; read as signed so that a negative number is an error,
+    // not a wrap to 4 billion.
+    long long threads = std::max(1u, std::thread::hardware_concurrency());
+    std::vector<std::string> stray;  // arguments that are no option's
     bool verify = false, quiet = false, flatten = false;
 };
 
@@ -82,14 +86,23 @@ RunSpec spec_of(const Args& a) {
     else throw InputError("--traversal '" + a.traversal + "': allowed are dfs, bfs, treelet");
     if (a.rays.empty()) parse_workload(a.workload);  // throws InputError
     if (!a.rays.empty() && !a.image.empty()) throw InputError("--image needs a scene workload, not --rays");
+    if (!a.stray.empty()) throw InputError("unexpected argument '" + a.stray.front() + "' (every option starts with --; see rtsim --help)");
     if (!timing && (!a.vcd.empty() || !a.trace_warp.empty() || !a.sets.empty() || a.quantum || !a.prefetcher.empty() || a.sample != 1.0))
         throw InputError("--vcd, --trace-warp, --set, --quantum, --prefetcher and --sample need --fidelity at, lt or interval");
     if (interval && (!a.vcd.empty() || !a.trace_warp.empty() || a.quantum))
         throw InputError("--vcd, --trace-warp and --quantum need --fidelity at or lt (the interval fidelity has no "
                          "SystemC signals or quantum)");
+    if (a.quantum && spec.fidelity != Fidelity::LT) throw InputError("--quantum is the loosely timed model's: it needs --fidelity lt");
+    if (a.quantum && *a.quantum == 0) throw InputError("--quantum 0: the LT quantum must be at least 1 core cycle");
+    if (!a.trace_warp.empty() && a.vcd.empty()) throw InputError("--trace-warp traces into the waveforms: it needs --vcd FILE");
     if (a.sample_seed && a.sample == 1.0) throw InputError("--sample-seed needs --sample RATE below 1");
     if (a.sample_unchecked && a.sample == 1.0) throw InputError("--sample-unchecked needs --sample RATE below 1");
-    if (a.threads == 0) throw InputError("--threads 0: the sampling pre-pass needs at least 1 thread");
+    if (a.threads < 1 || a.threads > 4096)
+        throw InputError("--threads " + std::to_string(a.threads) + ": the sampling pre-pass takes 1 to 4096 threads");
+    // Outputs are checked before anything runs: a bad path should not wait for the simulation.
+    for (const auto& [option, path] : {std::pair<const char*, std::string>{"--stats", a.stats}, {"--image", a.image},
+                                       {"--hits", a.hits}, {"--vcd", a.vcd}})
+        if (!path.empty()) check_writable_folder(option, path);
     if (!(a.sample > 0.0 && a.sample <= 1.0))
         throw InputError("--sample " + std::to_string(a.sample) + ": the share of the frame to simulate must be in (0, 1]");
     // Configuration first: a bad key should not wait for a scene to load.
@@ -97,7 +110,7 @@ RunSpec spec_of(const Args& a) {
         try {
             spec.config = Config::load(a.config);
             for (const auto& s : a.sets) spec.config.set(s);
-            if (a.quantum) spec.config.set("sim.quantum=" + std::to_string(a.quantum));
+            if (a.quantum) spec.config.set("sim.quantum=" + std::to_string(*a.quantum));
             if (!a.prefetcher.empty()) spec.config.set("prefetch.kind=" + a.prefetcher);
             spec.hw = spec.config.resolve();
             check_prefetcher(spec.hw.prefetch, spec.order);
@@ -116,7 +129,7 @@ RunSpec spec_of(const Args& a) {
     spec.sample_rate = a.sample;
     spec.sample_seed = a.sample_seed.value_or(a.seed);
     spec.sample_unchecked = a.sample_unchecked;
-    spec.threads = a.threads;
+    spec.threads = unsigned(a.threads);
     spec.vcd = a.vcd;
     if (spec.vcd.size() > 4 && spec.vcd.compare(spec.vcd.size() - 4, 4, ".vcd") == 0) spec.vcd.resize(spec.vcd.size() - 4);
     if (!a.trace_warp.empty()) std::tie(spec.trace_sm, spec.trace_warp) = parse_trace_warp(a.trace_warp, spec.hw);
@@ -227,7 +240,7 @@ int sc_main(int argc, char** argv) {
         ("fidelity", po::value(&a.fidelity)->default_value(a.fidelity), "functional, at (reference timing), lt (loosely timed) or interval (fastest timing, one event per node fetch)")
         ("config", po::value(&a.config)->default_value(a.config), "hardware preset (mobile: the paper's Table 2; paper: the TTP authors' MOBILE setup; desktop: their RTX 2060-like setup) or JSON file")
         ("set", po::value(&a.sets)->composing(), "override one configuration key, e.g. --set l1.size_kb=64 (repeatable)")
-        ("quantum", po::value(&a.quantum), "LT quantum in core cycles (same as --set sim.quantum=N)")
+        ("quantum", po::value<uint64_t>()->notifier([&a](uint64_t v) { a.quantum = v; }), "LT quantum in core cycles (same as --set sim.quantum=N)")
         ("prefetcher", po::value(&a.prefetcher), "none, ttp, park, treelet, perfect-up, perfect-down (same as --set prefetch.kind=...; interval: none, ttp)")
         ("sample", po::value(&a.sample), "simulate this share (0..1] of the frame's warps, stratified, and extrapolate (at, lt, interval)")
         ("sample-seed", po::value<uint64_t>()->notifier([&a](uint64_t v) { a.sample_seed = v; }),
@@ -245,7 +258,9 @@ int sc_main(int argc, char** argv) {
         ("quiet,q", po::bool_switch(&a.quiet), "no progress or summary");
     try {
         po::variables_map vm;
-        po::store(po::command_line_parser(argc, argv).options(desc).run(), vm);
+        const po::parsed_options parsed = po::command_line_parser(argc, argv).options(desc).run();
+        po::store(parsed, vm);
+        a.stray = po::collect_unrecognized(parsed.options, po::include_positional);
         if (vm.count("help")) {
             std::cout << desc << "\n";
             return 0;

@@ -123,7 +123,16 @@ TEST(Rtsim, BadInputExitsWithStatus2AndWritesNothing) {
         {"--scene cornell --fidelity interval --prefetcher park", "prefetchers none and ttp, not 'park'"},
         {"--scene cornell --fidelity interval --traversal treelet", "not treelet traversal"},
         {"--scene cornell --fidelity interval --prefetcher ttp --set prefetch.priority_after=5", "prefetch.priority_after 0"},
-        {"--scene cornell --fidelity at --trace-warp 99:0", "--trace-warp"},
+        {"--scene cornell --fidelity at --vcd " + dir.file("w.vcd") + " --trace-warp 99:0", "--trace-warp"},
+        {"--scene cornell --fidelity at --trace-warp 0:0", "it needs --vcd"},
+        {"--scene cornell --fidelity lt --quantum 0", "--quantum 0"},
+        {"--scene cornell --fidelity at --quantum 100", "it needs --fidelity lt"},
+        {"--scene cornell --fidelity at --sample 0.5 --threads -1", "--threads -1"},
+        {"--scene cornell stray", "unexpected argument 'stray'"},
+        // Output paths are checked before the run (a VCD into a missing folder used to end in
+        // SIGFPE after the whole simulation).
+        {"--scene cornell --fidelity at --vcd " + dir.file("nodir/w.vcd"), "does not exist"},
+        {"--scene cornell --image " + dir.path().string(), "is a folder"},
         {"--scene cornell --rays " + dir.file("no-rays.txt"), "no-rays.txt"},
         {"--scene bunny", "--assets"},
         {"--scene cornell --bogus-option", "unrecognised"},
