@@ -134,12 +134,12 @@ void write_stats(StatsOut& out, const RunRecord& r) {
     }
     if (r.verify) {
         const VerifyCounts& v = *r.verify;
-        StatsOut vo = out.child("verify", "every valid ray against Embree's robust mode (README: Verification)");
+        StatsOut vo = out.child("verify", "every valid ray against Embree's robust mode (docs/verification.md)");
         vo.value("rays", v.rays, "rays", "compared");
         vo.value("skipped", v.skipped, "rays", "not handed to Embree (|component| > 1.8e18)");
         vo.value("mismatches", v.mismatches(), "rays", "outside the documented classes (exit status 1)");
         StatsOut classes = vo.child("classes", "rays per agreement class");
-        for (size_t c = 0; c < size_t(Agreement::Count); ++c) classes.value(agreement_name(Agreement(c)), v.by_class[c], "rays", "README: Verification");
+        for (size_t c = 0; c < size_t(Agreement::Count); ++c) classes.value(agreement_name(Agreement(c)), v.by_class[c], "rays", "docs/verification.md");
         vo.value("mismatch_rays", *r.mismatch_rays, "ray indices", "the first 100 mismatching rays");
     }
     if (r.has_speed) {

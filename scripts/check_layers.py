@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Checks the layering of the source tree (README: Layout): model <- workloads <- tlm <- platforms.
+"""Checks the layering of the source tree (README, Layout): model <- workloads <- tlm <- platforms.
 
 - model/ includes only model/ (and no SystemC); workloads/ includes model/ and workloads/;
   tlm/ includes model/ and tlm/ (never workloads/); platforms/ may include all;

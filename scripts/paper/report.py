@@ -146,7 +146,7 @@ def main():
     missing = [k for k, r in d.items() if r["exit"] == ""]
     wall = sum(float(r["wall_s"] or 0) for r in d.values())
     scenes_run = sorted({s for (_, s) in d}, key=SCENES.index)
-    targets = []  # the targets, checked as the sections compute them, printed near the top
+    targets = []  # the targets (what a faithful reproduction should show), checked as the sections compute them, printed near the top
     R.p("# The TTP paper's experiments, reproduced on rtunit")
     R.p()
     R.p(f"Generated {datetime.date.today()} by `scripts/paper.sh` from `{results.name}`: {len(d)} runs ({len(failed)} failed, "
@@ -680,7 +680,7 @@ def main():
     R.p()
 
     # The targets, near the top.
-    block = ["## The issue's targets, checked", "",
+    block = ["## Targets, checked", "",
              "Computed from the runs below; a target not met is explained by a measurement in its section or in the gap table.", "",
              "| target | ours | status | note |", "|---|---|---|---|"]
     block += ["| " + " | ".join(str(c) for c in r) + " |" for r in targets] + [""]
