@@ -14,10 +14,17 @@
 
 namespace rtu {
 
+namespace {
+// The folder a relative or absolute file path is written into.
+std::filesystem::path folder_of(const std::filesystem::path& target) {
+    return target.has_parent_path() ? target.parent_path() : std::filesystem::path(".");
+}
+}  // namespace
+
 void check_writable_folder(const std::string& option, const std::string& path) {
     namespace fs = std::filesystem;
     const fs::path target(path);
-    const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
+    const fs::path dir = folder_of(target);
     std::error_code ec;
     if (!fs::is_directory(dir, ec))
         throw InputError(option + " " + path + ": the folder " + dir.string() + " does not exist (rtsim makes no folders)");
@@ -29,7 +36,7 @@ void check_writable_folder(const std::string& option, const std::string& path) {
 void write_file_atomic(const std::string& path, const std::string& content) {
     namespace fs = std::filesystem;
     const fs::path target(path);
-    const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
+    const fs::path dir = folder_of(target);
     std::string tmpl = (dir / ("." + target.filename().string() + ".tmp.XXXXXX")).string();
     const int fd = mkstemp(tmpl.data());
     if (fd < 0) throw input_error(path, 0, std::string("cannot write: ") + std::strerror(errno));

@@ -119,6 +119,27 @@ BvhImage one_triangle_image() {
     EXPECT_EQ(image.size(), 192u);
     return image;
 }
+
+// The hand-worked tests' one ray: from z = -5 straight up +z through the triangle's interior.
+Ray ray_through_the_triangle() {
+    Ray r;
+    r.org = {0, 0, -5};
+    r.dir = {0, 0, 1};
+    return r;
+}
+// As a ray file; make_ray_file_workload keeps a reference to it, so it must outlive the workload.
+std::vector<RayFileEntry> one_ray_file() {
+    std::vector<RayFileEntry> rays(1);
+    rays[0].ray = ray_through_the_triangle();
+    rays[0].valid = true;
+    return rays;
+}
+WarpRay one_warp_ray() {
+    WarpRay r;
+    r.ray = ray_through_the_triangle();
+    r.scale = scale_direction(r.ray);
+    return r;
+}
 }  // namespace
 
 // One ray, one triangle, cold caches, memory clock = core clock (so no rounding between clock
@@ -137,11 +158,6 @@ BvhImage one_triangle_image() {
 TEST(TimingAT, SingleRayLatencyIsTheHandWorkedSum) {
     FsResolution resolution;
     const BvhImage image = one_triangle_image();
-    std::vector<RayFileEntry> rays(1);
-    rays[0].ray.org = {0, 0, -5};
-    rays[0].ray.dir = {0, 0, 1};
-    rays[0].valid = true;
-    auto w = make_ray_file_workload(rays);
     Config c = Config::load("mobile");
     c.set("gpu.memory_clock_mhz=1365");
     const HwConfig hw = c.resolve();
@@ -155,6 +171,8 @@ TEST(TimingAT, SingleRayLatencyIsTheHandWorkedSum) {
     const uint64_t expected = leaf_b + hw.lat.leaf_descriptor + hw.lat.ray_triangle + hw.lat.triangle_hit;  // 466
     ASSERT_EQ(expected, 466u);
 
+    const std::vector<RayFileEntry> rays = one_ray_file();
+    auto w = make_ray_file_workload(rays);
     TimingOptions opt;
     opt.check_protocol = true;
     GpuPlatform platform(hw, image, *w, opt);
@@ -196,10 +214,7 @@ TEST(TimingInterval, SingleRayLatenciesAreTheHandWorkedSums) {
         out.insert(out.end(), done[0].rays.begin(), done[0].rays.end());
         return done[0].end;
     };
-    WarpRay r;
-    r.ray.org = {0, 0, -5};
-    r.ray.dir = {0, 0, 1};
-    r.scale = scale_direction(r.ray);
+    const WarpRay r = one_warp_ray();
     const uint64_t internal = hw.lat.header + hw.lat.ray_box, leaf = hw.lat.leaf_descriptor + hw.lat.ray_triangle + hw.lat.triangle_hit;
     EXPECT_EQ(time_trace(0, {r}, 0), 466u);
     ASSERT_EQ(out.size(), 1u);
@@ -414,16 +429,13 @@ HwConfig two_step_config() {
 TEST(TimingAT, TwoStepLeafReadIsTheHandWorkedSum) {
     FsResolution resolution;
     const BvhImage image = one_triangle_image();
-    std::vector<RayFileEntry> rays(1);
-    rays[0].ray.org = {0, 0, -5};
-    rays[0].ray.dir = {0, 0, 1};
-    rays[0].valid = true;
-    auto w = make_ray_file_workload(rays);
     const HwConfig hw = two_step_config();
     const uint64_t L2 = hw.l2.latency, rcd = hw.dram.tRCD, cl = hw.dram.tCL, xfer = 32 / (2 * hw.dram.bus_bytes);
     const uint64_t descriptor = 229 + 1 + L2 + rcd + cl + xfer;                    // 438
     const uint64_t leaf = descriptor + hw.lat.leaf_descriptor + 2 + L2 + cl + xfer;  // 632 (row hit)
     ASSERT_EQ(leaf + hw.lat.ray_triangle + hw.lat.triangle_hit, kTwoStepLeafCycles);
+    const std::vector<RayFileEntry> rays = one_ray_file();
+    auto w = make_ray_file_workload(rays);
     TimingOptions opt;
     opt.check_protocol = true;
     GpuPlatform platform(hw, image, *w, opt);
@@ -442,12 +454,8 @@ TEST(TimingAT, TwoStepLeafReadIsTheHandWorkedSum) {
 TEST(TimingInterval, TwoStepLeafReadIsTheHandWorkedSum) {
     const BvhImage image = one_triangle_image();
     IntervalGpu gpu(two_step_config(), image, TraversalOrder::DFS);
-    WarpRay r;
-    r.ray.org = {0, 0, -5};
-    r.ray.dir = {0, 0, 1};
-    r.scale = scale_direction(r.ray);
     std::vector<IntervalGpu::Finished> done;
-    gpu.start_trace(0, {r}, 0, done);
+    gpu.start_trace(0, {one_warp_ray()}, 0, done);
     while (done.empty() && gpu.next_event() != ~0ull) gpu.run_next(done);
     ASSERT_EQ(done.size(), 1u);
     EXPECT_EQ(done[0].end, kTwoStepLeafCycles);

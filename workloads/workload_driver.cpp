@@ -91,20 +91,10 @@ WorkloadDriver::WorkloadDriver(Workload& workload, uint32_t sms, uint32_t warp_s
         // The pre-pass also records, for each simulated cluster, the last node fetches of the
         // clusters skipped before it, to warm the caches with when it starts.
         std::vector<std::vector<uint32_t>> trace_nodes;
+        double frame_nodes = 0;  // the pre-pass's critical-path node reads over the frame
         if (sampling.make_workload && sampling.trace) {
             PrepassResult p = run_prepass(Frame(warps_), sampling, design.feeds(), design.strata());
-            // Never an estimate of 0 cycles for a frame with work: if the drawn clusters read no
-            // node while the frame reads some, say so before simulating.
-            double drawn = 0;
-            for (uint64_t h = 0; h < design.strata(); ++h)
-                for (uint64_t w = design.first_warp(h); w < design.end_warp(h); ++w)
-                    for (uint32_t n : p.trace_nodes[w]) drawn += n;
-            if (drawn == 0 && p.critical_nodes_total > 0)
-                throw InputError("--sample " + percent(sampling.rate) + " %: the " + std::to_string(design.strata()) +
-                                 " drawn cluster(s) read no BVH node while the frame reads " +
-                                 std::to_string(uint64_t(p.critical_nodes_total)) +
-                                 " along its traces' longest rays, so the estimate would be 0 cycles; draw others "
-                                 "(--sample-seed) or sample more (--sample)");
+            frame_nodes = p.critical_nodes_total;
             trace_nodes = p.trace_nodes;
             warm_ = std::move(p.warm);
             estimator_.set_prepass(std::move(p));
@@ -125,6 +115,15 @@ WorkloadDriver::WorkloadDriver(Workload& workload, uint32_t sms, uint32_t warp_s
                 }
                 kept_records.push_back(std::move(rec));
             }
+        // Never an estimate of 0 cycles for a frame with work: if the drawn clusters read no
+        // node while the frame reads some, say so before simulating.
+        double drawn = 0;
+        for (const WarpRecord& rec : kept_records) drawn += rec.critical_nodes;
+        if (drawn == 0 && frame_nodes > 0)
+            throw InputError("--sample " + percent(sampling.rate) + " %: the " + std::to_string(design.strata()) +
+                             " drawn cluster(s) read no BVH node while the frame reads " + std::to_string(uint64_t(frame_nodes)) +
+                             " along its traces' longest rays, so the estimate would be 0 cycles; draw others "
+                             "(--sample-seed) or sample more (--sample)");
         warps_ = std::move(kept);
         records_of_warps_ = std::move(kept_records);
         for (uint32_t i = 0; i < warps_.size(); ++i)

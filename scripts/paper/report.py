@@ -127,7 +127,7 @@ def known(*xs):
     return all(x is not None and x == x for x in xs)
 
 
-def check(R, targets, what, ours, figures, ok, detail=""):
+def check(targets, what, ours, figures, ok, detail=""):
     """One row of the target checklist: the issue's target, our figure, whether it is met; `ok`
     (a function) is asked only when every one of `figures` exists."""
     status = ("met" if ok() else "**not met**") if known(*figures) else "no data"
@@ -214,9 +214,9 @@ def main():
         R.p(f"Under the `mobile` preset (Table 2 alone) the geomean is {times(g_mob, 2)}: the authors' simulator details add "
             f"{pct(g_sp / g_mob - 1)} to the speed-up.")
     R.p()
-    check(R, targets, "TTP geomean >= 1.40 (paper 1.48)", times(g_sp, 2), [g_sp], lambda: g_sp >= 1.40)
+    check(targets, "TTP geomean >= 1.40 (paper 1.48)", times(g_sp, 2), [g_sp], lambda: g_sp >= 1.40)
     mx = max(paper_sp.values(), default=float("nan"))
-    check(R, targets, "TTP max >= 1.7 (paper 1.89)", f"{times(mx, 2)} ({peak_scene})", [mx], lambda: mx >= 1.7)
+    check(targets, "TTP max >= 1.7 (paper 1.89)", f"{times(mx, 2)} ({peak_scene})", [mx], lambda: mx >= 1.7)
 
     # 2. Thread status (Figure 1) at 1 spp.
     R.p("## Thread status in the RT unit (paper Figure 'rtcyclesdist'), 1 sample per pixel")
@@ -266,7 +266,7 @@ def main():
         f"with TTP is {pct(top_bw)}: the baseline {'leaves bandwidth unused' if top_bw < 0.5 else 'is near the bus limit'}, "
         "as the paper finds (latency bound).")
     R.p()
-    check(R, targets, "DRAM traffic about unchanged with TTP", f"{times(g_tr, 3)}", [g_tr], lambda: abs(g_tr - 1) <= 0.05,
+    check(targets, "DRAM traffic about unchanged with TTP", f"{times(g_tr, 3)}", [g_tr], lambda: abs(g_tr - 1) <= 0.05,
           "'about' read as within 5 %")
 
     # 4. Limit studies.
@@ -275,7 +275,7 @@ def main():
                           {"perfect-up": PAPER["perfect_up"], "perfect-down": PAPER["perfect_down"], "TTP": PAPER["ttp"]},
                           plot="perfect")
     gu, gd = g_lim.get("perfect-up"), g_lim.get("perfect-down")
-    check(R, targets, "perfect-up > perfect-down > 1 and perfect-up >= 1.6", f"up {times(gu, 3)}, down {times(gd, 3)}", [gu, gd],
+    check(targets, "perfect-up > perfect-down > 1 and perfect-up >= 1.6", f"up {times(gu, 3)}, down {times(gd, 3)}", [gu, gd],
           lambda: gu > gd > 1 and gu >= 1.6)
 
     # 5. Larger L1.
@@ -355,7 +355,7 @@ def main():
         for lvl in ("l1", "l2")) + ".")
     R.p()
     a_l1 = m(aacc, "l1")
-    check(R, targets, "TTP L1 accuracy >= 97 % (paper 98.9 %)", f"{pct(a_l1)} (authors' code), {pct(m(acc, 'l1'))} (text)", [a_l1],
+    check(targets, "TTP L1 accuracy >= 97 % (paper 98.9 %)", f"{pct(a_l1)} (authors' code), {pct(m(acc, 'l1'))} (text)", [a_l1],
           lambda: a_l1 >= 0.97, "the paper plots the authors' code's figure")
 
     # 8. Response breakdown.
@@ -466,8 +466,8 @@ def main():
         f"{times(g['DFS+TTP'], 2)}: {'above' if g['BFS+TTP N=4'] > g['DFS+TTP'] else 'below'}).")
     R.p()
     n1, n2, n4 = g_bfs.get("N=1"), g_bfs.get("N=2"), g_bfs.get("N=4")
-    check(R, targets, "BFS: N=1 < N=2 < N=4", f"{times(n1, 2)}, {times(n2, 2)}, {times(n4, 2)}", [n1, n2, n4], lambda: n1 < n2 < n4)
-    check(R, targets, "BFS+TTP above DFS+TTP", f"{times(g['BFS+TTP N=4'], 2)} against {times(g['DFS+TTP'], 2)}",
+    check(targets, "BFS: N=1 < N=2 < N=4", f"{times(n1, 2)}, {times(n2, 2)}, {times(n4, 2)}", [n1, n2, n4], lambda: n1 < n2 < n4)
+    check(targets, "BFS+TTP above DFS+TTP", f"{times(g['BFS+TTP N=4'], 2)} against {times(g['DFS+TTP'], 2)}",
           [g["BFS+TTP N=4"], g["DFS+TTP"]], lambda: g["BFS+TTP N=4"] > g["DFS+TTP"])
 
     # 16. Treelet.
@@ -507,7 +507,7 @@ def main():
     R.p(f"Paper: Treelet raises DRAM reads {times(PAPER['treelet_dram'], 2)}.")
     R.p()
     t128, t32 = tl.get("128"), tl.get("32")
-    check(R, targets, f"Treelet about 1.0 at {size} and better at 32x32", f"{times(t128, 2)} at {size}, {times(t32, 2)} at 32x32",
+    check(targets, f"Treelet about 1.0 at {size} and better at 32x32", f"{times(t128, 2)} at {size}, {times(t32, 2)} at 32x32",
           [t128, t32], lambda: abs(t128 - 1) <= 0.05 and t32 > t128, "'about' read as within 5 %")
 
     # 17. Park.
@@ -527,7 +527,7 @@ def main():
         f"chunks per node read (TTP {pk['ttp']['sent']:.2f}) at an L1 accuracy of {pct(pk['park']['acc'])} ({pct(pk['ttp']['acc'])}) "
         f"and covers {pct(pk['park']['cov'])} of the baseline's L1 misses ({pct(pk['ttp']['cov'])}).")
     R.p()
-    check(R, targets, "Park far below TTP", f"{share_words(g['Park'] - 1, g['TTP'] - 1)} of TTP's gain", [park_share],
+    check(targets, "Park far below TTP", f"{share_words(g['Park'] - 1, g['TTP'] - 1)} of TTP's gain", [park_share],
           lambda: park_share <= 0.25, "'far below' read as at most a quarter of TTP's gain (paper: 8 %)")
 
     # 18. AO and SH.
@@ -538,7 +538,7 @@ def main():
         f"{times(PAPER['ttp'], 2)}); ours: {times(g_ao['AO'], 2)}, {times(g_sh['SH'], 2)} against {times(g_sp, 2)}: "
         f"{'agrees' if aosh_ok else 'differs'}.")
     R.p()
-    check(R, targets, "AO and SH gains below path tracing's", f"AO {times(g_ao['AO'], 2)}, SH {times(g_sh['SH'], 2)}, PT {times(g_sp, 2)}",
+    check(targets, "AO and SH gains below path tracing's", f"AO {times(g_ao['AO'], 2)}, SH {times(g_sh['SH'], 2)}, PT {times(g_sp, 2)}",
           [g_ao["AO"], g_sh["SH"], g_sp], lambda: aosh_ok)
 
     # 19. Pop streaks.
