@@ -157,18 +157,22 @@ void write_sampling(StatsOut& out, const SampleEstimate& est, double rate, uint6
     // work and more, so a symmetric interval reaching below them only says the estimate is
     // uncertain upward. Fewer than 2 strata (--sample-unchecked) leave no variance: no interval.
     const double c = double(cycles), h = c * est.relative_half_width(double(cycles_simulated));
-    const bool has_interval = est.variance_pairs > 0;
+    const bool has_interval = est.has_interval;
     StatsOut s = out.child("sampling", "a sampled run's estimate of the frame (docs/sampling.md)");
     s.value("rate", rate, "ratio", "the share of the frame asked for (--sample)");
     s.value("rate_simulated", est.warps_total ? double(est.warps_simulated) / double(est.warps_total) : 0.0, "ratio",
             "the share of the frame's warps simulated (whole clusters, one per stratum)");
     s.value("warps_total", est.warps_total, "shader warps", "of the frame");
     s.value("warps_simulated", est.warps_simulated, "shader warps", "simulated");
+    s.value("cluster_warps", est.cluster_warps, "shader warps", "warps per cluster (the GPU's capacity, smaller where that leaves fewer than 30 strata)");
+    s.value("strata", est.strata, "strata", "drawn strata (clusters sorted by the pre-pass's work), one cluster simulated each");
+    s.value("first_wave_clusters", est.first_wave_clusters, "clusters", "the frame's first wave, simulated whole on cold caches");
+    s.value("empty_clusters", est.empty_clusters, "clusters", "clusters that read no BVH node: no RT work, not simulated");
     s.value("cycles_simulated", cycles_simulated, "cycles", "of the simulated sample");
     s.value("work_simulated_residence_cycles", est.work_simulated, "slot-cycles", "warp-buffer residence of the simulated traces");
     s.value("estimator", est.schedule ? "schedule (functional pre-pass)" : "stratified", "", "which estimator made `cycles`");
     s.value("work_estimate_residence_cycles", est.work_estimate, "slot-cycles", "the frame's residence, estimated");
-    s.value("work_estimate_stratified_residence_cycles", est.work_estimate_stratified, "slot-cycles", "the same by the stratified estimate alone");
+    s.value("work_estimate_stratified_residence_cycles", est.work_estimate_stratified, "slot-cycles", "the stratified estimate alone (ratio to the pre-pass's critical-path nodes)");
     s.value("critical_path_node_fetches_frame", est.critical_nodes_total, "node reads", "sum over the frame's traces of their longest ray (pre-pass)");
     s.value("prepass_threads", est.prepass_threads, "threads", "the pre-pass's threads");
     {
@@ -185,7 +189,7 @@ void write_sampling(StatsOut& out, const SampleEstimate& est, double rate, uint6
     s.value("saturated_until_cycle", est.saturated_until, "cycles", "while at least as many shader warps as the GPU holds were unfinished");
     s.value("work_done_saturated", est.work_saturated, "slot-cycles", "residence done by then");
     s.value("cycles_ci95", has_interval ? nlohmann::ordered_json{std::max(c - h, double(cycles_simulated)), c + h} : nlohmann::ordered_json(),
-            "cycles", "95 % interval of the frame's cycles [low, high], low at least cycles_simulated; null without one (--sample-unchecked, fewer than 2 strata)");
+            "cycles", "95 % interval of the frame's cycles [low, high], low at least cycles_simulated; null without one (--sample-unchecked, fewer than 10 strata)");
     s.value("relative_se", est.relative_se, "ratio", "standard error of the work estimate / the estimate");
     s.value("variance_pairs", est.variance_pairs, "pairs", "collapsed stratum pairs behind relative_se");
     for (const auto& [name, share, what] :

@@ -2,5 +2,5 @@
 # Speed against error: runs every fidelity (AT; LT at three quanta; sampled AT and LT at three
 # rates) on our scenes with and without TTP, and writes reports/speed-vs-error/README.md with a
 # Pareto plot. Resumable like scripts/paper.sh.
-# Usage: scripts/speed_error.sh [--size N] [--spp N] [--scenes a,b] [--jobs N] [--work DIR]
+# Usage: scripts/speed_error.sh [--size N (default 256)] [--spp N] [--scenes a,b] [--jobs N] [--work DIR]
 exec "$(dirname "$0")/sweep/experiment.sh" scripts/speed_error/experiments.py scripts/speed_error/report.py reports/speed-vs-error out/speed-error-runs "$@"

@@ -5,6 +5,9 @@
 #include "model/config.h"
 #include "model/sector_cache.h"
 #include "model/trace_schedule.h"
+#include "workloads/sampling.h"
+
+#include <algorithm>
 
 using namespace rtu;
 
@@ -84,4 +87,46 @@ TEST(SectorCacheWarm, ValidatesWithoutStatisticsAndRespectsPending) {
     EXPECT_EQ(c.fill(0x000), (SectorCache::Tokens{5}));
     EXPECT_EQ(c.read(0x100, 7, ReqKind::Demand), CacheOutcome::LineMiss);
     EXPECT_EQ(c.stats(ReqKind::Demand).evictions + c.stats(ReqKind::Prefetch).evictions, 3u);  // the reads' (0x100, 0x200, line 0), not the warming's
+}
+
+// The sample design (workloads/sampling.h) by hand: 10 clusters of 4 warps, capacity 4 (the
+// first wave is cluster 0), clusters 3 and 7 empty, a half of the frame: round(10 x 0.5) = 5
+// clusters simulated, the first wave and 4 strata over the 7 other non-empty clusters sorted by
+// work. Every stratum's weight is its size, the weights and the first wave and the empty
+// clusters account for every cluster, no empty cluster is drawn, and each draw lies in its
+// stratum's share of the work order.
+TEST(SampleDesign, FirstWaveEmptyClustersAndStrataByWork) {
+    const std::vector<double> work = {5, 9, 1, 0, 7, 3, 8, 0, 2, 6};  // per cluster
+    // Non-empty clusters after the first wave, by work: 2(1) 8(2) 5(3) 9(6) 4(7) 6(8) 1(9).
+    const std::vector<std::vector<uint64_t>> strata_of = {{2}, {8, 5}, {9, 4}, {6, 1}};  // 7 x h / 4 .. 7 x (h + 1) / 4
+    for (uint64_t seed = 1; seed <= 20; ++seed) {
+        const rtu::SampleDesign d(40, 4, 4, 0.5, seed, work);
+        EXPECT_EQ(d.clusters(), 10u);
+        EXPECT_EQ(d.first_wave_clusters(), 1u);
+        EXPECT_EQ(d.empty_clusters(), 2u);
+        EXPECT_EQ(d.strata(), 4u);
+        EXPECT_FALSE(d.census());
+        const auto& sim = d.simulated();
+        ASSERT_EQ(sim.size(), 5u);
+        EXPECT_EQ(sim[0].cluster, 0u);
+        EXPECT_EQ(sim[0].stratum, rtu::SampledCluster::kCertain);
+        double weights = 0;
+        for (size_t i = 1; i < sim.size(); ++i) {
+            EXPECT_LT(sim[i - 1].cluster, sim[i].cluster);  // frame order
+            ASSERT_LT(sim[i].stratum, 4u);
+            const auto& members = strata_of[sim[i].stratum];
+            EXPECT_NE(std::find(members.begin(), members.end(), sim[i].cluster), members.end()) << "seed " << seed;
+            EXPECT_EQ(sim[i].weight, double(members.size()));
+            weights += sim[i].weight;
+        }
+        EXPECT_EQ(weights + 1 + 2, 10.0);
+        // Warming: every warp between two simulated clusters feeds the later one.
+        const auto feeds = d.feeds();
+        for (size_t i = 0; i < sim.size(); ++i)
+            for (uint64_t w = i ? d.end_warp(i - 1) : 0; w < d.first_warp(i); ++w) EXPECT_EQ(feeds[w], i);
+    }
+    // Everything asked for: the first wave and every non-empty cluster, a census.
+    const rtu::SampleDesign all(40, 4, 4, 0.95, 1, work);
+    EXPECT_TRUE(all.census());
+    EXPECT_EQ(all.simulated().size(), 8u);
 }

@@ -17,9 +17,13 @@ namespace {
 // Variance of a stratified total with one sample per stratum, by collapsing neighbouring strata
 // in pairs: the sum over pairs of (d_a - d_b)^2, d being each stratum's weighted value or its
 // residual from a ratio line (Cochran, Sampling Techniques, 5A.12 and 6.12).
-double collapsed_pairs_variance(const std::vector<double>& d) {
+// Each pair is a stratum of weight[a] + weight[b] clusters of which 2 were drawn: the finite
+// population correction 1 - 2 / (weight[a] + weight[b]) makes a pair of single-cluster strata
+// (simulated whole) contribute nothing.
+double collapsed_pairs_variance(const std::vector<double>& d, const std::vector<double>& weight) {
     double v = 0;
-    for (size_t i = 0; i + 1 < d.size(); i += 2) v += (d[i] - d[i + 1]) * (d[i] - d[i + 1]);
+    for (size_t i = 0; i + 1 < d.size(); i += 2)
+        v += (d[i] - d[i + 1]) * (d[i] - d[i + 1]) * std::max(0.0, 1.0 - 2.0 / std::max(2.0, weight[i] + weight[i + 1]));
     return v;
 }
 
@@ -30,91 +34,139 @@ double t95(uint32_t pairs) {
 
 }  // namespace
 
-// Stratified cluster sample. The unit is a cluster of `cluster` consecutive warps (as many as the
-// GPU holds at once), so that the warps in flight together are neighbours sharing BVH nodes in
-// the caches, as in the full frame. The clusters are split into n equal strata in frame order
-// and one cluster per stratum is simulated.
-SampleDesign::SampleDesign(uint64_t warps, uint64_t cluster, double rate, uint64_t seed)
-    : warps_(warps), cluster_(std::max<uint64_t>(1, cluster)), clusters_((warps + cluster_ - 1) / cluster_) {
-    const uint64_t n = std::max<uint64_t>(1, std::min<uint64_t>(clusters_, uint64_t(std::llround(double(clusters_) * rate))));
-    picks_.resize(n);
-    for (uint64_t h = 0; h < n; ++h) {
-        Rng rng(seed, h, 0x5A3B1E);
-        picks_[h] = lo(h) + rng.next() % (hi(h) - lo(h));
-    }
+uint64_t SampleDesign::planned_strata(uint64_t warps, uint64_t cluster, uint64_t capacity, double rate) {
+    cluster = std::max<uint64_t>(1, cluster);
+    const uint64_t clusters = (warps + cluster - 1) / cluster, certain = std::min(clusters, (capacity + cluster - 1) / cluster);
+    const uint64_t total = std::min<uint64_t>(clusters, uint64_t(std::llround(double(clusters) * rate)));
+    return total > certain ? total - certain : 0;
 }
 
-uint64_t SampleDesign::end_warp(uint64_t h) const { return std::min(warps_, (picks_[h] + 1) * cluster_); }
+// The first wave: the warps that start together on the frame's cold caches, a startup the full
+// frame pays once; simulated always (weight 1), it is paid once in the sample too, where a drawn
+// cluster would start on warmed caches. Empty clusters: no node read, no RT work, nothing to
+// simulate. The other clusters, sorted by their critical-path node reads, fall into equal strata
+// (neighbouring strata alike, as the collapsed pairs of the variance want), and one cluster per
+// stratum is drawn.
+SampleDesign::SampleDesign(uint64_t warps, uint64_t cluster, uint64_t capacity, double rate, uint64_t seed, const std::vector<double>& work)
+    : warps_(warps), cluster_(std::max<uint64_t>(1, cluster)), clusters_((warps + cluster_ - 1) / cluster_) {
+    certain_ = std::min(clusters_, (std::max<uint64_t>(1, capacity) + cluster_ - 1) / cluster_);
+    std::vector<uint64_t> order;
+    for (uint64_t c = certain_; c < clusters_; ++c)
+        if (work.empty() || work[c] > 0) order.push_back(c);
+    empty_ = clusters_ - certain_ - order.size();
+    candidates_ = order.size();
+    if (!work.empty())
+        std::stable_sort(order.begin(), order.end(), [&](uint64_t a, uint64_t b) { return work[a] < work[b]; });
+    strata_ = std::min<uint64_t>(candidates_, planned_strata(warps, cluster_, capacity, rate));
+    for (uint64_t c = 0; c < certain_; ++c) sim_.push_back({c, SampledCluster::kCertain, 1.0});
+    for (uint64_t h = 0; h < strata_; ++h) {
+        const uint64_t lo = h * candidates_ / strata_, hi = (h + 1) * candidates_ / strata_;
+        Rng rng(seed, h, 0x5A3B1E);
+        sim_.push_back({order[lo + rng.next() % (hi - lo)], uint32_t(h), double(hi - lo)});
+    }
+    std::sort(sim_.begin(), sim_.end(), [](const SampledCluster& a, const SampledCluster& b) { return a.cluster < b.cluster; });
+}
 
 std::vector<uint32_t> SampleDesign::feeds() const {
     std::vector<uint32_t> feeds(warps_, ~0u);
-    for (uint64_t h = 0; h < strata(); ++h)
-        for (uint64_t w = h ? end_warp(h - 1) : 0; w < std::min(warps_, first_warp(h)); ++w) feeds[w] = uint32_t(h);
+    for (size_t i = 0; i < sim_.size(); ++i)
+        for (uint64_t w = i ? end_warp(i - 1) : 0; w < first_warp(i); ++w) feeds[w] = uint32_t(i);
     return feeds;
 }
 
-// The functional pre-pass: a trace costs its longest ray, since the warp waits for its last
-// thread. Contiguous ranges of warps go to the threads, each with its own workload instance; the
-// results are put together in frame order, so they do not depend on the number of threads.
-PrepassResult run_prepass(const FrameWarps& frame, const SamplingOptions& opt, const std::vector<uint32_t>& feeds, size_t strata) {
+namespace {
+
+// Runs body(thread, workload) on `threads` threads, each with a fresh instance of the workload
+// (set up as the driver's was; its first rays are in the driver's queues), and rethrows the
+// first exception any of them threw.
+void on_threads(unsigned threads, const SamplingOptions& opt, const std::function<void(unsigned, Workload&)>& body) {
+    auto run = [&](unsigned t) {
+        const std::unique_ptr<Workload> fresh = opt.make_workload();
+        std::vector<WorkRay> ignored;
+        fresh->begin(ignored);
+        body(t, *fresh);
+    };
+    std::vector<std::thread> pool;
+    std::vector<std::exception_ptr> failed(threads);
+    for (unsigned t = 1; t < threads; ++t)
+        pool.emplace_back([&, t] {
+            try {
+                run(t);
+            } catch (...) {
+                failed[t] = std::current_exception();
+            }
+        });
+    try {
+        run(0);
+    } catch (...) {
+        failed[0] = std::current_exception();
+    }
+    for (std::thread& th : pool) th.join();
+    for (const std::exception_ptr& e : failed)
+        if (e) std::rethrow_exception(e);
+}
+
+// Traces shader warp `wi` functionally: per trace, the most nodes one of its rays visits (a
+// trace costs its longest ray, since the warp waits for its last thread); with `rec`, every node
+// fetch is appended to it.
+struct WarpTracer {
+    const FrameWarps& frame;
+    const SamplingOptions& opt;
+    std::vector<WorkRay> follow;
+    std::vector<RayQueue> pending;  // per thread of the warp being traced (reused)
+    std::vector<uint32_t> paths;
+    std::vector<StackEntry> fetched;
+
+    void trace(Workload& workload, size_t wi, std::vector<uint32_t>& trace_nodes, std::vector<WarmFetch>* rec) {
+        const uint32_t sm = frame.sm(wi);
+        frame.threads(wi, paths, pending);
+        for (;;) {
+            uint32_t longest = 0;
+            bool any = false;
+            for (size_t i = 0; i < paths.size(); ++i) {
+                auto& q = pending[i];
+                if (q.empty()) continue;
+                any = true;
+                const WorkRay w = q.front();
+                q.pop_front();
+                TraceResult r;
+                fetched.clear();
+                if (is_valid_ray(w.ray)) r = opt.trace(w.ray, rec ? &fetched : nullptr);  // invalid rays never reach the RT unit: a miss
+                if (rec)
+                    for (const StackEntry& e : fetched) rec->push_back({sm, e.addr, node_bytes(e.type)});
+                longest = std::max(longest, r.nodes_visited);
+                follow.clear();
+                workload.complete(w, r.hit, follow);
+                for (const WorkRay& f : follow) {  // a follow-up ray belongs to a path of this warp
+                    size_t k = paths[i] == f.path ? i : 0;
+                    while (paths[k] != f.path) ++k;
+                    pending[k].push_back(f);
+                }
+            }
+            if (!any) break;
+            trace_nodes.push_back(longest);
+        }
+    }
+};
+
+}  // namespace
+
+// Contiguous ranges of warps go to the threads; the results are put together in frame order, so
+// they do not depend on the number of threads.
+PrepassResult run_prepass(const FrameWarps& frame, const SamplingOptions& opt) {
     const auto t0 = std::chrono::steady_clock::now();
-    // Only the last `window` fetches before a simulated cluster warm the caches. Each thread
-    // traces its range of warps backwards (warps are independent) and records the fetches of
-    // whole warps until it has `window` of them for that stratum; the rest are traced unrecorded.
-    const size_t window = opt.warm_window;
     const size_t n_warps = frame.warps();
     const unsigned threads = unsigned(std::max<size_t>(1, std::min<size_t>(opt.threads, (n_warps + 63) / 64)));
     PrepassResult result;
     result.threads = threads;
     result.trace_nodes.resize(n_warps);
-    std::vector<std::vector<WarmFetch>> warp_fetches(n_warps);
-    std::vector<std::vector<size_t>> recorded(threads, std::vector<size_t>(strata, 0));
     std::atomic<size_t> done{0};
-    auto work = [&](unsigned t) {
-        const std::unique_ptr<Workload> fresh = opt.make_workload();
-        std::vector<WorkRay> follow;
-        {
-            std::vector<WorkRay> ignored;
-            fresh->begin(ignored);  // the workload's own set-up; the first rays are in the driver's queues
-        }
-        std::vector<RayQueue> pending;  // per thread of the warp being traced (reused)
-        std::vector<uint32_t> paths;
-        std::vector<StackEntry> fetched;
+    on_threads(threads, opt, [&](unsigned t, Workload& workload) {
+        WarpTracer tracer{frame, opt, {}, {}, {}, {}};
         auto last = t0;
         bool printed = false;
-        const size_t lo = n_warps * t / threads, hi = n_warps * (t + 1) / threads;
-        for (size_t wi = hi; wi-- > lo;) {
-            const uint32_t sm = frame.sm(wi);
-            frame.threads(wi, paths, pending);
-            std::vector<uint32_t>& trace_nodes = result.trace_nodes[wi];
-            const uint32_t h = feeds[wi];
-            std::vector<WarmFetch>* rec = h != ~0u && recorded[t][h] < window ? &warp_fetches[wi] : nullptr;
-            for (;;) {
-                uint32_t longest = 0;
-                bool any = false;
-                for (size_t i = 0; i < paths.size(); ++i) {
-                    auto& q = pending[i];
-                    if (q.empty()) continue;
-                    any = true;
-                    const WorkRay w = q.front();
-                    q.pop_front();
-                    TraceResult r;
-                    fetched.clear();
-                    if (is_valid_ray(w.ray)) r = opt.trace(w.ray, rec ? &fetched : nullptr);  // invalid rays never reach the RT unit: a miss
-                    for (const StackEntry& e : fetched) rec->push_back({sm, e.addr, node_bytes(e.type)});
-                    longest = std::max(longest, r.nodes_visited);
-                    follow.clear();
-                    fresh->complete(w, r.hit, follow);
-                    for (const WorkRay& f : follow) {  // a follow-up ray belongs to a path of this warp
-                        size_t k = paths[i] == f.path ? i : 0;
-                        while (paths[k] != f.path) ++k;
-                        pending[k].push_back(f);
-                    }
-                }
-                if (!any) break;
-                trace_nodes.push_back(longest);
-            }
-            if (rec) recorded[t][h] += rec->size();
+        for (size_t wi = n_warps * t / threads, hi = n_warps * (t + 1) / threads; wi < hi; ++wi) {
+            tracer.trace(workload, wi, result.trace_nodes[wi], nullptr);
             const size_t d = ++done;
             if (opt.progress && t == 0 && (d & 63) == 0) {
                 const auto now = std::chrono::steady_clock::now();
@@ -128,38 +180,39 @@ PrepassResult run_prepass(const FrameWarps& frame, const SamplingOptions& opt, c
             }
         }
         if (printed) std::cerr << "\n";
-    };
-    std::vector<std::thread> pool;
-    std::vector<std::exception_ptr> failed(threads);
-    for (unsigned t = 1; t < threads; ++t)
-        pool.emplace_back([&, t] {
-            try {
-                work(t);
-            } catch (...) {
-                failed[t] = std::current_exception();
-            }
-        });
-    try {
-        work(0);
-    } catch (...) {
-        failed[0] = std::current_exception();
-    }
-    for (std::thread& th : pool) th.join();
-    for (const std::exception_ptr& e : failed)
-        if (e) std::rethrow_exception(e);
+    });
     for (const std::vector<uint32_t>& trace : result.trace_nodes)
         for (uint32_t n : trace) result.critical_nodes_total += n;
-    // Each stratum's recorded fetches in frame order; the last `window` kept.
-    result.warm.assign(strata, {});
-    for (size_t wi = 0; wi < n_warps; ++wi)
-        if (!warp_fetches[wi].empty()) {
-            std::vector<WarmFetch>& w = result.warm[feeds[wi]];
-            w.insert(w.end(), warp_fetches[wi].begin(), warp_fetches[wi].end());
-            std::vector<WarmFetch>().swap(warp_fetches[wi]);
-        }
-    for (std::vector<WarmFetch>& w : result.warm)
-        if (w.size() > window) w.erase(w.begin(), w.end() - long(window));
     return result;
+}
+
+// Only the last `window` fetches before a simulated cluster warm the caches: the warps it feeds
+// are traced backwards (warps are independent), recording whole warps until `window` fetches are
+// there. Simulated clusters are shared out among the threads; each result lands in its own slot.
+std::vector<std::vector<WarmFetch>> warming_fetches(const FrameWarps& frame, const SamplingOptions& opt, const SampleDesign& design) {
+    const auto& sim = design.simulated();
+    std::vector<std::vector<WarmFetch>> warm(sim.size());
+    if (opt.warm_window == 0 || sim.empty()) return warm;
+    const unsigned threads = unsigned(std::max<size_t>(1, std::min<size_t>(opt.threads, sim.size())));
+    on_threads(threads, opt, [&](unsigned t, Workload& workload) {
+        WarpTracer tracer{frame, opt, {}, {}, {}, {}};
+        std::vector<uint32_t> ignored;
+        std::vector<std::vector<WarmFetch>> by_warp;  // the recorded warps, last first
+        for (size_t i = t; i < sim.size(); i += threads) {
+            const uint64_t from = i ? design.end_warp(i - 1) : 0;
+            size_t recorded = 0;
+            by_warp.clear();
+            for (uint64_t w = design.first_warp(i); w-- > from && recorded < opt.warm_window;) {
+                by_warp.emplace_back();
+                ignored.clear();
+                tracer.trace(workload, size_t(w), ignored, &by_warp.back());
+                recorded += by_warp.back().size();
+            }
+            for (auto it = by_warp.rbegin(); it != by_warp.rend(); ++it) warm[i].insert(warm[i].end(), it->begin(), it->end());
+            if (warm[i].size() > opt.warm_window) warm[i].erase(warm[i].begin(), warm[i].end() - long(opt.warm_window));
+        }
+    });
+    return warm;
 }
 
 void SampleEstimator::set_prepass(PrepassResult&& p) {
@@ -169,7 +222,9 @@ void SampleEstimator::set_prepass(PrepassResult&& p) {
 }
 
 void SampleEstimator::on_trace_done(WarpRecord& w, double residence) {
-    if (w.traces_done < w.trace_nodes.size()) {  // pre-pass: fit residence against the critical path
+    // Pre-pass: fit residence against the critical path, on the drawn clusters (the first wave
+    // starts on cold caches, unlike the rest of the frame).
+    if (w.stratum != SampledCluster::kCertain && w.traces_done < w.trace_nodes.size()) {
         const double x = w.trace_nodes[w.traces_done];
         if (x > 0) {
             fit_n_ += 1;
@@ -180,6 +235,7 @@ void SampleEstimator::on_trace_done(WarpRecord& w, double residence) {
         }
     }
     ++w.traces_done;
+    w.residences.push_back(residence);
     w.work += residence;
     work_done_ += residence;
 }
@@ -195,21 +251,33 @@ SampleEstimate SampleEstimator::estimate(const std::vector<WarpRecord>& warps, u
     SampleEstimate e;
     e.warps_total = warps_total;
     e.warps_simulated = warps.size();
-    // Per stratum (one cluster each, weighted by the stratum's size): work and critical-path nodes.
-    std::vector<double> work, nodes;
-    double weighted_nodes = 0;
-    for (const WarpRecord& w : warps) {
-        e.work_simulated += w.work;
-        e.work_estimate_stratified += w.weight * w.work;
-        weighted_nodes += w.weight * w.critical_nodes;
-        if (work.size() <= w.stratum) work.resize(w.stratum + 1, 0.0), nodes.resize(w.stratum + 1, 0.0);
-        work[w.stratum] += w.weight * w.work;
-        nodes[w.stratum] += w.weight * w.critical_nodes;
-    }
-    const bool ratio = sampled && weighted_nodes > 0;  // the pre-pass ran and the sample visited nodes
     e.critical_nodes_total = critical_nodes_total_;
     e.prepass_threads = prepass_threads_;
-    const double r = ratio ? e.work_estimate_stratified / weighted_nodes : 0.0;  // work per critical-path node
+    // Per drawn stratum (one cluster each, weighted by the stratum's size): work, critical-path
+    // nodes and the weight. The first wave is known exactly, the empty clusters do no RT work.
+    std::vector<double> work, nodes, weight;
+    double certain_work = 0, certain_nodes = 0, drawn_work = 0, drawn_nodes = 0;
+    for (const WarpRecord& w : warps) {
+        e.work_simulated += w.work;
+        if (w.stratum == SampledCluster::kCertain) {
+            certain_work += w.work;
+            certain_nodes += w.critical_nodes;
+            continue;
+        }
+        if (work.size() <= w.stratum) work.resize(w.stratum + 1, 0.0), nodes.resize(w.stratum + 1, 0.0), weight.resize(w.stratum + 1, 0.0);
+        work[w.stratum] += w.weight * w.work;
+        nodes[w.stratum] += w.weight * w.critical_nodes;
+        weight[w.stratum] = w.weight;
+        drawn_work += w.weight * w.work;
+        drawn_nodes += w.weight * w.critical_nodes;
+    }
+    // The stratified estimate of the frame's work: without the pre-pass the drawn clusters'
+    // weighted work; with it the ratio estimate, work per critical-path node of the drawn
+    // clusters times the frame's critical-path nodes outside the first wave.
+    const bool ratio = sampled && drawn_nodes > 0 && critical_nodes_total_ > 0;
+    const double r = ratio ? drawn_work / drawn_nodes : 0.0;  // work per critical-path node
+    const double rest_nodes = std::max(0.0, critical_nodes_total_ - certain_nodes);
+    e.work_estimate_stratified = certain_work + (ratio ? r * rest_nodes : drawn_work);
     e.work_estimate = e.work_estimate_stratified;
     const double det = fit_n_ * fit_xx_ - fit_x_ * fit_x_;
     if (ratio && fit_n_ >= 2 && det > 0) {
@@ -217,47 +285,56 @@ SampleEstimate SampleEstimator::estimate(const std::vector<WarpRecord>& warps, u
         e.fit_traces = uint64_t(fit_n_);
         e.fit_b = (fit_n_ * fit_xy_ - fit_x_ * fit_y_) / det;
         e.fit_a = (fit_y_ - e.fit_b * fit_x_) / fit_n_;
-        // A trace whose rays all miss the root box never occupies a slot.
+        // The schedule model is fed with the fitted durations, but for the first wave's traces,
+        // which ran on the frame's cold caches, with their own residences. A trace whose rays all
+        // miss the root box never occupies a slot.
         auto duration = [&](uint32_t n) { return n == 0 ? 0.0 : std::max(0.0, e.fit_a + e.fit_b * double(n)); };
-        auto durations = [&](const std::vector<uint32_t>& n) {
+        std::vector<const WarpRecord*> certain(frame_traces_.size(), nullptr);
+        for (const WarpRecord& w : warps)
+            if (w.stratum == SampledCluster::kCertain && w.frame_warp < certain.size()) certain[w.frame_warp] = &w;
+        auto durations = [&](size_t fw) {
+            const std::vector<uint32_t>& n = frame_traces_[fw];
             std::vector<double> d(n.size());
-            for (size_t k = 0; k < n.size(); ++k) d[k] = duration(n[k]);
+            for (size_t k = 0; k < n.size(); ++k)
+                d[k] = certain[fw] && k < certain[fw]->residences.size() ? certain[fw]->residences[k] : duration(n[k]);
             return d;
         };
         std::vector<std::vector<double>> frame, sample;
         e.work_estimate = 0;
-        for (const auto& t : frame_traces_) {
-            frame.push_back(durations(t));
+        for (size_t fw = 0; fw < frame_traces_.size(); ++fw) {
+            frame.push_back(durations(fw));
             for (double d : frame.back()) e.work_estimate += d;
         }
-        for (const WarpRecord& w : warps) sample.push_back(durations(w.trace_nodes));
+        for (const WarpRecord& w : warps) sample.push_back(durations(w.frame_warp));
         e.model_frame = schedule_cycles(frame, shape_);
         e.model_sample = schedule_cycles(sample, shape_);
     }
-    // The work's variance: of the strata's weighted work, or for the ratio estimate of their
-    // residuals from the ratio line.
+    // The stratified work's variance: of the strata's weighted work, or for the ratio estimate of
+    // their residuals from the ratio line, scaled to the frame's nodes outside the first wave.
     std::vector<double> residual(work.size());
     for (size_t h = 0; h < work.size(); ++h) residual[h] = work[h] - r * nodes[h];
-    double v = collapsed_pairs_variance(residual);
-    if (ratio) v *= (critical_nodes_total_ / weighted_nodes) * (critical_nodes_total_ / weighted_nodes);
+    double v = collapsed_pairs_variance(residual, weight);
+    if (ratio) v *= (rest_nodes / drawn_nodes) * (rest_nodes / drawn_nodes);
     e.relative_se = sampled && e.work_estimate > 0 ? std::sqrt(v) / e.work_estimate : 0.0;
     e.variance_pairs = uint32_t(work.size() / 2);
     // Shares of node fetches: ratio estimates over the strata, residual variance by collapsed pairs.
     const double t = t95(e.variance_pairs);
     auto share = [&](double WarpRecord::*part) {
         std::vector<double> num(work.size(), 0.0), den(work.size(), 0.0);
+        double sn = 0, sd = 0;
         for (const WarpRecord& w : warps) {
+            sn += w.weight * (w.*part);
+            sd += w.weight * w.nodes;
+            if (w.stratum == SampledCluster::kCertain) continue;
             num[w.stratum] += w.weight * (w.*part);
             den[w.stratum] += w.weight * w.nodes;
         }
-        double sn = 0, sd = 0;
-        for (size_t h = 0; h < num.size(); ++h) sn += num[h], sd += den[h];
         SampleEstimate::Share s;
         if (sd <= 0) return s;
         s.estimate = sn / sd;
         std::vector<double> res(num.size());
         for (size_t h = 0; h < num.size(); ++h) res[h] = num[h] - s.estimate * den[h];
-        const double half = sampled ? t * std::sqrt(collapsed_pairs_variance(res)) / sd : 0.0;
+        const double half = sampled ? t * std::sqrt(collapsed_pairs_variance(res, weight)) / sd : 0.0;
         s.lo = std::max(0.0, s.estimate - half);
         s.hi = std::min(1.0, s.estimate + half);
         return s;
@@ -272,7 +349,7 @@ SampleEstimate SampleEstimator::estimate(const std::vector<WarpRecord>& warps, u
 double SampleEstimate::relative_half_width(double cycles_simulated) const {
     const double t = t95(variance_pairs);
     const double model = 1.96 * std::sqrt(2.0) * model_misfit(cycles_simulated);
-    return std::hypot(t * relative_se, model);
+    return std::sqrt(t * relative_se * t * relative_se + model * model + 1.96 * extrapolation_gap() * 1.96 * extrapolation_gap());
 }
 
 }  // namespace rtu

@@ -19,21 +19,26 @@
 
 namespace rtu {
 
-// rate < 1: clusters of `cluster` consecutive shader warps (groups of warp_size neighbouring pixel
-// samples) are split into round(clusters x rate) equal strata in frame order; one cluster per
-// stratum, chosen by `seed`, is simulated, and the estimator extrapolates to the whole frame.
+// rate < 1 (docs/sampling.md): the frame's shader warps (groups of warp_size neighbouring pixel
+// samples) are cut into clusters of `capacity` consecutive warps (as many as the GPU holds, so
+// that the warps running together are neighbours, as in the full frame; smaller clusters drew
+// more strata but ran 5-80 % off, docs/sampling.md). The first wave (the clusters
+// holding the first `capacity` warps, which start together on cold caches) is always simulated;
+// clusters whose traces read no BVH node are never simulated (their RT work is known: none); the
+// rest are sorted by the functional pre-pass's work and split into equal strata, one cluster each
+// drawn by `seed`, and the estimator extrapolates to the whole frame.
 struct SamplingOptions {
     double rate = 1.0;
     uint64_t seed = 1;
-    // false: a sample too small for a 95 % interval (fewer than 2 strata) is refused with an
-    // InputError naming the smallest rate that works; true (--sample-unchecked): it runs and
-    // reports no interval.
+    // false: a sample of fewer than kMinStrata drawn strata (and not every cluster) is refused with
+    // an InputError naming the smallest rate and frame that work; true (--sample-unchecked): it
+    // runs and reports no interval.
     bool unchecked = false;
-    uint32_t cluster = 1;
-    uint32_t capacity = 32;  // shader warps the GPU keeps in flight at once (for the estimator)
+    uint32_t capacity = 32;  // shader warps the GPU keeps in flight at once (SMs x warp-buffer slots)
     // Functional pre-pass of the schedule estimator: a maker of fresh instances of the run's
     // workload (one per pre-pass thread) and a functional tracer that may be called from several
-    // threads at once. Without them the estimator is the plain stratified one.
+    // threads at once. Without them the clusters are stratified by position and the estimator is
+    // the plain stratified one.
     std::function<std::unique_ptr<Workload>()> make_workload;
     std::function<TraceResult(const Ray&, std::vector<StackEntry>* fetched)> trace;
     unsigned threads = 1;  // pre-pass threads (results do not depend on the number)
@@ -43,6 +48,10 @@ struct SamplingOptions {
     bool progress = false;  // report the pre-pass's progress on stderr every 2 s
 };
 
+// Drawn strata a sample needs for its interval (collapsed pairs: 5 pairs, Student's t with 5
+// degrees of freedom, 2.57).
+constexpr uint64_t kMinStrata = 10;
+
 // A node fetch of the functional pre-pass, replayed into an SM's L1 and the L2 (functional
 // warming) before a simulated cluster starts; `sm` is the SM that made it in the full frame.
 struct WarmFetch {
@@ -51,25 +60,40 @@ struct WarmFetch {
     uint32_t bytes;
 };
 
-// The stratified cluster sample of a frame of `warps` shader warps.
+// One simulated cluster of a sample.
+struct SampledCluster {
+    uint64_t cluster;  // its index in the frame
+    uint32_t stratum;  // the drawn stratum it stands for; kCertain for the first wave
+    double weight;     // clusters of the frame it stands for
+    static constexpr uint32_t kCertain = ~0u;
+};
+
+// The sample of a frame of `warps` shader warps in clusters of `cluster`. `work`: per cluster,
+// the pre-pass's critical-path node reads (empty: no pre-pass; strata by position and no
+// cluster is known to be empty).
 class SampleDesign {
 public:
-    SampleDesign(uint64_t warps, uint64_t cluster, double rate, uint64_t seed);
-    uint64_t strata() const { return picks_.size(); }
-    // Clusters in stratum h: the weight of its simulated cluster.
-    double weight(uint64_t h) const { return double(hi(h) - lo(h)); }
-    // The warps [first, end) of stratum h's simulated cluster.
-    uint64_t first_warp(uint64_t h) const { return picks_[h] * cluster_; }
-    uint64_t end_warp(uint64_t h) const;
-    // Per warp of the frame, the stratum whose cluster its fetches warm (the warps between the
-    // previous stratum's cluster and this one's); ~0 for simulated warps and those after the last.
+    SampleDesign(uint64_t warps, uint64_t cluster, uint64_t capacity, double rate, uint64_t seed, const std::vector<double>& work = {});
+    // Drawn strata (the first wave and the empty clusters are not strata).
+    uint64_t strata() const { return strata_; }
+    uint64_t clusters() const { return clusters_; }
+    uint64_t empty_clusters() const { return empty_; }
+    uint64_t first_wave_clusters() const { return certain_; }
+    // Strata this design draws before the pre-pass is known (as above, no cluster taken as empty).
+    static uint64_t planned_strata(uint64_t warps, uint64_t cluster, uint64_t capacity, double rate);
+    // Every cluster is simulated or known to be empty: the sample is the frame.
+    bool census() const { return strata_ == candidates_; }
+    // The simulated clusters in frame order.
+    const std::vector<SampledCluster>& simulated() const { return sim_; }
+    uint64_t first_warp(size_t i) const { return sim_[i].cluster * cluster_; }
+    uint64_t end_warp(size_t i) const { return std::min(warps_, (sim_[i].cluster + 1) * cluster_); }
+    // Per warp of the frame, the simulated cluster (index into simulated()) whose start its
+    // fetches warm: the warps between the previous simulated cluster and it; ~0 otherwise.
     std::vector<uint32_t> feeds() const;
 
 private:
-    uint64_t lo(uint64_t h) const { return h * clusters_ / picks_.size(); }
-    uint64_t hi(uint64_t h) const { return (h + 1) * clusters_ / picks_.size(); }
-    uint64_t warps_, cluster_, clusters_;
-    std::vector<uint64_t> picks_;  // the simulated cluster of each stratum
+    uint64_t warps_, cluster_, clusters_, certain_ = 0, empty_ = 0, candidates_ = 0, strata_ = 0;
+    std::vector<SampledCluster> sim_;
 };
 
 // The frame's shader warps as the pre-pass reads them (the workload driver implements it).
@@ -82,43 +106,48 @@ public:
     virtual void threads(size_t warp, std::vector<uint32_t>& paths, std::vector<RayQueue>& first) const = 0;
 };
 
+// The functional pre-pass traces every path of the frame as the timing run will trace it (the
+// same rays, because a workload's random numbers depend only on path and depth), warp by warp and
+// trace by trace, and returns per warp of the frame, per trace, the most nodes one of its rays
+// visits (the trace's critical path). Needs opt.make_workload and opt.trace.
 struct PrepassResult {
-    std::vector<std::vector<uint32_t>> trace_nodes;  // per warp of the frame: per trace, the most nodes one of its rays visits
+    std::vector<std::vector<uint32_t>> trace_nodes;  // per warp of the frame: per trace, its critical path
     double critical_nodes_total = 0;                 // their sum over the frame
     unsigned threads = 0;
-    std::vector<std::vector<WarmFetch>> warm;        // per stratum: the fetches that warm the caches before its cluster
 };
+PrepassResult run_prepass(const FrameWarps& frame, const SamplingOptions& opt);
 
-// Traces every path of the frame functionally, as the timing run will trace it (the same rays,
-// because a workload's random numbers depend only on path and depth), warp by warp and trace by
-// trace. `feeds` and `strata` as SampleDesign's; the last `opt.warm_window` fetches per stratum are
-// kept. Needs opt.make_workload and opt.trace.
-PrepassResult run_prepass(const FrameWarps& frame, const SamplingOptions& opt, const std::vector<uint32_t>& feeds, size_t strata);
+// Per simulated cluster of `design`, the last opt.warm_window node fetches of the warps it feeds
+// (the clusters skipped before it), in frame order: traced again, backwards from the cluster,
+// until the window is full.
+std::vector<std::vector<WarmFetch>> warming_fetches(const FrameWarps& frame, const SamplingOptions& opt, const SampleDesign& design);
 
 // What the estimator knows of one simulated shader warp.
 struct WarpRecord {
     double weight = 1.0;   // warps of the frame this one stands for (its stratum's size)
-    uint32_t stratum = 0;  // sampled: the stratum it was drawn for
+    uint32_t stratum = 0;  // sampled: the stratum it was drawn for (SampledCluster::kCertain: the first wave)
+    uint64_t frame_warp = 0;  // its index in the frame
     double work = 0;       // cycles its traces spent in an RT unit so far
     double nodes = 0, l1_miss_nodes = 0, dram_nodes = 0;  // over its retired rays
     std::vector<uint32_t> trace_nodes;  // pre-pass: per trace, the most nodes one of its rays visits
     double critical_nodes = 0;          // their sum
+    std::vector<double> residences;     // per trace simulated so far, its residence
     uint32_t traces_done = 0;
 };
 
 // A sampled run's estimate of the frame. A warp's work is the cycles its traces spent in an RT
 // unit's warp buffer. With the functional pre-pass (the schedule estimator):
 // - each trace's residence is fitted as a + b x its critical path (the most nodes one of its
-//   rays visits) over the simulated traces, and the frame's work is the fit summed over all
-//   of the frame's traces;
-// - cycles = simulated cycles x (schedule model of the frame / schedule model of the sample),
-//   both models fed with the fitted durations (model/trace_schedule.h).
+//   rays visits) over the drawn clusters' traces;
+// - cycles = simulated cycles x (schedule model of the frame / schedule model of the sample)
+//   (model/trace_schedule.h), both models fed with the simulated traces' own residences and,
+//   for the frame's other traces, the fit; the frame's work is the frame model's durations summed.
 // Without it, the work is the stratified estimate and cycles come from the full-GPU throughput
 // (cycles_estimate).
 struct SampleEstimate {
     uint64_t warps_total = 0, warps_simulated = 0;
     double work_simulated = 0, work_estimate = 0;  // warp-buffer residence cycles
-    double work_estimate_stratified = 0;           // without the pre-pass
+    double work_estimate_stratified = 0;           // stratified (ratio to critical-path nodes with the pre-pass)
     bool schedule = false;                         // the schedule estimator is in use
     double critical_nodes_total = 0;               // of the frame (pre-pass)
     double fit_a = 0, fit_b = 0;                   // residence = a + b x critical-path nodes
@@ -127,6 +156,10 @@ struct SampleEstimate {
     double model_frame = 0, model_sample = 0;      // schedule-model cycles
     double relative_se = 0;  // standard error of work_estimate / work_estimate
     uint32_t variance_pairs = 0;  // collapsed stratum pairs behind relative_se (degrees of freedom)
+    bool has_interval = true;     // false: too few strata (--sample-unchecked), no interval
+    // The design (set by the workload driver): warps per cluster, drawn strata, clusters of the
+    // first wave (simulated whole) and empty clusters (no node read; not simulated).
+    uint64_t cluster_warps = 0, strata = 0, first_wave_clusters = 0, empty_clusters = 0;
     // The frame's share of node fetches that missed L1 / went to DRAM: the stratified ratio
     // estimate and its 95 % interval (collapsed strata, Student's t).
     struct Share {
@@ -147,14 +180,20 @@ struct SampleEstimate {
         if (schedule && model_sample > 0) return cycles_simulated * model_frame / model_sample;
         return cycles_simulated + (work_estimate - work_simulated) / throughput(cycles_simulated);
     }
+    // How far the fit's work (summed over the frame) is from the stratified ratio estimate, which
+    // the design makes unbiased: a measured bound for the extrapolation's own error.
+    double extrapolation_gap() const {
+        return schedule && work_estimate_stratified > 0 ? std::fabs(work_estimate / work_estimate_stratified - 1.0) : 0.0;
+    }
     // How far the schedule model missed the simulated sample: |simulated / model - 1|.
     double model_misfit(double cycles_simulated) const {
         return schedule && model_sample > 0 ? std::fabs(cycles_simulated / model_sample - 1.0) : 0.0;
     }
-    // Half-width of the 95 % interval of cycles_estimate, relative to it (docs/sampling.md):
-    // the work's sampling error with Student's t for the collapsed pairs, and, with the
-    // schedule estimator, the model's error, taken to be as large on the frame as on the
-    // sample and independent of it (1.96 x sqrt(2) x the misfit).
+    // Half-width of the 95 % interval of cycles_estimate, relative to it (docs/sampling.md),
+    // three parts in quadrature: the work's sampling error with Student's t for the collapsed
+    // pairs; with the schedule estimator the model's error, taken to be as large on the frame as
+    // on the sample and independent of it (1.96 x sqrt(2) x the misfit), and the extrapolation
+    // gap (1.96 x it).
     double relative_half_width(double cycles_simulated) const;
 };
 

@@ -18,20 +18,24 @@ std::string percent(double x) {
     return b;
 }
 
-// A sample of fewer than 2 strata has no pair to estimate its variance from, and its interval
-// would shrink to the schedule model's term alone: refuse it, naming what works.
-void check_sample_size(const SampleDesign& d, uint64_t warps, const SamplingOptions& o) {
-    if (d.strata() >= 2 || o.unchecked) return;
-    const uint64_t cluster = std::max<uint32_t>(1, o.cluster), clusters = (warps + cluster - 1) / cluster;
-    std::string msg = "--sample " + percent(o.rate) + " % draws " + std::to_string(d.strata()) + " cluster of " +
-                      std::to_string(cluster) + " shader warps from this frame's " + std::to_string(clusters) + " (" +
-                      std::to_string(warps) + " warps); a 95 % interval needs at least 2 strata: ";
-    if (clusters >= 2) {
-        // The smallest rate that rounds to 2 strata: 1.5 / clusters, rounded up to a permille.
-        const double rate = std::ceil(1000.0 * 1.5 / double(clusters)) / 1000.0;
-        msg += "use --sample " + percent(rate) + " % or more (--sample " + std::to_string(rate).substr(0, 5) + "), ";
-    }
-    msg += "a frame of at least " + std::to_string(uint64_t(std::ceil(1.5 / std::max(o.rate, 1e-9))) * cluster) +
+// A sample of fewer than kMinStrata drawn strata has too few pairs to estimate its variance
+// from (and its interval would shrink to the schedule model's term alone): refuse it, naming the
+// smallest rate and frame that work. A sample that simulates every cluster needs no interval.
+void check_sample_size(uint64_t warps, const SamplingOptions& o) {
+    const uint64_t cluster = std::max<uint32_t>(1, o.capacity);
+    const uint64_t clusters = (warps + cluster - 1) / cluster, certain = std::min<uint64_t>(clusters, (o.capacity + cluster - 1) / cluster);
+    const uint64_t strata = SampleDesign::planned_strata(warps, cluster, o.capacity, o.rate);
+    if (strata >= kMinStrata || strata == clusters - certain || o.unchecked) return;
+    // n strata need round(clusters x rate) >= 1 + n (the first wave is one cluster, simulated
+    // whole); the 0.5 is llround's.
+    const double need = double(1 + kMinStrata) - 0.5;
+    const double rate = std::ceil(1000.0 * need / double(clusters)) / 1000.0;
+    std::string msg = "--sample " + percent(o.rate) + " % of this frame's " + std::to_string(clusters) + " clusters of " +
+                      std::to_string(cluster) + " shader warps (" + std::to_string(warps) + " warps) draws " + std::to_string(strata) +
+                      " strata beside the first wave (simulated whole); a 95 % interval needs at least " + std::to_string(kMinStrata) +
+                      " strata: ";
+    if (rate < 1.0) msg += "use --sample " + percent(rate) + " % or more (--sample " + std::to_string(rate).substr(0, 5) + "), ";
+    msg += "a frame of at least " + std::to_string(uint64_t(std::ceil(need / std::max(o.rate, 1e-9))) * cluster) +
            " shader warps at this rate, or --sample-unchecked for an estimate without an interval";
     throw InputError(msg);
 }
@@ -86,44 +90,52 @@ WorkloadDriver::WorkloadDriver(Workload& workload, uint32_t sms, uint32_t warp_s
     records_of_warps_.assign(warps_.size(), WarpRecord{});
     if (sampling.rate < 1.0 && !warps_.empty()) {
         sampled_ = true;
-        const SampleDesign design(warps_.size(), sampling.cluster, sampling.rate, sampling.seed);
-        check_sample_size(design, warps_.size(), sampling);
-        // The pre-pass also records, for each simulated cluster, the last node fetches of the
-        // clusters skipped before it, to warm the caches with when it starts.
+        check_sample_size(warps_.size(), sampling);
+        const uint64_t cluster = std::max<uint32_t>(1, sampling.capacity);
+        // The pre-pass's critical paths per warp, and per cluster their sum: the work the
+        // clusters are stratified by.
         std::vector<std::vector<uint32_t>> trace_nodes;
-        double frame_nodes = 0;  // the pre-pass's critical-path node reads over the frame
-        if (sampling.make_workload && sampling.trace) {
-            PrepassResult p = run_prepass(Frame(warps_), sampling, design.feeds(), design.strata());
-            frame_nodes = p.critical_nodes_total;
+        std::vector<double> cluster_work;
+        const bool prepass = sampling.make_workload && sampling.trace;
+        if (prepass) {
+            PrepassResult p = run_prepass(Frame(warps_), sampling);
             trace_nodes = p.trace_nodes;
-            warm_ = std::move(p.warm);
+            cluster_work.assign((warps_.size() + cluster - 1) / cluster, 0.0);
+            for (size_t w = 0; w < trace_nodes.size(); ++w)
+                for (uint32_t n : trace_nodes[w]) cluster_work[w / cluster] += n;
             estimator_.set_prepass(std::move(p));
         }
+        const SampleDesign design(warps_.size(), cluster, sampling.capacity, sampling.rate, sampling.seed, cluster_work);
+        has_interval_ = design.strata() >= kMinStrata || design.census();
+        // Never an estimate of 0 (or of the first wave alone) for a frame with work beyond it: a
+        // draw of no stratum cannot extrapolate, checked or not.
+        if (design.strata() == 0 && !design.census())
+            throw InputError("--sample " + percent(sampling.rate) + " % of this frame's " + std::to_string(design.clusters()) +
+                             " clusters of " + std::to_string(cluster) + " shader warps draws no cluster beside the first wave, so " +
+                             "nothing stands for the rest of the frame's work; sample more (--sample " +
+                             std::to_string(std::ceil(1000.0 * 1.5 / double(design.clusters())) / 1000.0).substr(0, 5) + " or more)");
+        design_ = {cluster, design.strata(), design.first_wave_clusters(), design.empty_clusters()};
+        // The caches are warmed, when a simulated cluster starts, with the last node fetches of
+        // the clusters skipped before it.
+        if (prepass) warm_ = warming_fetches(Frame(warps_), sampling, design);
         std::vector<ShaderWarp> kept;
         std::vector<WarpRecord> kept_records;
-        for (uint64_t h = 0; h < design.strata(); ++h)
-            for (uint64_t w = design.first_warp(h); w < design.end_warp(h); ++w) {
+        for (size_t i = 0; i < design.simulated().size(); ++i)
+            for (uint64_t w = design.first_warp(i); w < design.end_warp(i); ++w) {
                 ShaderWarp sw = std::move(warps_[w]);
                 sw.sm = uint32_t(kept.size() % sms);
+                sw.cluster = uint32_t(i);
                 kept.push_back(std::move(sw));
                 WarpRecord rec;
-                rec.weight = design.weight(h);
-                rec.stratum = uint32_t(h);
+                rec.weight = design.simulated()[i].weight;
+                rec.stratum = design.simulated()[i].stratum;
+                rec.frame_warp = w;
                 if (!trace_nodes.empty()) {
                     rec.trace_nodes = std::move(trace_nodes[w]);
                     for (uint32_t n : rec.trace_nodes) rec.critical_nodes += n;
                 }
                 kept_records.push_back(std::move(rec));
             }
-        // Never an estimate of 0 cycles for a frame with work: if the drawn clusters read no
-        // node while the frame reads some, say so before simulating.
-        double drawn = 0;
-        for (const WarpRecord& rec : kept_records) drawn += rec.critical_nodes;
-        if (drawn == 0 && frame_nodes > 0)
-            throw InputError("--sample " + percent(sampling.rate) + " %: the " + std::to_string(design.strata()) +
-                             " drawn cluster(s) read no BVH node while the frame reads " + std::to_string(uint64_t(frame_nodes)) +
-                             " along its traces' longest rays, so the estimate would be 0 cycles; draw others "
-                             "(--sample-seed) or sample more (--sample)");
         warps_ = std::move(kept);
         records_of_warps_ = std::move(kept_records);
         for (uint32_t i = 0; i < warps_.size(); ++i)
@@ -134,7 +146,15 @@ WorkloadDriver::WorkloadDriver(Workload& workload, uint32_t sms, uint32_t warp_s
     live_warps_ = warps_.size();
 }
 
-WorkloadDriver::Estimate WorkloadDriver::estimate() const { return estimator_.estimate(records_of_warps_, warps_total_, sampled_); }
+WorkloadDriver::Estimate WorkloadDriver::estimate() const {
+    Estimate e = estimator_.estimate(records_of_warps_, warps_total_, sampled_);
+    e.has_interval = has_interval_;
+    e.cluster_warps = design_[0];
+    e.strata = design_[1];
+    e.first_wave_clusters = design_[2];
+    e.empty_clusters = design_[3];
+    return e;
+}
 
 void WorkloadDriver::enqueue(uint32_t warp, uint64_t ready_at) { ready_[warps_[warp].sm].insert({ready_at, warp}); }
 
@@ -146,10 +166,9 @@ std::optional<std::vector<WarpRay>> WorkloadDriver::next_trace(uint32_t sm, uint
         const uint32_t wi = q.begin()->second;
         q.erase(q.begin());
         ShaderWarp& sw = warps_[wi];
-        const uint32_t stratum = records_of_warps_[wi].stratum;
-        if (stratum < warm_.size() && !warm_[stratum].empty()) {  // the first trace of a simulated cluster
-            if (on_warm) on_warm(warm_[stratum]);
-            std::vector<WarmFetch>().swap(warm_[stratum]);
+        if (sw.cluster < warm_.size() && !warm_[sw.cluster].empty()) {  // the first trace of a simulated cluster
+            if (on_warm) on_warm(warm_[sw.cluster]);
+            std::vector<WarmFetch>().swap(warm_[sw.cluster]);
         }
         std::vector<WarpRay> rays;
         std::vector<RetiredRay> invalid;

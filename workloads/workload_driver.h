@@ -6,6 +6,7 @@
 // (workloads/sampling.h) keeps only the drawn clusters of warps. Plain C++ with cycle numbers: it
 // serves AT, LT and interval alike.
 #pragma once
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -81,6 +82,7 @@ private:
         std::vector<Thread> threads;
         uint32_t in_flight = 0;  // rays of the current trace not yet retired
         uint64_t issued_at = 0;
+        uint32_t cluster = ~0u;  // sampled: its simulated cluster (index into warm_)
     };
     struct Record {
         TracedRay r;
@@ -99,14 +101,15 @@ private:
     std::vector<std::set<std::pair<uint64_t, uint32_t>>> ready_;  // per SM: (ready cycle, warp)
     std::vector<Record> records_;
     std::vector<uint64_t> free_records_;
-    std::vector<std::vector<WarmFetch>> warm_;  // per stratum, until its cluster starts
+    std::vector<std::vector<WarmFetch>> warm_;  // per simulated cluster, until it starts
     bool keep_rays_ = true;
     uint64_t issued_ = 0;
     RaySummary summary_;
     uint64_t live_warps_ = 0, last_progress_ = 0;
     size_t launched_ = 0;  // warps given a place on an SM so far (in frame order)
     uint64_t warps_total_ = 0;
-    bool sampled_ = false;
+    bool sampled_ = false, has_interval_ = true;
+    std::array<uint64_t, 4> design_{};  // cluster size, strata, first-wave clusters, empty clusters
     SampleEstimator estimator_;
 };
 

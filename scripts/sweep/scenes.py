@@ -16,11 +16,12 @@ SCENES = {
 }
 
 
-def arguments(description, extra=None):
-    """MANIFEST [--size N] [--spp N] [--scenes a,b,...] plus `extra(parser)` options; checks scenes."""
+def arguments(description, extra=None, size=128):
+    """MANIFEST [--size N] [--spp N] [--scenes a,b,...] plus `extra(parser)` options; checks scenes.
+    `size`: the default frame size."""
     ap = argparse.ArgumentParser(description=description)
     ap.add_argument("manifest")
-    ap.add_argument("--size", type=int, default=128)
+    ap.add_argument("--size", type=int, default=size)
     ap.add_argument("--spp", type=int, default=2)
     ap.add_argument("--scenes", default=",".join(SCENES))
     if extra:

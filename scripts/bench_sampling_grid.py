@@ -1,0 +1,62 @@
+#!/usr/bin/env python3
+"""Sampled AT against full AT on a grid of scenes, frame sizes, presets, rates and sample seeds:
+per cell the error of each draw, whether its 95 % interval covers the full run (! where it does
+not) and its half-width; then coverage, misses of intervals narrower than +-10 %, refusals and
+errors. Resumable (a run with stats is not redone; use a new OUTDIR for a new rtsim).
+Usage: scripts/bench_sampling_grid.py RTSIM OUTDIR [SCENES]   (SCENES: comma-separated, from
+mesh, bunny, cornell, sprng, ship; default mesh,bunny,cornell)
+Environment: SIZES (default 64,128), PRESETS (mobile,desktop), RATES (0.1,0.25), SEEDS (4),
+FID (at), SHARED (../shared/scenes beside the repository). Two runs at a time.
+The grids of docs/sampling.md:
+  SIZES=128,256 RATES=0.25,0.5 scripts/bench_sampling_grid.py build/rtsim out/grid
+  SIZES=256 RATES=0.1,0.25 PRESETS=mobile,paper scripts/bench_sampling_grid.py build/rtsim out/heldout ship,sprng"""
+import json, os, subprocess, sys, itertools, concurrent.futures as cf
+rtsim, out = sys.argv[1], sys.argv[2]
+S = os.environ.get("SHARED", os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "shared", "scenes"))
+SC = {"mesh": f"--scene {S}/bunny/stanford-bunny.obj", "bunny": f"--scene bunny --assets {S}/bunny", "cornell": "--scene cornell",
+      "sprng": f"--scene sprng --assets {S}/sprng", "ship": f"--scene ship --assets {S}/ship"}
+scenes = sys.argv[3].split(",") if len(sys.argv) > 3 else ["mesh", "bunny", "cornell"]
+sizes = [int(x) for x in os.environ.get("SIZES", "64,128").split(",")]
+presets = os.environ.get("PRESETS", "mobile,desktop").split(",")
+rates = os.environ.get("RATES", "0.1,0.25").split(",")
+seeds = range(1, int(os.environ.get("SEEDS", "4")) + 1)
+fid = os.environ.get("FID", "at")
+os.makedirs(out, exist_ok=True)
+def run(key, args):
+    f = f"{out}/{key}.json"
+    if os.path.exists(f): return key, 0, ""
+    p = subprocess.run(f"{rtsim} {args} --stats {f}.tmp -q", shell=True, capture_output=True, text=True)
+    if p.returncode == 0: os.rename(f + ".tmp", f)
+    return key, p.returncode, p.stderr.strip()[-300:]
+jobs = []
+for sc, n, pre in itertools.product(scenes, sizes, presets):
+    base = f"{SC[sc]} --width {n} --height {n} --config {pre} --fidelity {fid}"
+    jobs.append((f"{sc}_{n}_{pre}_full", base))
+    for r, s in itertools.product(rates, seeds):
+        jobs.append((f"{sc}_{n}_{pre}_{r}_{s}", base + f" --sample {r} --sample-seed {s} --threads 1"))
+fails = {}
+with cf.ThreadPoolExecutor(2) as ex:
+    for key, rc, err in ex.map(lambda j: run(*j), jobs):
+        if rc: fails[key] = (rc, err)
+# analyse
+rows = []
+cov = n = narrow_miss = refused = 0; errs = []
+for sc, sz, pre in itertools.product(scenes, sizes, presets):
+    try: truth = json.load(open(f"{out}/{sc}_{sz}_{pre}_full.json"))["cycles"]
+    except Exception: continue
+    for r in rates:
+        line = []; sm = {}
+        for s in seeds:
+            k = f"{sc}_{sz}_{pre}_{r}_{s}"
+            if k in fails: refused += 1; line.append("refused"); continue
+            d = json.load(open(f"{out}/{k}.json")); est = d["cycles"]; sm = d["timing"]["sampling"]; ci = sm["cycles_ci95"]
+            e = est / truth - 1; errs.append(abs(e))
+            if ci is None: line.append(f"{100*e:+.1f}(noci)"); continue
+            n += 1; c = ci[0] <= truth <= ci[1]; cov += c
+            hw = (ci[1] - ci[0]) / 2 / est
+            if not c and hw < 0.10: narrow_miss += 1
+            line.append(f"{100*e:+.1f}{'' if c else '!'}±{100*hw:.0f}")
+        print(f"{sc:7s} {sz:4d} {pre:8s} r={r:5s} strata={sm.get('strata', '?')} rate_sim={sm.get('rate_simulated', 0):.3f}  " + "  ".join(line))
+errs.sort()
+print(f"coverage {cov}/{n} intervals, narrow(<10%) misses {narrow_miss}, refused {refused}, mean|err| {100*sum(errs)/max(1,len(errs)):.2f}%, worst {100*max(errs or [0]):.1f}%")
+for k, v in fails.items(): print("FAIL", k, v[0], v[1][:200])
