@@ -156,7 +156,7 @@ void print_summary(const Args& a, const RunResult& r) {
                 std::cout << " (95 % interval " << std::llround(sm["cycles_ci95"][0].get<double>()) << ".."
                           << std::llround(sm["cycles_ci95"][1].get<double>()) << ")\n";
             else
-                std::cout << " (no interval: fewer than 2 strata, --sample-unchecked)\n";
+                std::cout << " (no interval: fewer than 10 strata, --sample-unchecked)\n";
         }
         std::cout << "cycles " << j["cycles"] << ", L1 miss rate " << t["l1"]["demand"]["miss_rate"].get<double>()
                   << ", L2 miss rate " << t["l2"]["demand"]["miss_rate"].get<double>() << ", DRAM reads "
