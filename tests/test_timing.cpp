@@ -134,6 +134,15 @@ std::vector<RayFileEntry> one_ray_file() {
     rays[0].valid = true;
     return rays;
 }
+// The one ray through the AT platform, with the protocol checker on.
+TimingResult run_one_ray_at(const HwConfig& hw, const BvhImage& image) {
+    const std::vector<RayFileEntry> rays = one_ray_file();
+    auto w = make_ray_file_workload(rays);
+    TimingOptions opt;
+    opt.check_protocol = true;
+    GpuPlatform platform(hw, image, *w, opt);
+    return platform.run();
+}
 WarpRay one_warp_ray() {
     WarpRay r;
     r.ray = ray_through_the_triangle();
@@ -171,12 +180,7 @@ TEST(TimingAT, SingleRayLatencyIsTheHandWorkedSum) {
     const uint64_t expected = leaf_b + hw.lat.leaf_descriptor + hw.lat.ray_triangle + hw.lat.triangle_hit;  // 466
     ASSERT_EQ(expected, 466u);
 
-    const std::vector<RayFileEntry> rays = one_ray_file();
-    auto w = make_ray_file_workload(rays);
-    TimingOptions opt;
-    opt.check_protocol = true;
-    GpuPlatform platform(hw, image, *w, opt);
-    const TimingResult r = platform.run();
+    const TimingResult r = run_one_ray_at(hw, image);
     ASSERT_EQ(r.rays.size(), 1u);
     EXPECT_TRUE(r.rays[0].hit.hit);
     EXPECT_EQ(r.cycles, expected);
@@ -434,12 +438,7 @@ TEST(TimingAT, TwoStepLeafReadIsTheHandWorkedSum) {
     const uint64_t descriptor = 229 + 1 + L2 + rcd + cl + xfer;                    // 438
     const uint64_t leaf = descriptor + hw.lat.leaf_descriptor + 2 + L2 + cl + xfer;  // 632 (row hit)
     ASSERT_EQ(leaf + hw.lat.ray_triangle + hw.lat.triangle_hit, kTwoStepLeafCycles);
-    const std::vector<RayFileEntry> rays = one_ray_file();
-    auto w = make_ray_file_workload(rays);
-    TimingOptions opt;
-    opt.check_protocol = true;
-    GpuPlatform platform(hw, image, *w, opt);
-    const TimingResult r = platform.run();
+    const TimingResult r = run_one_ray_at(hw, image);
     ASSERT_EQ(r.rays.size(), 1u);
     EXPECT_TRUE(r.rays[0].hit.hit);
     EXPECT_EQ(r.cycles, kTwoStepLeafCycles);
