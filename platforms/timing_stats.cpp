@@ -157,17 +157,17 @@ void write_sampling(StatsOut& out, const SampleEstimate& est, double rate, uint6
     // work and more, so a symmetric interval reaching below them only says the estimate is
     // uncertain upward. Fewer than 2 strata (--sample-unchecked) leave no variance: no interval.
     const double c = double(cycles), h = c * est.relative_half_width(double(cycles_simulated));
-    const bool has_interval = est.has_interval;
+    const bool has_interval = est.design.has_interval;
     StatsOut s = out.child("sampling", "a sampled run's estimate of the frame (docs/sampling.md)");
     s.value("rate", rate, "ratio", "the share of the frame asked for (--sample)");
     s.value("rate_simulated", est.warps_total ? double(est.warps_simulated) / double(est.warps_total) : 0.0, "ratio",
             "the share of the frame's warps simulated (whole clusters, one per stratum)");
     s.value("warps_total", est.warps_total, "shader warps", "of the frame");
     s.value("warps_simulated", est.warps_simulated, "shader warps", "simulated");
-    s.value("cluster_warps", est.cluster_warps, "shader warps", "warps per cluster (the GPU's capacity, smaller where that leaves fewer than 30 strata)");
-    s.value("strata", est.strata, "strata", "drawn strata (clusters sorted by the pre-pass's work), one cluster simulated each");
-    s.value("first_wave_clusters", est.first_wave_clusters, "clusters", "the frame's first wave, simulated whole on cold caches");
-    s.value("empty_clusters", est.empty_clusters, "clusters", "clusters that read no BVH node: no RT work, not simulated");
+    s.value("cluster_warps", est.design.cluster_warps, "shader warps", "warps per cluster (as many as the GPU holds at once)");
+    s.value("strata", est.design.strata, "strata", "drawn strata (clusters sorted by the pre-pass's work), one cluster simulated each");
+    s.value("first_wave_clusters", est.design.first_wave_clusters, "clusters", "the frame's first wave, simulated whole on cold caches");
+    s.value("empty_clusters", est.design.empty_clusters, "clusters", "clusters that read no BVH node: no RT work, not simulated");
     s.value("cycles_simulated", cycles_simulated, "cycles", "of the simulated sample");
     s.value("work_simulated_residence_cycles", est.work_simulated, "slot-cycles", "warp-buffer residence of the simulated traces");
     s.value("estimator", est.schedule ? "schedule (functional pre-pass)" : "stratified", "", "which estimator made `cycles`");

@@ -89,8 +89,8 @@ TEST(SectorCacheWarm, ValidatesWithoutStatisticsAndRespectsPending) {
     EXPECT_EQ(c.stats(ReqKind::Demand).evictions + c.stats(ReqKind::Prefetch).evictions, 3u);  // the reads' (0x100, 0x200, line 0), not the warming's
 }
 
-// The sample design (workloads/sampling.h) by hand: 10 clusters of 4 warps, capacity 4 (the
-// first wave is cluster 0), clusters 3 and 7 empty, a half of the frame: round(10 x 0.5) = 5
+// The sample design (workloads/sampling.h) by hand: 10 clusters of 4 warps (the first wave is
+// cluster 0), clusters 3 and 7 empty, a half of the frame: round(10 x 0.5) = 5
 // clusters simulated, the first wave and 4 strata over the 7 other non-empty clusters sorted by
 // work. Every stratum's weight is its size, the weights and the first wave and the empty
 // clusters account for every cluster, no empty cluster is drawn, and each draw lies in its
@@ -100,7 +100,7 @@ TEST(SampleDesign, FirstWaveEmptyClustersAndStrataByWork) {
     // Non-empty clusters after the first wave, by work: 2(1) 8(2) 5(3) 9(6) 4(7) 6(8) 1(9).
     const std::vector<std::vector<uint64_t>> strata_of = {{2}, {8, 5}, {9, 4}, {6, 1}};  // 7 x h / 4 .. 7 x (h + 1) / 4
     for (uint64_t seed = 1; seed <= 20; ++seed) {
-        const rtu::SampleDesign d(40, 4, 4, 0.5, seed, work);
+        const rtu::SampleDesign d(40, 4, 0.5, seed, work);
         EXPECT_EQ(d.clusters(), 10u);
         EXPECT_EQ(d.first_wave_clusters(), 1u);
         EXPECT_EQ(d.empty_clusters(), 2u);
@@ -126,7 +126,7 @@ TEST(SampleDesign, FirstWaveEmptyClustersAndStrataByWork) {
             for (uint64_t w = i ? d.end_warp(i - 1) : 0; w < d.first_warp(i); ++w) EXPECT_EQ(feeds[w], i);
     }
     // Everything asked for: the first wave and every non-empty cluster, a census.
-    const rtu::SampleDesign all(40, 4, 4, 0.95, 1, work);
+    const rtu::SampleDesign all(40, 4, 0.95, 1, work);
     EXPECT_TRUE(all.census());
     EXPECT_EQ(all.simulated().size(), 8u);
 }

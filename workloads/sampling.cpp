@@ -34,22 +34,15 @@ double t95(uint32_t pairs) {
 
 }  // namespace
 
-uint64_t SampleDesign::planned_strata(uint64_t warps, uint64_t cluster, uint64_t capacity, double rate) {
-    cluster = std::max<uint64_t>(1, cluster);
-    const uint64_t clusters = (warps + cluster - 1) / cluster, certain = std::min(clusters, (capacity + cluster - 1) / cluster);
-    const uint64_t total = std::min<uint64_t>(clusters, uint64_t(std::llround(double(clusters) * rate)));
-    return total > certain ? total - certain : 0;
-}
-
 // The first wave: the warps that start together on the frame's cold caches, a startup the full
 // frame pays once; simulated always (weight 1), it is paid once in the sample too, where a drawn
 // cluster would start on warmed caches. Empty clusters: no node read, no RT work, nothing to
 // simulate. The other clusters, sorted by their critical-path node reads, fall into equal strata
 // (neighbouring strata alike, as the collapsed pairs of the variance want), and one cluster per
 // stratum is drawn.
-SampleDesign::SampleDesign(uint64_t warps, uint64_t cluster, uint64_t capacity, double rate, uint64_t seed, const std::vector<double>& work)
+SampleDesign::SampleDesign(uint64_t warps, uint64_t cluster, double rate, uint64_t seed, const std::vector<double>& work)
     : warps_(warps), cluster_(std::max<uint64_t>(1, cluster)), clusters_((warps + cluster_ - 1) / cluster_) {
-    certain_ = std::min(clusters_, (std::max<uint64_t>(1, capacity) + cluster_ - 1) / cluster_);
+    certain_ = std::min<uint64_t>(clusters_, 1);
     std::vector<uint64_t> order;
     for (uint64_t c = certain_; c < clusters_; ++c)
         if (work.empty() || work[c] > 0) order.push_back(c);
@@ -57,7 +50,9 @@ SampleDesign::SampleDesign(uint64_t warps, uint64_t cluster, uint64_t capacity, 
     candidates_ = order.size();
     if (!work.empty())
         std::stable_sort(order.begin(), order.end(), [&](uint64_t a, uint64_t b) { return work[a] < work[b]; });
-    strata_ = std::min<uint64_t>(candidates_, planned_strata(warps, cluster_, capacity, rate));
+    // round(clusters x rate) clusters simulated, the first wave among them.
+    const uint64_t total = std::min<uint64_t>(clusters_, uint64_t(std::llround(double(clusters_) * rate)));
+    strata_ = std::min<uint64_t>(candidates_, total > certain_ ? total - certain_ : 0);
     for (uint64_t c = 0; c < certain_; ++c) sim_.push_back({c, SampledCluster::kCertain, 1.0});
     for (uint64_t h = 0; h < strata_; ++h) {
         const uint64_t lo = h * candidates_ / strata_, hi = (h + 1) * candidates_ / strata_;
@@ -76,16 +71,10 @@ std::vector<uint32_t> SampleDesign::feeds() const {
 
 namespace {
 
-// Runs body(thread, workload) on `threads` threads, each with a fresh instance of the workload
-// (set up as the driver's was; its first rays are in the driver's queues), and rethrows the
+// Runs body(thread, workload) on `threads` threads, each with its own workload, and rethrows the
 // first exception any of them threw.
-void on_threads(unsigned threads, const SamplingOptions& opt, const std::function<void(unsigned, Workload&)>& body) {
-    auto run = [&](unsigned t) {
-        const std::unique_ptr<Workload> fresh = opt.make_workload();
-        std::vector<WorkRay> ignored;
-        fresh->begin(ignored);
-        body(t, *fresh);
-    };
+void on_threads(unsigned threads, PrepassWorkloads& workloads, const std::function<void(unsigned, Workload&)>& body) {
+    auto run = [&](unsigned t) { body(t, workloads.of_thread(t)); };
     std::vector<std::thread> pool;
     std::vector<std::exception_ptr> failed(threads);
     for (unsigned t = 1; t < threads; ++t)
@@ -151,9 +140,21 @@ struct WarpTracer {
 
 }  // namespace
 
+PrepassWorkloads::PrepassWorkloads(const SamplingOptions& opt) : opt_(opt), made_(std::max(1u, opt.threads)) {}
+
+// Set up as the driver's workload was; its first rays are in the driver's queues.
+Workload& PrepassWorkloads::of_thread(unsigned t) {
+    if (!made_.at(t)) {
+        made_[t] = opt_.make_workload();
+        std::vector<WorkRay> ignored;
+        made_[t]->begin(ignored);
+    }
+    return *made_[t];
+}
+
 // Contiguous ranges of warps go to the threads; the results are put together in frame order, so
 // they do not depend on the number of threads.
-PrepassResult run_prepass(const FrameWarps& frame, const SamplingOptions& opt) {
+PrepassResult run_prepass(const FrameWarps& frame, const SamplingOptions& opt, PrepassWorkloads& workloads) {
     const auto t0 = std::chrono::steady_clock::now();
     const size_t n_warps = frame.warps();
     const unsigned threads = unsigned(std::max<size_t>(1, std::min<size_t>(opt.threads, (n_warps + 63) / 64)));
@@ -161,7 +162,7 @@ PrepassResult run_prepass(const FrameWarps& frame, const SamplingOptions& opt) {
     result.threads = threads;
     result.trace_nodes.resize(n_warps);
     std::atomic<size_t> done{0};
-    on_threads(threads, opt, [&](unsigned t, Workload& workload) {
+    on_threads(threads, workloads, [&](unsigned t, Workload& workload) {
         WarpTracer tracer{frame, opt, {}, {}, {}, {}};
         auto last = t0;
         bool printed = false;
@@ -189,12 +190,13 @@ PrepassResult run_prepass(const FrameWarps& frame, const SamplingOptions& opt) {
 // Only the last `window` fetches before a simulated cluster warm the caches: the warps it feeds
 // are traced backwards (warps are independent), recording whole warps until `window` fetches are
 // there. Simulated clusters are shared out among the threads; each result lands in its own slot.
-std::vector<std::vector<WarmFetch>> warming_fetches(const FrameWarps& frame, const SamplingOptions& opt, const SampleDesign& design) {
+std::vector<std::vector<WarmFetch>> warming_fetches(const FrameWarps& frame, const SamplingOptions& opt, const SampleDesign& design,
+                                                    PrepassWorkloads& workloads) {
     const auto& sim = design.simulated();
     std::vector<std::vector<WarmFetch>> warm(sim.size());
     if (opt.warm_window == 0 || sim.empty()) return warm;
     const unsigned threads = unsigned(std::max<size_t>(1, std::min<size_t>(opt.threads, sim.size())));
-    on_threads(threads, opt, [&](unsigned t, Workload& workload) {
+    on_threads(threads, workloads, [&](unsigned t, Workload& workload) {
         WarpTracer tracer{frame, opt, {}, {}, {}, {}};
         std::vector<uint32_t> ignored;
         std::vector<std::vector<WarmFetch>> by_warp;  // the recorded warps, last first

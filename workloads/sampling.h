@@ -22,8 +22,8 @@ namespace rtu {
 // rate < 1 (docs/sampling.md): the frame's shader warps (groups of warp_size neighbouring pixel
 // samples) are cut into clusters of `capacity` consecutive warps (as many as the GPU holds, so
 // that the warps running together are neighbours, as in the full frame; smaller clusters drew
-// more strata but ran 5-80 % off, docs/sampling.md). The first wave (the clusters
-// holding the first `capacity` warps, which start together on cold caches) is always simulated;
+// more strata but ran 5-80 % off, docs/sampling.md). The first wave (the first cluster, whose
+// warps start together on cold caches) is always simulated;
 // clusters whose traces read no BVH node are never simulated (their RT work is known: none); the
 // rest are sorted by the functional pre-pass's work and split into equal strata, one cluster each
 // drawn by `seed`, and the estimator extrapolates to the whole frame.
@@ -68,19 +68,17 @@ struct SampledCluster {
     static constexpr uint32_t kCertain = ~0u;
 };
 
-// The sample of a frame of `warps` shader warps in clusters of `cluster`. `work`: per cluster,
-// the pre-pass's critical-path node reads (empty: no pre-pass; strata by position and no
-// cluster is known to be empty).
+// The sample of a frame of `warps` shader warps in clusters of `cluster`, the first of them the
+// first wave. `work`: per cluster, the pre-pass's critical-path node reads (empty: no pre-pass,
+// or not run yet; strata by position and no cluster is known to be empty).
 class SampleDesign {
 public:
-    SampleDesign(uint64_t warps, uint64_t cluster, uint64_t capacity, double rate, uint64_t seed, const std::vector<double>& work = {});
+    SampleDesign(uint64_t warps, uint64_t cluster, double rate, uint64_t seed, const std::vector<double>& work = {});
     // Drawn strata (the first wave and the empty clusters are not strata).
     uint64_t strata() const { return strata_; }
     uint64_t clusters() const { return clusters_; }
     uint64_t empty_clusters() const { return empty_; }
     uint64_t first_wave_clusters() const { return certain_; }
-    // Strata this design draws before the pre-pass is known (as above, no cluster taken as empty).
-    static uint64_t planned_strata(uint64_t warps, uint64_t cluster, uint64_t capacity, double rate);
     // Every cluster is simulated or known to be empty: the sample is the frame.
     bool census() const { return strata_ == candidates_; }
     // The simulated clusters in frame order.
@@ -106,6 +104,18 @@ public:
     virtual void threads(size_t warp, std::vector<uint32_t>& paths, std::vector<RayQueue>& first) const = 0;
 };
 
+// Fresh instances of the run's workload (opt.make_workload), one per pre-pass thread, made on the
+// thread's first use and kept for the warming pass. Each thread touches only its own.
+class PrepassWorkloads {
+public:
+    explicit PrepassWorkloads(const SamplingOptions& opt);
+    Workload& of_thread(unsigned t);
+
+private:
+    const SamplingOptions& opt_;
+    std::vector<std::unique_ptr<Workload>> made_;
+};
+
 // The functional pre-pass traces every path of the frame as the timing run will trace it (the
 // same rays, because a workload's random numbers depend only on path and depth), warp by warp and
 // trace by trace, and returns per warp of the frame, per trace, the most nodes one of its rays
@@ -115,12 +125,13 @@ struct PrepassResult {
     double critical_nodes_total = 0;                 // their sum over the frame
     unsigned threads = 0;
 };
-PrepassResult run_prepass(const FrameWarps& frame, const SamplingOptions& opt);
+PrepassResult run_prepass(const FrameWarps& frame, const SamplingOptions& opt, PrepassWorkloads& workloads);
 
 // Per simulated cluster of `design`, the last opt.warm_window node fetches of the warps it feeds
 // (the clusters skipped before it), in frame order: traced again, backwards from the cluster,
 // until the window is full.
-std::vector<std::vector<WarmFetch>> warming_fetches(const FrameWarps& frame, const SamplingOptions& opt, const SampleDesign& design);
+std::vector<std::vector<WarmFetch>> warming_fetches(const FrameWarps& frame, const SamplingOptions& opt, const SampleDesign& design,
+                                                    PrepassWorkloads& workloads);
 
 // What the estimator knows of one simulated shader warp.
 struct WarpRecord {
@@ -156,10 +167,13 @@ struct SampleEstimate {
     double model_frame = 0, model_sample = 0;      // schedule-model cycles
     double relative_se = 0;  // standard error of work_estimate / work_estimate
     uint32_t variance_pairs = 0;  // collapsed stratum pairs behind relative_se (degrees of freedom)
-    bool has_interval = true;     // false: too few strata (--sample-unchecked), no interval
-    // The design (set by the workload driver): warps per cluster, drawn strata, clusters of the
-    // first wave (simulated whole) and empty clusters (no node read; not simulated).
-    uint64_t cluster_warps = 0, strata = 0, first_wave_clusters = 0, empty_clusters = 0;
+    // The design, as the workload driver drew it: warps per cluster, drawn strata, clusters of the
+    // first wave (simulated whole) and empty clusters (no node read; not simulated); whether the
+    // sample carries an interval (false: too few strata, --sample-unchecked).
+    struct Design {
+        uint64_t cluster_warps = 0, strata = 0, first_wave_clusters = 0, empty_clusters = 0;
+        bool has_interval = true;
+    } design;
     // The frame's share of node fetches that missed L1 / went to DRAM: the stratified ratio
     // estimate and its 95 % interval (collapsed strata, Student's t).
     struct Share {

@@ -20,20 +20,19 @@ std::string percent(double x) {
 
 // A sample of fewer than kMinStrata drawn strata has too few pairs to estimate its variance
 // from (and its interval would shrink to the schedule model's term alone): refuse it, naming the
-// smallest rate and frame that work. A sample that simulates every cluster needs no interval.
-void check_sample_size(uint64_t warps, const SamplingOptions& o) {
-    const uint64_t cluster = std::max<uint32_t>(1, o.capacity);
-    const uint64_t clusters = (warps + cluster - 1) / cluster, certain = std::min<uint64_t>(clusters, (o.capacity + cluster - 1) / cluster);
-    const uint64_t strata = SampleDesign::planned_strata(warps, cluster, o.capacity, o.rate);
-    if (strata >= kMinStrata || strata == clusters - certain || o.unchecked) return;
+// smallest rate and frame that work. `planned`: the design before the pre-pass (no cluster known
+// to be empty). A sample that simulates every cluster needs no interval.
+void check_sample_size(const SampleDesign& planned, uint64_t warps, uint64_t cluster, const SamplingOptions& o) {
+    if (planned.strata() >= kMinStrata || planned.census() || o.unchecked) return;
+    const uint64_t clusters = planned.clusters();
     // n strata need round(clusters x rate) >= 1 + n (the first wave is one cluster, simulated
     // whole); the 0.5 is llround's.
     const double need = double(1 + kMinStrata) - 0.5;
     const double rate = std::ceil(1000.0 * need / double(clusters)) / 1000.0;
     std::string msg = "--sample " + percent(o.rate) + " % of this frame's " + std::to_string(clusters) + " clusters of " +
-                      std::to_string(cluster) + " shader warps (" + std::to_string(warps) + " warps) draws " + std::to_string(strata) +
-                      " strata beside the first wave (simulated whole); a 95 % interval needs at least " + std::to_string(kMinStrata) +
-                      " strata: ";
+                      std::to_string(cluster) + " shader warps (" + std::to_string(warps) + " warps) draws " +
+                      std::to_string(planned.strata()) + " strata beside the first wave (simulated whole); a 95 % interval needs at least " +
+                      std::to_string(kMinStrata) + " strata: ";
     if (rate < 1.0) msg += "use --sample " + percent(rate) + " % or more (--sample " + std::to_string(rate).substr(0, 5) + "), ";
     msg += "a frame of at least " + std::to_string(uint64_t(std::ceil(need / std::max(o.rate, 1e-9))) * cluster) +
            " shader warps at this rate, or --sample-unchecked for an estimate without an interval";
@@ -90,23 +89,22 @@ WorkloadDriver::WorkloadDriver(Workload& workload, uint32_t sms, uint32_t warp_s
     records_of_warps_.assign(warps_.size(), WarpRecord{});
     if (sampling.rate < 1.0 && !warps_.empty()) {
         sampled_ = true;
-        check_sample_size(warps_.size(), sampling);
         const uint64_t cluster = std::max<uint32_t>(1, sampling.capacity);
+        check_sample_size(SampleDesign(warps_.size(), cluster, sampling.rate, sampling.seed), warps_.size(), cluster, sampling);
         // The pre-pass's critical paths per warp, and per cluster their sum: the work the
         // clusters are stratified by.
-        std::vector<std::vector<uint32_t>> trace_nodes;
+        PrepassResult prepass;
         std::vector<double> cluster_work;
-        const bool prepass = sampling.make_workload && sampling.trace;
-        if (prepass) {
-            PrepassResult p = run_prepass(Frame(warps_), sampling);
-            trace_nodes = p.trace_nodes;
+        const bool traced = sampling.make_workload && sampling.trace;
+        std::optional<PrepassWorkloads> workloads;
+        if (traced) {
+            workloads.emplace(sampling);
+            prepass = run_prepass(Frame(warps_), sampling, *workloads);
             cluster_work.assign((warps_.size() + cluster - 1) / cluster, 0.0);
-            for (size_t w = 0; w < trace_nodes.size(); ++w)
-                for (uint32_t n : trace_nodes[w]) cluster_work[w / cluster] += n;
-            estimator_.set_prepass(std::move(p));
+            for (size_t w = 0; w < prepass.trace_nodes.size(); ++w)
+                for (uint32_t n : prepass.trace_nodes[w]) cluster_work[w / cluster] += n;
         }
-        const SampleDesign design(warps_.size(), cluster, sampling.capacity, sampling.rate, sampling.seed, cluster_work);
-        has_interval_ = design.strata() >= kMinStrata || design.census();
+        const SampleDesign design(warps_.size(), cluster, sampling.rate, sampling.seed, cluster_work);
         // Never an estimate of 0 (or of the first wave alone) for a frame with work beyond it: a
         // draw of no stratum cannot extrapolate, checked or not.
         if (design.strata() == 0 && !design.census())
@@ -114,10 +112,11 @@ WorkloadDriver::WorkloadDriver(Workload& workload, uint32_t sms, uint32_t warp_s
                              " clusters of " + std::to_string(cluster) + " shader warps draws no cluster beside the first wave, so " +
                              "nothing stands for the rest of the frame's work; sample more (--sample " +
                              std::to_string(std::ceil(1000.0 * 1.5 / double(design.clusters())) / 1000.0).substr(0, 5) + " or more)");
-        design_ = {cluster, design.strata(), design.first_wave_clusters(), design.empty_clusters()};
+        design_ = {cluster, design.strata(), design.first_wave_clusters(), design.empty_clusters(),
+                   design.strata() >= kMinStrata || design.census()};
         // The caches are warmed, when a simulated cluster starts, with the last node fetches of
         // the clusters skipped before it.
-        if (prepass) warm_ = warming_fetches(Frame(warps_), sampling, design);
+        if (traced) warm_ = warming_fetches(Frame(warps_), sampling, design, *workloads);
         std::vector<ShaderWarp> kept;
         std::vector<WarpRecord> kept_records;
         for (size_t i = 0; i < design.simulated().size(); ++i)
@@ -130,12 +129,13 @@ WorkloadDriver::WorkloadDriver(Workload& workload, uint32_t sms, uint32_t warp_s
                 rec.weight = design.simulated()[i].weight;
                 rec.stratum = design.simulated()[i].stratum;
                 rec.frame_warp = w;
-                if (!trace_nodes.empty()) {
-                    rec.trace_nodes = std::move(trace_nodes[w]);
+                if (traced) {
+                    rec.trace_nodes = prepass.trace_nodes[w];  // the estimator keeps the frame's
                     for (uint32_t n : rec.trace_nodes) rec.critical_nodes += n;
                 }
                 kept_records.push_back(std::move(rec));
             }
+        if (traced) estimator_.set_prepass(std::move(prepass));
         warps_ = std::move(kept);
         records_of_warps_ = std::move(kept_records);
         for (uint32_t i = 0; i < warps_.size(); ++i)
@@ -148,11 +148,7 @@ WorkloadDriver::WorkloadDriver(Workload& workload, uint32_t sms, uint32_t warp_s
 
 WorkloadDriver::Estimate WorkloadDriver::estimate() const {
     Estimate e = estimator_.estimate(records_of_warps_, warps_total_, sampled_);
-    e.has_interval = has_interval_;
-    e.cluster_warps = design_[0];
-    e.strata = design_[1];
-    e.first_wave_clusters = design_[2];
-    e.empty_clusters = design_[3];
+    e.design = design_;
     return e;
 }
 

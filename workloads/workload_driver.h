@@ -6,7 +6,6 @@
 // (workloads/sampling.h) keeps only the drawn clusters of warps. Plain C++ with cycle numbers: it
 // serves AT, LT and interval alike.
 #pragma once
-#include <array>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -108,8 +107,8 @@ private:
     uint64_t live_warps_ = 0, last_progress_ = 0;
     size_t launched_ = 0;  // warps given a place on an SM so far (in frame order)
     uint64_t warps_total_ = 0;
-    bool sampled_ = false, has_interval_ = true;
-    std::array<uint64_t, 4> design_{};  // cluster size, strata, first-wave clusters, empty clusters
+    bool sampled_ = false;
+    SampleEstimate::Design design_;
     SampleEstimator estimator_;
 };
 
