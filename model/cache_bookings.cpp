@@ -45,7 +45,17 @@ CacheBookings::Lookup CacheBookings::lookup(uint64_t addr, uint64_t cycle, ReqKi
     const uint64_t sector = tags_.sector_of(addr);
     // The tags never hold a pending sector here (a miss is filled at once), so the tags answer
     // a hit or a miss, never a reservation fail.
-    if (tags_.read(addr, 0, kind) != CacheOutcome::Hit) return {Lookup::Miss, c, mshr_slot(c, kind) + hit_latency_};
+    if (tags_.read(addr, 0, kind) != CacheOutcome::Hit) {
+        // Every MSHR busy: the miss waits for the first to free (a reservation fail), and the
+        // requester's port with it, as AT withholds END_REQ until then.
+        const uint64_t slot = mshr_slot(c, kind);
+        Lookup l{Lookup::Miss, c, slot + hit_latency_};
+        if (slot > c) {
+            l.retry_at = slot;
+            if (own_port_) port_.hold(c + 1, slot);
+        }
+        return l;
+    }
     InFlightSector* r = in_flight(sector, c);
     if (!r || r->at <= c + hit_latency_) return {Lookup::Hit, c, c + hit_latency_};
     if (r->merged + 1 >= cfg_.mshr_merge) {

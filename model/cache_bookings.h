@@ -38,7 +38,9 @@ public:
         uint64_t cycle;          // the lookup's cycle (at or after the request's, by the port)
         uint64_t ready;          // Hit, InFlight, Retry: the cycle the data is there; Miss: the cycle the miss leaves
         bool dram = false;       // InFlight: the data on its way comes from DRAM
-        uint64_t retry_at = 0;   // Retry: the cycle the sector arrives (the requester's port is held until then)
+        // Retry: the cycle the sector arrives; Miss: the cycle an MSHR frees when all were busy
+        // (0: one was free). The requester's port is held until then.
+        uint64_t retry_at = 0;
     };
     // A read of the sector holding `addr` at cycle `cycle` (at or after the floor).
     Lookup lookup(uint64_t addr, uint64_t cycle, ReqKind kind);

@@ -86,7 +86,10 @@ IntervalGpu::Served IntervalGpu::read(uint32_t sm, uint64_t addr, uint64_t cycle
             // withheld, as in AT); the retry then hits.
             issue_[sm].hold(cycle + 1, l.retry_at);
             return {l.ready, false, false};
-        case CacheBookings::Lookup::Miss: break;
+        case CacheBookings::Lookup::Miss:
+            // Every MSHR busy: the port waits with the miss for the first to free.
+            if (l.retry_at) issue_[sm].hold(cycle + 1, l.retry_at);
+            break;
     }
     const uint64_t xbar = cfg_.xbar_latency;
     const Served r = read_l2(l1.tags().sector_of(addr), l.ready + xbar, kind);

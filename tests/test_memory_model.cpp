@@ -479,25 +479,31 @@ TEST(CacheBookings, HandWorkedSequence) {
     EXPECT_EQ(e.ready, 104u);
     c.fill(0x020, e, 200, true, ReqKind::Demand);
     // F at 100: A's MSHR is free again. G at 101: both MSHRs busy (E until 200, F until 300): the
-    // miss waits for E's, a reservation fail.
+    // miss waits for E's, a reservation fail, and holds the port until then (AT withholds END_REQ).
     L f = demand(0x040, 100);
     EXPECT_EQ(f.ready, 105u);
+    EXPECT_EQ(f.retry_at, 0u);
     c.fill(0x040, f, 300, true, ReqKind::Demand);
     L g = demand(0x060, 101);
     EXPECT_EQ(g.outcome, L::Miss);
+    EXPECT_EQ(g.retry_at, 200u);
     EXPECT_EQ(g.ready, 205u);
     c.fill(0x060, g, 400, true, ReqKind::Demand);
-    // H: a prefetch's miss waits for F's MSHR (300); I: a demand read finds it on its way (late,
-    // useful); J: a second demand read is not counted again.
+    // H at 102 gets the port at 201: a prefetch's miss that waits for F's MSHR (300), holding the
+    // port again; I: a demand read (port at 301) finds it on its way (late, useful); J: a second
+    // demand read is not counted again.
     L h = c.lookup(0x080, 102, ReqKind::Prefetch);
+    EXPECT_EQ(h.cycle, 201u);
+    EXPECT_EQ(h.retry_at, 300u);
     EXPECT_EQ(h.ready, 305u);
     c.fill(0x080, h, 500, true, ReqKind::Prefetch);
     EXPECT_EQ(demand(0x080, 103).outcome, L::InFlight);
     EXPECT_EQ(demand(0x080, 104).outcome, L::InFlight);
-    // K: once the data is there, a plain hit.
+    // K at 150, after J's port cycle (302): the data is there, a plain hit.
     L k = demand(0x000, 150);
     EXPECT_EQ(k.outcome, L::Hit);
-    EXPECT_EQ(k.ready, 155u);
+    EXPECT_EQ(k.cycle, 303u);
+    EXPECT_EQ(k.ready, 308u);
 
     const CacheAccessCounts s = c.tags().stats(ReqKind::Demand), p = c.tags().stats(ReqKind::Prefetch);
     const PrefetchedSectorCounts pf = c.tags().counts().prefetched;

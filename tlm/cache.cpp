@@ -171,6 +171,7 @@ void Cache::b_transport(tlm::tlm_generic_payload& t, sc_time& d) {
     lt_.advance(clock_.cycle_at_or_before(sc_time_stamp()));  // no requester is behind simulated time
     const CacheBookings::Lookup l = lt_.lookup(t.get_address(), clock_.cycle_at_or_after(sc_time_stamp() + d), e.kind);
     uint64_t done = l.ready;
+    if (role_ == CacheRole::L1) e.accepted_at = l.retry_at;  // a reservation fail: the port waits, as in AT
     if (l.outcome == CacheBookings::Lookup::InFlight) {  // waits for a miss on its way
         if (role_ == CacheRole::L1) e.l1_miss = true;
         e.dram = e.dram || l.dram;

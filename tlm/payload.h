@@ -22,6 +22,9 @@ struct RtExtension : tlm::tlm_extension<RtExtension> {
     bool l1_miss = false;     // set on the way back: not served by L1
     bool dram = false;        // set on the way back: served by DRAM
     uint32_t source = 0;      // crossbar/DRAM: which input port it came from
+    // LT, set on the way back by the L1: a reservation fail withheld the request's acceptance
+    // (AT's END_REQ) until this cycle, and the requester sends nothing before it.
+    uint64_t accepted_at = 0;
 
     tlm::tlm_extension_base* clone() const override { return new RtExtension(*this); }
     void copy_from(const tlm::tlm_extension_base& e) override { *this = static_cast<const RtExtension&>(e); }

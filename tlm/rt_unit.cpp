@@ -132,6 +132,7 @@ void RtUnit::lt_loop() {
     };
     std::priority_queue<Resp, std::vector<Resp>, std::greater<Resp>> responses;
     uint64_t sent = 0;
+    uint64_t port_free = 0;  // a reservation fail holds the request port until the L1 accepts
     uint64_t c = clock_.cycle_at_or_after(sc_time_stamp());
     for (;;) {
         last_cycle_ = c;
@@ -141,11 +142,12 @@ void RtUnit::lt_loop() {
             responses.pop();
         }
         pull_work(c);
-        if (core_.has_request(c)) {
+        if (c >= port_free && core_.has_request(c)) {
             tlm::tlm_generic_payload* t = make_payload(core_.front_request(c));
             sc_time d = clock_.time_of(c) - sc_time_stamp();
             socket->b_transport(*t, d);
             const RtExtension& e = ext(*t);
+            port_free = e.accepted_at + 1;
             responses.push({std::max(c + 1, clock_.cycle_at_or_after(sc_time_stamp() + d)), sent++, e.id, e.l1_miss, e.dram});
             t->release();
             core_.pop_request(c);
@@ -156,7 +158,7 @@ void RtUnit::lt_loop() {
         if (on_cycle) on_cycle(c);
 
         uint64_t next = core_.next_event(c);
-        if (core_.has_request(c + 1)) next = c + 1;
+        if (core_.has_request(c + 1)) next = std::max(c + 1, port_free);
         if (!responses.empty()) next = std::min(next, std::max(c + 1, responses.top().at));
         if (core_.has_free_slot()) {
             const uint64_t r = source_.earliest_ready(sm_);
