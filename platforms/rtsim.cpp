@@ -5,9 +5,20 @@
 #include <cmath>
 #include <cinttypes>
 #include <cstdio>
+#include <cerrno>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <iostream>
 #include <optional>
 #include <thread>
+
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <boost/program_options.hpp>
 #include <nlohmann/json.hpp>
@@ -35,6 +46,7 @@ struct Args {
     double sample = 1.0;
     std::optional<uint64_t> sample_seed;  // which clusters a sampled run simulates (default: --seed)
     bool sample_unchecked = false;
+    uint64_t check_error = 0;  // --check-error N
     // The sampling pre-pass's threads; read as signed so that a negative number is an error,
     // not a wrap to 4 billion.
     long long threads = std::max(1u, std::thread::hardware_concurrency());
@@ -71,6 +83,91 @@ std::pair<int, int> parse_trace_warp(const std::string& s, const HwConfig& hw) {
     }
 }
 
+// --check-error: rtsim itself, run twice as a child process (SystemC elaborates one platform per
+// process) on the same frame and options, sampled at `rate` with the run's sample seed (the same
+// clusters, the same functional warming) or whole at rate 1: once in the run's fidelity, once in
+// AT. Their simulated cycles are the check.
+ErrorCheck run_error_check(const Args& a, double rate) {
+    namespace fs = std::filesystem;
+    std::string tmpl = (fs::temp_directory_path() / "rtsim-check-XXXXXX").string();
+    if (!mkdtemp(tmpl.data())) throw std::runtime_error("--check-error: cannot make a temporary folder in " + fs::temp_directory_path().string());
+    const fs::path dir(tmpl);
+    struct Cleanup {
+        fs::path d;
+        ~Cleanup() {
+            std::error_code ec;
+            fs::remove_all(d, ec);
+        }
+    } cleanup{dir};
+    std::vector<std::string> base = {"--scene", a.scene, "--workload", a.workload, "--width", std::to_string(a.width), "--height",
+                                     std::to_string(a.height), "--spp", std::to_string(a.spp), "--bounces", std::to_string(a.bounces),
+                                     "--seed", std::to_string(a.seed), "--traversal", a.traversal, "--config", a.config,
+                                     "--threads", std::to_string(a.threads), "--quiet"};
+    if (!a.assets.empty()) base.insert(base.end(), {"--assets", a.assets});
+    if (!a.rays.empty()) base.insert(base.end(), {"--rays", a.rays});
+    for (const std::string& set : a.sets) base.insert(base.end(), {"--set", set});
+    if (!a.prefetcher.empty()) base.insert(base.end(), {"--prefetcher", a.prefetcher});
+    if (a.flatten) base.push_back("--flatten");
+    if (rate < 1.0) {
+        char r[32];
+        std::snprintf(r, sizeof r, "%.17g", rate);
+        base.insert(base.end(), {"--sample", r, "--sample-seed", std::to_string(a.sample_seed.value_or(a.seed)), "--sample-unchecked"});
+    }
+    struct Child {
+        uint64_t cycles;
+        double seconds;
+        uint64_t warps, warps_total, clusters;  // sampled: simulated warps, the frame's, simulated clusters
+    };
+    auto child = [&](const std::string& fidelity) {
+        std::vector<std::string> args = base;
+        args.insert(args.begin(), "rtsim");
+        const std::string stats = (dir / (fidelity + ".json")).string(), err = (dir / (fidelity + ".err")).string();
+        args.insert(args.end(), {"--fidelity", fidelity, "--stats", stats});
+        if (fidelity == "lt" && a.quantum) args.insert(args.end(), {"--quantum", std::to_string(*a.quantum)});
+        std::vector<char*> argv;
+        for (std::string& s : args) argv.push_back(s.data());
+        argv.push_back(nullptr);
+        posix_spawn_file_actions_t fa;
+        posix_spawn_file_actions_init(&fa);
+        posix_spawn_file_actions_addopen(&fa, 1, "/dev/null", O_WRONLY, 0);
+        posix_spawn_file_actions_addopen(&fa, 2, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+        pid_t pid = 0;
+        const int rc = posix_spawn(&pid, "/proc/self/exe", &fa, nullptr, argv.data(), environ);
+        posix_spawn_file_actions_destroy(&fa);
+        if (rc != 0) throw std::runtime_error("--check-error: cannot start rtsim: " + std::string(std::strerror(rc)));
+        int status = 0;
+        while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+        }
+        if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+            std::ifstream in(err);
+            std::stringstream msg;
+            msg << in.rdbuf();
+            throw std::runtime_error("--check-error: the " + fidelity + " run of the check failed (" +
+                                     (WIFEXITED(status) ? "exit " + std::to_string(WEXITSTATUS(status)) : std::string("a signal")) +
+                                     "): " + msg.str());
+        }
+        const nlohmann::json j = nlohmann::json::parse(std::ifstream(stats));
+        const bool sampled = j["timing"].contains("sampling");
+        Child c;
+        c.cycles = sampled ? j["timing"]["sampling"]["cycles_simulated"].get<uint64_t>() : j["cycles"].get<uint64_t>();
+        c.seconds = j["time_s"]["run"].get<double>();
+        c.warps = sampled ? j["timing"]["sampling"]["warps_simulated"].get<uint64_t>() : 1;
+        c.warps_total = sampled ? j["timing"]["sampling"]["warps_total"].get<uint64_t>() : 1;
+        c.clusters = sampled ? j["timing"]["sampling"]["strata"].get<uint64_t>() + j["timing"]["sampling"]["first_wave_clusters"].get<uint64_t>() : 0;
+        return c;
+    };
+    if (!a.quiet) std::cerr << "checking the error: the same " << (rate < 1.0 ? "sample" : "frame") << " in " << a.fidelity << " and in AT\n";
+    const Child f = child(a.fidelity), at = child("at");
+    ErrorCheck c;
+    c.share = double(f.warps) / double(std::max<uint64_t>(1, f.warps_total));
+    c.clusters = f.clusters;  // 0 for the whole frame: the caller knows its clusters
+    c.fidelity_cycles = f.cycles;
+    c.at_cycles = at.cycles;
+    c.fidelity_s = f.seconds;
+    c.at_s = at.seconds;
+    return c;
+}
+
 // The run's specification from the command line; every check that needs no scene comes first.
 RunSpec spec_of(const Args& a) {
     RunSpec spec;
@@ -97,6 +194,8 @@ RunSpec spec_of(const Args& a) {
     if (!a.trace_warp.empty() && a.vcd.empty()) throw InputError("--trace-warp traces into the waveforms: it needs --vcd FILE");
     if (a.sample_seed && a.sample == 1.0) throw InputError("--sample-seed needs --sample RATE below 1");
     if (a.sample_unchecked && a.sample == 1.0) throw InputError("--sample-unchecked needs --sample RATE below 1");
+    if (a.check_error && spec.fidelity != Fidelity::LT && spec.fidelity != Fidelity::Interval)
+        throw InputError("--check-error compares a fast fidelity with AT: it needs --fidelity lt or interval (AT is the reference)");
     if (a.threads < 1 || a.threads > 4096)
         throw InputError("--threads " + std::to_string(a.threads) + ": the sampling pre-pass takes 1 to 4096 threads");
     // Outputs are checked before anything runs: a bad path should not wait for the simulation.
@@ -136,6 +235,8 @@ RunSpec spec_of(const Args& a) {
     spec.verify = a.verify;
     spec.keep_rays = !a.hits.empty();
     spec.progress = !a.quiet;
+    spec.check_error = a.check_error;
+    if (a.check_error) spec.run_check = [&a](double rate) { return run_error_check(a, rate); };
     return spec;
 }
 
@@ -158,6 +259,7 @@ void print_summary(const Args& a, const RunResult& r) {
             else
                 std::cout << " (no interval: fewer than 10 strata, --sample-unchecked)\n";
         }
+        std::cout << error_line(j["error_estimate"]) << "\n";
         std::cout << "cycles " << j["cycles"] << ", L1 miss rate " << t["l1"]["demand"]["miss_rate"].get<double>()
                   << ", L2 miss rate " << t["l2"]["demand"]["miss_rate"].get<double>() << ", DRAM reads "
                   << t["dram"]["reads"] << " (bandwidth " << t["dram"]["bandwidth_utilisation"].get<double>() * 100
@@ -213,7 +315,7 @@ int sc_main(int argc, char** argv) {
         "             [--width W --height H --spp N --bounces B --seed S] [--traversal dfs|bfs|treelet] [--flatten]\n"
         "             [--fidelity functional|at|lt|interval] [--config NAME|FILE] [--set KEY=VALUE]... [--quantum CYCLES]\n"
         "             [--prefetcher none|ttp|park|treelet|perfect-up|perfect-down]\n"
-        "             [--sample RATE [--sample-seed S] [--sample-unchecked] [--threads N]]\n"
+        "             [--sample RATE [--sample-seed S] [--sample-unchecked] [--threads N]] [--check-error N]\n"
         "             [--stats FILE.json] [--image FILE.png] [--vcd FILE] [--trace-warp SM:WARP] [--verify] [--quiet]\n"
         "       rtsim --stats-schema | --help\n"
         "exit status: 0 ok, 1 a check failed (--verify mismatches), 2 bad input, 3 internal error\n";
@@ -246,9 +348,15 @@ int sc_main(int argc, char** argv) {
         ("sample-seed", po::value<uint64_t>()->notifier([&a](uint64_t v) { a.sample_seed = v; }),
          "which clusters --sample draws (default: --seed, which also seeds the rays)")
         ("sample-unchecked", po::bool_switch(&a.sample_unchecked),
-         "run a sample too small for a 95 % interval (fewer than 2 strata) and report no interval")
+         "run a sample too small for a 95 % interval (fewer than 10 strata) and report no interval")
         ("threads", po::value(&a.threads)->default_value(a.threads),
          "threads for --sample's functional pre-pass (the simulation itself runs on one; results do not depend on it)")
+        ("check-error", po::value<uint64_t>()->notifier([&a](uint64_t v) {
+             if (v == 0) throw po::validation_error(po::validation_error::invalid_option_value, "check-error", "0");
+             a.check_error = v;
+         }),
+         "lt, interval: simulate N randomly drawn clusters (and the first wave) of the frame in this fidelity and in AT, "
+         "and report the measured difference beside the error estimate")
         ("vcd", po::value(&a.vcd), "write waveforms to this VCD file (at, lt)")
         ("trace-warp", po::value(&a.trace_warp), "with --vcd: trace each thread's stack depth of warp-buffer slot WARP of SM")
         ("stats", po::value(&a.stats), "write statistics JSON")

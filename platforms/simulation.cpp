@@ -55,6 +55,7 @@ struct RunRecord {
     double load_s = 0, build_s = 0, run_s = 0;
     double scene_mb = 0, image_mb = 0, decoded_mb = 0, peak_mb = 0;
     const TimingResult* timing = nullptr;  // timing runs
+    ErrorEstimate error;                   // timing runs
     const HwConfig* hw = nullptr;
     const Config* config = nullptr;
     double sample_rate = 1.0;
@@ -64,6 +65,27 @@ struct RunRecord {
     uint64_t speed_rays = 0;
     double ours_s = 0, embree_s = 0;
 };
+
+void write_error_estimate(StatsOut& out, const ErrorEstimate& e) {
+    StatsOut o = out.child("error_estimate", "the run's error against the AT reference (docs/accuracy.md)");
+    o.value("value", e.value ? nlohmann::ordered_json(*e.value) : nlohmann::ordered_json(), "ratio",
+            "relative error bound on cycles (0.02: within +-2 %); null: no estimate (see basis)");
+    o.value("kind", e.kind, "",
+            "reference (AT), interval (sampling), validated bound (the error grid), measured (--check-error), their sums, or none");
+    o.value("basis", e.basis, "", "what the value rests on");
+    StatsOut c = o.child("check", "--check-error N: the same clusters simulated in this fidelity and in AT (null without)");
+    if (!e.check) {
+        o.json()["check"] = nullptr;
+        return;
+    }
+    c.value("clusters", e.check->clusters, "clusters", "simulated in both, the first wave included");
+    c.value("share", e.check->share, "ratio", "of the frame's shader warps");
+    c.value("fidelity_cycles", e.check->fidelity_cycles, "cycles", "simulated in this run's fidelity");
+    c.value("at_cycles", e.check->at_cycles, "cycles", "simulated in AT");
+    c.value("difference", e.check->difference(), "ratio", "fidelity_cycles / at_cycles - 1");
+    c.value("fidelity_s", e.check->fidelity_s, "s", "the fidelity's simulation time");
+    c.value("at_s", e.check->at_s, "s", "AT's simulation time");
+}
 
 // Every statistic of a run: the one place that writes them, and (with a schema) lists them.
 void write_stats(StatsOut& out, const RunRecord& r) {
@@ -115,6 +137,7 @@ void write_stats(StatsOut& out, const RunRecord& r) {
     if (r.timing) {
         const TimingResult& t = *r.timing;
         out.value("cycles", t.cycles, "core cycles", "the frame's cycles (a sampled run's estimate; simulated cycles under timing.sampling)");
+        write_error_estimate(out, r.error);
         StatsOut tm = out.child("timing", "the timing model's statistics");
         if (t.sampled) write_sampling(tm, t.estimate, r.sample_rate, t.cycles, t.cycles_simulated);
         write_hierarchy(tm, *r.hw, t.counts, t.summary, t.estimate.scale());
@@ -163,6 +186,7 @@ std::vector<StatKey> stats_schema() {
     r.has_params = true;
     TimingResult t;
     t.sampled = true;
+    r.error.check = ErrorCheck{};
     const Config config = Config::load("mobile");
     const HwConfig hw = config.resolve();
     r.timing = &t;
@@ -304,6 +328,17 @@ RunResult run_simulation(const RunSpec& spec, std::ostream* log) {
     }
     rec.run_s = seconds_since(t0);
     if (timing) {
+        // After the run's own time: --check-error's child runs are not this run's speed.
+        std::optional<ErrorCheck> check;
+        if (spec.check_error && spec.run_check) {
+            // N drawn clusters and the first wave: a sample at (N + 1) / clusters, or the whole frame.
+            const uint64_t capacity = uint64_t(spec.hw.sms) * spec.hw.warp_buffer;
+            const uint64_t clusters = (timing_result.estimate.warps_total + capacity - 1) / capacity;
+            const double rate = clusters <= spec.check_error + 1 ? 1.0 : double(spec.check_error + 1) / double(clusters);
+            check = spec.run_check(rate);
+            if (rate == 1.0) check->clusters = clusters;
+        }
+        rec.error = estimate_error(spec, timing_result, check);
         rec.invalid = timing_result.summary.invalid;
         rec.hits = timing_result.summary.hits;
         rec.rays = timing_result.summary.rays;

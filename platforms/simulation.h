@@ -4,6 +4,7 @@
 // and writes what comes back; other programs can do the same.
 #pragma once
 #include <cstdint>
+#include <functional>
 #include <iosfwd>
 #include <string>
 #include <vector>
@@ -11,6 +12,7 @@
 #include <glm/vec3.hpp>
 #include <nlohmann/json.hpp>
 
+#include "error_estimate.h"
 #include "model/config.h"
 #include "model/fidelity.h"
 #include "model/stats.h"
@@ -40,6 +42,11 @@ struct RunSpec {
     bool verify = false;       // every ray against Embree (robust mode)
     bool keep_rays = false;    // return every ray with its hit (for a hits file)
     bool progress = false;     // progress on stderr
+    // --check-error N (LT, interval): N clusters drawn besides the first wave simulated in the
+    // run's fidelity and in AT; run_check simulates a sample of the frame at `rate` (1: the
+    // whole frame) in both (rtsim runs child processes) and returns the two cycle counts.
+    uint64_t check_error = 0;
+    std::function<ErrorCheck(double rate)> run_check;
 };
 
 struct RunResult {

@@ -760,7 +760,7 @@ void flatten_keys(const nlohmann::json& j, const std::string& path, std::set<std
 
 // `rtsim --stats-schema` lists every key a stats file can hold, once, with a unit column and a
 // description, and nothing that no run writes: a functional run with --verify, a sampled AT run
-// with TTP and --verify, and an interval run together write every key of the schema.
+// with TTP and --verify, and an interval run with --check-error together write every key of the schema.
 TEST(RtsimStats, SchemaListsEveryKeyWrittenAndNothingElse) {
     RTU_NEED_SHARED_SCENES();
     TempDir dir;
@@ -778,7 +778,7 @@ TEST(RtsimStats, SchemaListsEveryKeyWrittenAndNothingElse) {
     }
     std::set<std::string> written;
     const std::string scene = "--scene bunny --assets " + rtu::test::shared_dir() + "/scenes/bunny --width 32 --height 32 ";
-    for (const std::string args : {"--verify", "--fidelity at --prefetcher ttp --sample 0.75 --verify", "--fidelity interval"}) {
+    for (const std::string args : {"--verify", "--fidelity at --prefetcher ttp --sample 0.75 --verify", "--fidelity interval --check-error 1"}) {
         ASSERT_EQ(rtsim(dir, scene + args + " --stats " + dir.file("s.json")).status, 0) << args;
         std::set<std::string> keys;
         flatten_keys(nlohmann::json::parse(read_text(dir.file("s.json"))), "", keys);
@@ -1022,4 +1022,84 @@ TEST(RtsimConfig, EveryKeyOfEveryPresetIsRead) {
             }
         }
     }
+}
+
+// Every timing run states its error against AT (platforms/error_estimate.h): AT is the
+// reference; LT and interval inside the error grid's regime carry the grid's worst error for their
+// workload (platforms/configs/error_bounds.json, read here independently); outside it (another
+// quantum, a ray file) no value and the reason; a sampled AT run its interval's upper half-width.
+TEST(RtsimError, EveryTimingRunStatesItsError) {
+    TempDir dir;
+    const auto bounds = nlohmann::json::parse(read_text(std::string(RTU_SOURCE_DIR) + "/platforms/configs/error_bounds.json"));
+    auto run = [&](const std::string& args) {
+        const Result r = rtsim(dir, "--scene cornell " + args + " --stats " + dir.file("s.json"));
+        EXPECT_EQ(r.status, 0) << args << r.err;
+        EXPECT_NE(r.out.find("error estimate: "), std::string::npos) << args << r.out;
+        return nlohmann::json::parse(read_text(dir.file("s.json")))["error_estimate"];
+    };
+    auto at = run("--fidelity at --width 32 --height 32");
+    EXPECT_EQ(at["kind"], "reference");
+    EXPECT_EQ(at["value"].get<double>(), 0.0);
+    EXPECT_TRUE(at["check"].is_null());
+    for (const std::string fid : {"lt", "interval"}) {
+        // Path tracing, 2 spp, mobile: in the grid. A frame of the grid's takes that size's
+        // bound, one between two sizes the worse of the two.
+        const auto& by_size = bounds["bounds"][fid]["pt"]["by_size"];
+        auto e = run("--fidelity " + fid + " --width 64 --height 64");
+        EXPECT_EQ(e["kind"], "validated bound") << fid << e.dump();
+        EXPECT_EQ(e["value"].get<double>(), by_size["64"]["worst"].get<double>()) << fid;
+        EXPECT_NE(e["basis"].get<std::string>().find("error grid"), std::string::npos);
+        e = run("--fidelity " + fid + " --width 96 --height 96");
+        EXPECT_EQ(e["value"].get<double>(), std::max(by_size["64"]["worst"].get<double>(), by_size["128"]["worst"].get<double>())) << fid;
+    }
+    auto q = run("--fidelity lt --quantum 100 --width 64 --height 64");
+    EXPECT_EQ(q["kind"], "none");
+    EXPECT_TRUE(q["value"].is_null());
+    EXPECT_NE(q["basis"].get<std::string>().find("configuration other than the grid's"), std::string::npos) << q.dump();
+    write_text(dir.file("rays.txt"), "278 278 800 0 0 -1 0 inf\n");
+    const Result rays = rtsim(dir, "--scene cornell --fidelity interval --rays " + dir.file("rays.txt") + " --stats " + dir.file("r.json"));
+    ASSERT_EQ(rays.status, 0) << rays.err;
+    EXPECT_NE(rays.out.find("error estimate: none (outside the validated regime: a ray file"), std::string::npos) << rays.out;
+    const Result sampled = rtsim(dir, "--scene cornell --fidelity at --width 256 --height 256 --sample 0.5 --stats " + dir.file("p.json"));
+    ASSERT_EQ(sampled.status, 0) << sampled.err;
+    const auto p = nlohmann::json::parse(read_text(dir.file("p.json")));
+    EXPECT_EQ(p["error_estimate"]["kind"], "interval");
+    const double c = p["cycles"].get<double>(), hi = p["timing"]["sampling"]["cycles_ci95"][1].get<double>();
+    EXPECT_NEAR(p["error_estimate"]["value"].get<double>(), (hi - c) / c, 1e-9);
+}
+
+// --check-error N simulates the same clusters in the run's fidelity and in AT. A frame of no more
+// than N + 1 clusters is checked whole: the check's cycles are the run's own and a full AT run's.
+// A larger frame is checked on N drawn clusters and the first wave, the sample an AT run with
+// the same rate and seed simulates.
+TEST(RtsimError, CheckErrorSimulatesTheSameClustersInAt) {
+    TempDir dir;
+    const std::string small = "--scene cornell --width 32 --height 32 --stats ";  // 64 warps: 2 clusters of 32 (mobile)
+    ASSERT_EQ(rtsim(dir, small + dir.file("at.json") + " --fidelity at").status, 0);
+    const Result r = rtsim(dir, small + dir.file("iv.json") + " --fidelity interval --check-error 5");
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_NE(r.out.find("checked against AT on 2 clusters"), std::string::npos) << r.out;
+    const auto at = nlohmann::json::parse(read_text(dir.file("at.json")));
+    const auto iv = nlohmann::json::parse(read_text(dir.file("iv.json")));
+    const auto& e = iv["error_estimate"];
+    EXPECT_EQ(e["check"]["clusters"], 2);
+    EXPECT_EQ(e["check"]["share"].get<double>(), 1.0);
+    EXPECT_EQ(e["check"]["fidelity_cycles"], iv["cycles"]);
+    EXPECT_EQ(e["check"]["at_cycles"], at["cycles"]);
+    // 32x32 is below the grid's frames: the measurement is the estimate.
+    EXPECT_EQ(e["kind"], "measured") << e.dump();
+    EXPECT_NEAR(e["value"].get<double>(), std::fabs(iv["cycles"].get<double>() / at["cycles"].get<double>() - 1), 1e-12);
+
+    const std::string big = "--scene cornell --width 128 --height 128 --stats ";  // 1,024 warps: 32 clusters
+    ASSERT_EQ(rtsim(dir, big + dir.file("lt.json") + " --fidelity lt --check-error 3").status, 0);
+    ASSERT_EQ(rtsim(dir, big + dir.file("ats.json") + " --fidelity at --sample 0.125 --sample-unchecked").status, 0);
+    const auto lt = nlohmann::json::parse(read_text(dir.file("lt.json")));
+    const auto ats = nlohmann::json::parse(read_text(dir.file("ats.json")));
+    EXPECT_EQ(lt["error_estimate"]["check"]["clusters"], 4);
+    EXPECT_EQ(lt["error_estimate"]["check"]["share"].get<double>(), 0.125);
+    EXPECT_EQ(lt["error_estimate"]["check"]["at_cycles"], ats["timing"]["sampling"]["cycles_simulated"]);
+    EXPECT_EQ(lt["error_estimate"]["kind"], "validated bound");  // 128x128 pt on mobile: in the grid
+
+    EXPECT_EQ(rtsim(dir, small + dir.file("x.json") + " --fidelity at --check-error 2").status, 2);
+    EXPECT_EQ(rtsim(dir, small + dir.file("x.json") + " --fidelity lt --check-error 0").status, 2);
 }

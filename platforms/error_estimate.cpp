@@ -1,0 +1,188 @@
+#include "error_estimate.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+#include "error_bounds.h"
+#include "simulation.h"
+#include "timing_run.h"
+
+namespace rtu {
+namespace {
+
+std::string percent(double v) {
+    std::ostringstream s;
+    s.precision(v < 0.1 ? 2 : 3);
+    s << 100.0 * v << " %";
+    return s.str();
+}
+
+std::string join(const std::vector<std::string>& v) {
+    std::string s;
+    for (const std::string& x : v) s += (s.empty() ? "" : ", ") + x;
+    return s;
+}
+
+// The configuration `name` (NAME or NAME+PREFETCHER) of the grid, as a run would hold it.
+nlohmann::ordered_json grid_config(const std::string& name) {
+    const size_t plus = name.find('+');
+    Config c = Config::load(name.substr(0, plus));
+    if (plus != std::string::npos) c.set("prefetch.kind=" + name.substr(plus + 1));
+    return c.to_json();
+}
+
+}  // namespace
+
+std::optional<ErrorBounds::Bound> ErrorBounds::bound(const std::string& fidelity, const std::string& workload) const {
+    if (!bounds.contains(fidelity) || !bounds[fidelity].contains(workload)) return std::nullopt;
+    const nlohmann::json& b = bounds[fidelity][workload];
+    if (b.value("runs", 0) == 0) return std::nullopt;
+    return Bound{b["runs"].get<uint64_t>(), b["mean"].get<double>(), b["worst"].get<double>()};
+}
+
+std::optional<ErrorBounds::Bound> ErrorBounds::bound(const std::string& fidelity, const std::string& workload, double side) const {
+    const std::optional<Bound> all = bound(fidelity, workload);
+    if (!all || !bounds[fidelity][workload].contains("by_size")) return all;
+    const std::vector<int>& sizes = workload == "primary" ? primary_sizes : pt_sizes;
+    Bound b;
+    for (size_t i = 0; i < sizes.size(); ++i) {
+        // The sizes bracketing `side`: the largest at or below it and the smallest at or above it.
+        const bool below = sizes[i] <= side && (i + 1 == sizes.size() || sizes[i + 1] > side);
+        const bool above = sizes[i] >= side && (i == 0 || sizes[i - 1] < side);
+        if (!below && !above) continue;
+        const nlohmann::json& s = bounds[fidelity][workload]["by_size"][std::to_string(sizes[i])];
+        if (s.value("runs", 0) == 0) return all;  // a size without runs: the whole grid's bound
+        b.runs += s["runs"].get<uint64_t>();
+        b.worst = std::max(b.worst, s["worst"].get<double>());
+        b.mean = std::max(b.mean, s["mean"].get<double>());
+    }
+    if (b.runs == 0) return all;
+    return b;
+}
+
+ErrorBounds ErrorBounds::parse(const std::string& text) {
+    const nlohmann::json j = nlohmann::json::parse(text);
+    ErrorBounds b;
+    b.measured_on = j.at("measured_on").get<std::string>();
+    b.date = j.at("date").get<std::string>();
+    b.command = j.at("command").get<std::string>();
+    const nlohmann::json& g = j.at("grid");
+    b.scenes = g.at("scenes").get<std::vector<std::string>>();
+    b.configs = g.at("configs").get<std::vector<std::string>>();
+    b.primary_sizes = g.at("primary_sizes").get<std::vector<int>>();
+    b.pt_sizes = g.at("pt_sizes").get<std::vector<int>>();
+    b.spp = g.value("spp", 2);
+    b.seed = g.value("seed", 1);
+    b.bounds = j.at("bounds");
+    return b;
+}
+
+const ErrorBounds& ErrorBounds::built_in() {
+    static const ErrorBounds b = parse(kErrorBoundsJson);
+    return b;
+}
+
+std::optional<std::string> outside_regime(const RunSpec& spec, const ErrorBounds& bounds) {
+    const std::string fid = fidelity_name(spec.fidelity);
+    if (!spec.rays.empty()) return "a ray file (the grid measured scene workloads)";
+    if (!bounds.bound(fid, spec.workload)) return "no " + fid + " runs of the " + spec.workload + " workload in the grid";
+    if (spec.order != TraversalOrder::DFS) return "traversal other than dfs";
+    const auto& sizes = spec.workload == "primary" ? bounds.primary_sizes : bounds.pt_sizes;
+    // The frame's size as its number of pixel samples, within the grid's smallest and largest.
+    const auto [lo, hi] = std::minmax_element(sizes.begin(), sizes.end());
+    const double samples = double(spec.params.width) * double(spec.params.height) * double(spec.params.spp);
+    if (samples < double(*lo) * double(*lo) * bounds.spp || samples > double(*hi) * double(*hi) * bounds.spp)
+        return "a frame of " + std::to_string(spec.params.width) + "x" + std::to_string(spec.params.height) + " at " +
+               std::to_string(spec.params.spp) + " spp (the grid: " + std::to_string(*lo) + "^2 to " + std::to_string(*hi) + "^2 pixels at " +
+               std::to_string(bounds.spp) + " spp)";
+    if (spec.workload == "pt" && spec.params.bounces != WorkloadParams{}.bounces) return "a bounce limit other than the default";
+    const nlohmann::ordered_json run = spec.config.to_json();
+    for (const std::string& c : bounds.configs)
+        if (grid_config(c) == run) return std::nullopt;
+    return "a configuration other than the grid's (" + join(bounds.configs) + ", each at its preset's values and default quantum)";
+}
+
+ErrorEstimate estimate_error(const RunSpec& spec, const TimingResult& t, const std::optional<ErrorCheck>& check,
+                             const ErrorBounds& bounds) {
+    ErrorEstimate e;
+    e.check = check;
+    // A sampled run first carries its sampling interval (relative half-width around the estimate).
+    double sampling = 0;
+    std::string sampled_basis;
+    if (t.sampled) {
+        if (!t.estimate.design.has_interval) {
+            e.kind = "none";
+            e.basis = "a sample of fewer than 10 strata (--sample-unchecked) has no interval";
+            return e;
+        }
+        sampling = t.estimate.relative_half_width(double(t.cycles_simulated));
+        sampled_basis = "95 % sampling interval over " + std::to_string(t.estimate.design.strata) +
+                        " drawn strata, extrapolation term included (docs/sampling.md)";
+    }
+    const std::string fid = fidelity_name(spec.fidelity);
+    if (spec.fidelity == Fidelity::AT) {
+        e.value = sampling;
+        e.kind = t.sampled ? "interval" : "reference";
+        e.basis = t.sampled ? sampled_basis : "AT is the reference timing model (docs/accuracy.md)";
+        return e;
+    }
+    const std::string plus = t.sampled ? "interval + " : "";
+    const auto add_sampling = [&](const std::string& basis) { return t.sampled ? sampled_basis + "; plus " + basis : basis; };
+    const std::optional<std::string> outside = outside_regime(spec, bounds);
+    std::string measured;
+    if (check)
+        measured = "measured against AT on " + std::to_string(check->clusters) + " clusters (" + percent(check->share) +
+                   " of the frame's warps): " + (check->difference() >= 0 ? "+" : "") + percent(check->difference());
+    if (!outside) {
+        // The frame as the square one of as many pixel samples at the grid's spp.
+        const double side = std::sqrt(double(spec.params.width) * double(spec.params.height) * double(spec.params.spp) / bounds.spp);
+        const ErrorBounds::Bound b = *bounds.bound(fid, spec.workload, side);
+        const std::string bound_basis = "worst |cycles error| against AT in the " + std::to_string(b.runs) + " runs of " + fid + " on " +
+                                        spec.workload + " at the nearest frame sizes of the error grid (" +
+                                        std::to_string(bounds.scenes.size()) + " scenes, configurations " + join(bounds.configs) +
+                                        "; rtsim " + bounds.measured_on + "; docs/accuracy.md)";
+        // A measurement beyond the bound shows the bound does not hold here: it replaces it.
+        if (check && std::abs(check->difference()) > b.worst) {
+            e.value = sampling + std::abs(check->difference());
+            e.kind = plus + "measured";
+            e.basis = add_sampling(measured + ", beyond the " + percent(b.worst) + " " + bound_basis);
+        } else {
+            e.value = sampling + b.worst;
+            e.kind = plus + "validated bound";
+            e.basis = add_sampling(bound_basis);
+        }
+        return e;
+    }
+    if (check) {
+        e.value = sampling + std::abs(check->difference());
+        e.kind = plus + "measured";
+        e.basis = add_sampling(measured + "; outside the validated regime: " + *outside);
+        return e;
+    }
+    e.kind = "none";
+    e.basis = "outside the validated regime: " + *outside + "; --check-error N measures this run's error against AT";
+    return e;
+}
+
+std::string error_line(const nlohmann::ordered_json& s) {
+    std::string line = "error estimate: ";
+    if (s["value"].is_null())
+        line += "none (" + s["basis"].get<std::string>() + ")";
+    else
+        line += "+-" + percent(s["value"].get<double>()) + " (" + s["kind"].get<std::string>() + ": " + s["basis"].get<std::string>() + ")";
+    if (s.contains("check") && !s["check"].is_null()) {
+        const auto& c = s["check"];
+        line += "\nchecked against AT on " + std::to_string(c["clusters"].get<uint64_t>()) + " clusters (" +
+                percent(c["share"].get<double>()) + " of the frame): " + std::to_string(c["fidelity_cycles"].get<uint64_t>()) +
+                " cycles against AT's " + std::to_string(c["at_cycles"].get<uint64_t>()) + ", " +
+                (c["difference"].get<double>() >= 0 ? "+" : "") + percent(c["difference"].get<double>());
+        char took[64];
+        std::snprintf(took, sizeof took, "; AT took %.1f s, this fidelity %.1f s", c["at_s"].get<double>(), c["fidelity_s"].get<double>());
+        line += took;
+    }
+    return line;
+}
+
+}  // namespace rtu

@@ -1,0 +1,72 @@
+// Every timing run's error against the AT reference (docs/accuracy.md), in one place: what kind
+// of figure it is (AT itself, a sampling interval, a bound validated on the error grid, a
+// measurement of this run's own frame) and what it rests on.
+// - AT is the reference: error 0 (its error against hardware is the model's, not a fidelity's).
+// - LT at its default quantum and the interval fidelity carry the worst |cycles error| that
+//   scripts/bench_error_grid.py measured against AT on its grid of scenes, frames, presets and
+//   workloads (platforms/configs/error_bounds.json, compiled in) wherever the run lies inside
+//   that grid's regime; outside it there is no bound, and --check-error N measures one.
+// - A sampled run adds its 95 % interval's relative half-width (docs/sampling.md).
+// Plain C++ (no SystemC).
+#pragma once
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace rtu {
+
+struct RunSpec;
+struct TimingResult;
+
+// --check-error N: the same clusters of the frame simulated in the run's fidelity and in AT
+// (child runs of rtsim; SystemC elaborates once per process).
+struct ErrorCheck {
+    uint64_t clusters = 0;  // clusters simulated, the first wave included
+    double share = 0;       // of the frame's shader warps
+    uint64_t fidelity_cycles = 0, at_cycles = 0;
+    double fidelity_s = 0, at_s = 0;  // wall-clock time of each child's simulation
+    double difference() const { return at_cycles ? double(fidelity_cycles) / double(at_cycles) - 1.0 : 0.0; }
+};
+
+struct ErrorEstimate {
+    std::optional<double> value;  // relative (0.02: the cycles within +-2 %); none: no estimate
+    std::string kind;             // reference, interval, validated bound, measured, the sums of
+                                  // interval and one of the latter two, or none
+    std::string basis;            // what the value rests on
+    std::optional<ErrorCheck> check;
+};
+
+// The validated bounds compiled into the program (the grid's regime and, per fidelity and
+// workload, the mean and worst |error| against AT).
+struct ErrorBounds {
+    struct Bound {
+        uint64_t runs = 0;
+        double mean = 0, worst = 0;
+    };
+    std::string measured_on, date, command;
+    std::vector<std::string> scenes, configs;  // configs as NAME or NAME+PREFETCHER
+    std::vector<int> primary_sizes, pt_sizes;  // square frames
+    int spp = 2, seed = 1;
+    nlohmann::json bounds;  // fidelity -> workload -> {runs, mean, worst, by_size: {side: {...}}}
+    // Over the whole grid; with `side` (the square frame of as many pixel samples as the run's),
+    // the worst of the grid's frame sizes on either side of it (one size on the grid's own).
+    std::optional<Bound> bound(const std::string& fidelity, const std::string& workload) const;
+    std::optional<Bound> bound(const std::string& fidelity, const std::string& workload, double side) const;
+    static ErrorBounds parse(const std::string& json);
+    static const ErrorBounds& built_in();
+};
+
+// Why the run lies outside the bounds' regime, or nothing when it lies inside.
+std::optional<std::string> outside_regime(const RunSpec& spec, const ErrorBounds& bounds);
+
+// The run's error estimate; `t` is its timing result (a timing fidelity's run).
+ErrorEstimate estimate_error(const RunSpec& spec, const TimingResult& t, const std::optional<ErrorCheck>& check,
+                             const ErrorBounds& bounds = ErrorBounds::built_in());
+
+// One line for the run's summary: "error estimate: +-1.9 % (validated bound: ...)".
+std::string error_line(const nlohmann::ordered_json& error_estimate_stats);
+
+}  // namespace rtu

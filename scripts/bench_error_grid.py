@@ -1,0 +1,146 @@
+#!/usr/bin/env python3
+"""The fast fidelities (LT at its default quantum, interval) against AT, full frames, on a grid of
+scenes, frame sizes, presets, prefetchers and workloads. Writes per run OUTDIR/KEY.json (resumable:
+a run with stats is not redone; use a new OUTDIR for a new rtsim), then
+  OUTDIR/table.md          error per cell and per fidelity x workload (mean, worst, runs);
+  OUTDIR/error_bounds.json the validated bounds rtsim reports as error_estimate (copy it to
+                           platforms/configs/error_bounds.json to make them the build's).
+Usage: scripts/bench_error_grid.py RTSIM OUTDIR [SCENES]
+  SCENES: comma-separated from mesh (the Stanford bunny as a bare mesh, automatic camera), bunny,
+  ship, bath, sprng, party, cornell, wknd; default mesh,bunny,ship,bath,sprng,party.
+Environment: PRIMARY_SIZES (64,128,256,512), PT_SIZES (64,128,256), CONFIGS (mobile,paper,
+paper+ttp,desktop; NAME+PREFETCHER), SEED (1), JOBS (2), SHARED (../shared/scenes beside the
+repository), ANALYSE_ONLY (1: no runs, tables from the runs already in OUTDIR), COMMIT (the
+commit RTSIM was built from; default: the repository's HEAD)."""
+import concurrent.futures as cf
+import datetime
+import itertools
+import json
+import os
+import subprocess
+import sys
+
+rtsim, out = sys.argv[1], sys.argv[2]
+S = os.environ.get("SHARED", os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "shared", "scenes"))
+SC = {"mesh": f"--scene {S}/bunny/stanford-bunny.obj", "cornell": "--scene cornell", "wknd": "--scene wknd"}
+for n in ("bunny", "ship", "bath", "sprng", "party"):
+    SC[n] = f"--scene {n} --assets {S}/{n}"
+scenes = sys.argv[3].split(",") if len(sys.argv) > 3 else ["mesh", "bunny", "ship", "bath", "sprng", "party"]
+sizes = {"primary": [int(x) for x in os.environ.get("PRIMARY_SIZES", "64,128,256,512").split(",")],
+         "pt": [int(x) for x in os.environ.get("PT_SIZES", "64,128,256").split(",")]}
+configs = os.environ.get("CONFIGS", "mobile,paper,paper+ttp,desktop").split(",")
+seed = int(os.environ.get("SEED", "1"))
+fids = ["at", "lt", "interval"]
+os.makedirs(out, exist_ok=True)
+
+
+def run(key, args):
+    f = f"{out}/{key}.json"
+    if os.path.exists(f) or os.environ.get("ANALYSE_ONLY") == "1":
+        return key, 0, ""
+    p = subprocess.run(f"{rtsim} {args} --stats {f}.tmp -q", shell=True, capture_output=True, text=True)
+    if p.returncode == 0:
+        os.rename(f + ".tmp", f)
+    return key, p.returncode, p.stderr.strip()[-300:]
+
+
+cases = []  # (scene, workload, size, config)
+for wl in ("primary", "pt"):
+    for sc, n, cfg in itertools.product(scenes, sizes[wl], configs):
+        cases.append((sc, wl, n, cfg))
+cases.sort(key=lambda c: c[2])  # small frames first: a partial grid already reads
+
+
+def key(c, fid):
+    return f"{c[0]}_{c[1]}_{c[2]}_{c[3]}_{fid}"
+
+
+jobs = []
+for c in cases:
+    name, _, pf = c[3].partition("+")
+    base = f"{SC[c[0]]} --workload {c[1]} --width {c[2]} --height {c[2]} --seed {seed} --config {name}"
+    if pf:
+        base += f" --prefetcher {pf}"
+    for fid in fids:
+        jobs.append((key(c, fid), base + f" --fidelity {fid}"))
+fails = {}
+done = 0
+with cf.ThreadPoolExecutor(int(os.environ.get("JOBS", "2"))) as ex:
+    for k, rc, err in ex.map(lambda j: run(*j), jobs):
+        done += 1
+        if rc:
+            fails[k] = (rc, err)
+        if done % 20 == 0:
+            print(f"{done}/{len(jobs)} runs", file=sys.stderr, flush=True)
+
+# Per case, each fast fidelity's error against AT and its wall-time speed-up.
+rows = []
+for c in cases:
+    try:
+        at = json.load(open(f"{out}/{key(c, 'at')}.json"))
+    except OSError:
+        continue
+    for fid in ("lt", "interval"):
+        try:
+            d = json.load(open(f"{out}/{key(c, fid)}.json"))
+        except OSError:
+            continue
+        rows.append({"scene": c[0], "workload": c[1], "size": c[2], "config": c[3], "fidelity": fid,
+                     "at_cycles": at["cycles"], "cycles": d["cycles"], "error": d["cycles"] / at["cycles"] - 1})
+
+
+def summary(sel):
+    e = [abs(r["error"]) for r in sel]
+    return {"runs": len(e), "mean": sum(e) / max(1, len(e)), "worst": max(e or [0.0])}
+
+
+commit = os.environ.get("COMMIT") or subprocess.run("git rev-parse --short HEAD", shell=True, capture_output=True, text=True,
+                        cwd=os.path.dirname(os.path.abspath(__file__))).stdout.strip()
+# The regime rtsim claims: only the frame sizes with runs in (a partial grid claims less).
+measured = {wl: [n for n in sizes[wl] if any(r["workload"] == wl and r["size"] == n for r in rows)] for wl in sizes}
+grid = {"scenes": scenes, "primary_sizes": measured["primary"], "pt_sizes": measured["pt"], "spp": 2, "configs": configs, "seed": seed}
+bounds = {"measured_on": commit, "date": datetime.date.today().isoformat(),
+          "command": "scripts/bench_error_grid.py " + " ".join(sys.argv[1:]), "grid": grid, "bounds": {}}
+# Per fidelity and workload: over the whole grid and per frame size (rtsim takes the worst of the
+# grid's frame sizes on either side of a run's frame).
+for fid in ("lt", "interval"):
+    bounds["bounds"][fid] = {}
+    for wl in ("primary", "pt"):
+        sel = [r for r in rows if r["fidelity"] == fid and r["workload"] == wl]
+        b = summary(sel)
+        b["by_size"] = {str(n): summary([r for r in sel if r["size"] == n]) for n in measured[wl]}
+        bounds["bounds"][fid][wl] = b
+with open(f"{out}/error_bounds.json", "w") as f:
+    json.dump(bounds, f, indent=2)
+    f.write("\n")
+
+pct = lambda x: f"{100 * x:+.1f} %"
+lines = [f"Grid: scenes {', '.join(scenes)}; primary rays at {sizes['primary']}, path tracing (2 spp) at {sizes['pt']} "
+         f"(square frames); configurations {', '.join(configs)}; seed {seed}; rtsim at {commit}. "
+         f"{len(rows)} fast runs against AT, {len(fails)} failed runs.", "",
+         "| fidelity | workload | frame | runs | mean abs. error | worst abs. error | worst case |",
+         "|---|---|---|---|---|---|---|"]
+for fid, wl in itertools.product(("lt", "interval"), ("primary", "pt")):
+    for n in sizes[wl] + ["all"]:
+        sel = [r for r in rows if r["fidelity"] == fid and r["workload"] == wl and (n == "all" or r["size"] == n)]
+        if not sel:
+            continue
+        s = summary(sel)
+        w = max(sel, key=lambda r: abs(r["error"]))
+        lines.append(f"| {fid} | {wl} | {n} | {s['runs']} | {100 * s['mean']:.2f} % | {100 * s['worst']:.2f} % | "
+                     f"{w['scene']} {w['size']} {w['config']} ({pct(w['error'])}) |")
+within = sum(abs(r["error"]) <= 0.01 for r in rows)
+lines += ["", f"{within} of {len(rows)} fast runs are within 1 % of AT.", "",
+          "Per case (error against AT; LT / interval):", "",
+          "| scene | workload | frame | config | AT cycles | LT | interval |", "|---|---|---|---|---|---|---|"]
+by = {}
+for r in rows:
+    by.setdefault((r["scene"], r["workload"], r["size"], r["config"]), {})[r["fidelity"]] = r
+for (sc, wl, n, cfg), d in sorted(by.items(), key=lambda x: (x[0][1], x[0][0], x[0][2], x[0][3])):
+    at = next(iter(d.values()))["at_cycles"]
+    lines.append(f"| {sc} | {wl} | {n} | {cfg} | {at} | " + " | ".join(pct(d[f]["error"]) if f in d else "-" for f in ("lt", "interval")) + " |")
+for k, v in fails.items():
+    lines.append(f"\nFAILED {k}: exit {v[0]}: {v[1][:200]}")
+with open(f"{out}/table.md", "w") as f:
+    f.write("\n".join(lines) + "\n")
+print("\n".join(lines[:6 + 2 * sum(len(v) + 1 for v in sizes.values()) + 2]))
