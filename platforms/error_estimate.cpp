@@ -39,13 +39,17 @@ std::optional<ErrorBounds::Bound> ErrorBounds::bound(const std::string& fidelity
     if (!bounds.contains(fidelity) || !bounds[fidelity].contains(workload)) return std::nullopt;
     const nlohmann::json& b = bounds[fidelity][workload];
     if (b.value("runs", 0) == 0) return std::nullopt;
-    return Bound{b["runs"].get<uint64_t>(), b["mean"].get<double>(), b["worst"].get<double>()};
+    return Bound{b["runs"].get<uint64_t>(), b["worst"].get<double>()};
+}
+
+double ErrorBounds::side(const RunSpec& spec) const {
+    return std::sqrt(double(spec.params.width) * double(spec.params.height) * double(spec.params.spp) / spp);
 }
 
 std::optional<ErrorBounds::Bound> ErrorBounds::bound(const std::string& fidelity, const std::string& workload, double side) const {
     const std::optional<Bound> all = bound(fidelity, workload);
     if (!all || !bounds[fidelity][workload].contains("by_size")) return all;
-    const std::vector<int>& sizes = workload == "primary" ? primary_sizes : pt_sizes;
+    const std::vector<int>& sizes = this->sizes(workload);
     Bound b;
     for (size_t i = 0; i < sizes.size(); ++i) {
         // The sizes bracketing `side`: the largest at or below it and the smallest at or above it.
@@ -56,7 +60,6 @@ std::optional<ErrorBounds::Bound> ErrorBounds::bound(const std::string& fidelity
         if (s.value("runs", 0) == 0) return all;  // a size without runs: the whole grid's bound
         b.runs += s["runs"].get<uint64_t>();
         b.worst = std::max(b.worst, s["worst"].get<double>());
-        b.mean = std::max(b.mean, s["mean"].get<double>());
     }
     if (b.runs == 0) return all;
     return b;
@@ -66,15 +69,12 @@ ErrorBounds ErrorBounds::parse(const std::string& text) {
     const nlohmann::json j = nlohmann::json::parse(text);
     ErrorBounds b;
     b.measured_on = j.at("measured_on").get<std::string>();
-    b.date = j.at("date").get<std::string>();
-    b.command = j.at("command").get<std::string>();
     const nlohmann::json& g = j.at("grid");
     b.scenes = g.at("scenes").get<std::vector<std::string>>();
     b.configs = g.at("configs").get<std::vector<std::string>>();
     b.primary_sizes = g.at("primary_sizes").get<std::vector<int>>();
     b.pt_sizes = g.at("pt_sizes").get<std::vector<int>>();
     b.spp = g.value("spp", 2);
-    b.seed = g.value("seed", 1);
     b.bounds = j.at("bounds");
     return b;
 }
@@ -89,11 +89,11 @@ std::optional<std::string> outside_regime(const RunSpec& spec, const ErrorBounds
     if (!spec.rays.empty()) return "a ray file (the grid measured scene workloads)";
     if (!bounds.bound(fid, spec.workload)) return "no " + fid + " runs of the " + spec.workload + " workload in the grid";
     if (spec.order != TraversalOrder::DFS) return "traversal other than dfs";
-    const auto& sizes = spec.workload == "primary" ? bounds.primary_sizes : bounds.pt_sizes;
+    const auto& sizes = bounds.sizes(spec.workload);
     // The frame's size as its number of pixel samples, within the grid's smallest and largest.
     const auto [lo, hi] = std::minmax_element(sizes.begin(), sizes.end());
-    const double samples = double(spec.params.width) * double(spec.params.height) * double(spec.params.spp);
-    if (samples < double(*lo) * double(*lo) * bounds.spp || samples > double(*hi) * double(*hi) * bounds.spp)
+    const double side = bounds.side(spec);
+    if (side < *lo || side > *hi)
         return "a frame of " + std::to_string(spec.params.width) + "x" + std::to_string(spec.params.height) + " at " +
                std::to_string(spec.params.spp) + " spp (the grid: " + std::to_string(*lo) + "^2 to " + std::to_string(*hi) + "^2 pixels at " +
                std::to_string(bounds.spp) + " spp)";
@@ -136,9 +136,7 @@ ErrorEstimate estimate_error(const RunSpec& spec, const TimingResult& t, const s
         measured = "measured against AT on " + std::to_string(check->clusters) + " clusters (" + percent(check->share) +
                    " of the frame's warps): " + (check->difference() >= 0 ? "+" : "") + percent(check->difference());
     if (!outside) {
-        // The frame as the square one of as many pixel samples at the grid's spp.
-        const double side = std::sqrt(double(spec.params.width) * double(spec.params.height) * double(spec.params.spp) / bounds.spp);
-        const ErrorBounds::Bound b = *bounds.bound(fid, spec.workload, side);
+        const ErrorBounds::Bound b = *bounds.bound(fid, spec.workload, bounds.side(spec));
         const std::string bound_basis = "worst |cycles error| against AT in the " + std::to_string(b.runs) + " runs of " + fid + " on " +
                                         spec.workload + " at the nearest frame sizes of the error grid (" +
                                         std::to_string(bounds.scenes.size()) + " scenes, configurations " + join(bounds.configs) +

@@ -44,15 +44,19 @@ struct ErrorEstimate {
 struct ErrorBounds {
     struct Bound {
         uint64_t runs = 0;
-        double mean = 0, worst = 0;
+        double worst = 0;
     };
-    std::string measured_on, date, command;
+    std::string measured_on;
     std::vector<std::string> scenes, configs;  // configs as NAME or NAME+PREFETCHER
     std::vector<int> primary_sizes, pt_sizes;  // square frames
-    int spp = 2, seed = 1;
+    int spp = 2;
     nlohmann::json bounds;  // fidelity -> workload -> {runs, mean, worst, by_size: {side: {...}}}
-    // Over the whole grid; with `side` (the square frame of as many pixel samples as the run's),
-    // the worst of the grid's frame sizes on either side of it (one size on the grid's own).
+    // The grid's frame sides for `workload`.
+    const std::vector<int>& sizes(const std::string& workload) const { return workload == "primary" ? primary_sizes : pt_sizes; }
+    // The side of the square frame with as many pixel samples at the grid's spp as `spec`'s frame.
+    double side(const RunSpec& spec) const;
+    // Over the whole grid; with `side`, the worst of the grid's frame sizes on either side of it
+    // (one size on the grid's own).
     std::optional<Bound> bound(const std::string& fidelity, const std::string& workload) const;
     std::optional<Bound> bound(const std::string& fidelity, const std::string& workload, double side) const;
     static ErrorBounds parse(const std::string& json);

@@ -332,7 +332,7 @@ RunResult run_simulation(const RunSpec& spec, std::ostream* log) {
         std::optional<ErrorCheck> check;
         if (spec.check_error && spec.run_check) {
             // N drawn clusters and the first wave: a sample at (N + 1) / clusters, or the whole frame.
-            const uint64_t capacity = uint64_t(spec.hw.sms) * spec.hw.warp_buffer;
+            const uint64_t capacity = gpu_warp_capacity(spec.hw);
             const uint64_t clusters = (timing_result.estimate.warps_total + capacity - 1) / capacity;
             const double rate = clusters <= spec.check_error + 1 ? 1.0 : double(spec.check_error + 1) / double(clusters);
             check = spec.run_check(rate);

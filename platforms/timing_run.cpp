@@ -7,7 +7,7 @@ SamplingOptions sampling_options(const HwConfig& c, const BvhImage& img, const T
     s.rate = o.sample_rate;
     s.seed = o.sample_seed;
     s.unchecked = o.sample_unchecked;
-    s.capacity = c.sms * c.warp_buffer;
+    s.capacity = gpu_warp_capacity(c);
     s.make_workload = o.sample_workload;
     s.threads = o.sample_threads;
     s.progress = o.progress;

@@ -56,6 +56,9 @@ struct TimingResult {
     uint64_t payloads_allocated = 0;  // AT and LT: transaction payloads the pool made
 };
 
+// Shader warps the GPU keeps in flight at once (SMs x warp-buffer slots): a sampled run's cluster.
+inline uint32_t gpu_warp_capacity(const HwConfig& c) { return c.sms * c.warp_buffer; }
+
 // The workload driver's sampling options for a timing run (docs/sampling.md): clusters of as
 // many warps as the GPU holds, the functional pre-pass on `image`, warming enough to refill
 // every cache twice. `treelets` as for the run's traversal (may be null).
