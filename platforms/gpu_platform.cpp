@@ -4,13 +4,7 @@
 
 #include "model/treelet.h"
 #include "timing_stats.h"
-#include "tlm/cache.h"
-#include "tlm/clock.h"
-#include "tlm/crossbar.h"
-#include "tlm/dram.h"
-#include "tlm/payload.h"
-#include "tlm/protocol_checker.h"
-#include "tlm/rt_unit.h"
+#include "tlm/rt_complex.h"
 #include "workloads/workload_driver.h"
 
 namespace rtu {
@@ -61,16 +55,11 @@ struct GpuPlatform::Impl {
     HwConfig cfg;
     const BvhImage& image;
     TimingOptions opt;
-    ClockDomain core, mem;
-    PayloadPool pool;
     std::unique_ptr<Treelets> treelets;  // before the driver: its pre-pass traverses with them
     WorkloadDriver driver;
-    std::vector<std::unique_ptr<RtUnit>> rt;
-    std::vector<std::unique_ptr<Cache>> l1, l2;
-    std::unique_ptr<Crossbar> xbar;
-    std::unique_ptr<Dram> dram;
+    RtComplex gpu;
+    const ClockDomain &core, &mem;
     std::unique_ptr<Monitor> monitor;
-    std::vector<std::unique_ptr<ProtocolChecker>> checkers;
     sc_trace_file* tf = nullptr;
     // Traced values (sampled into the VCD when tracing is on).
     struct RtTrace {
@@ -91,59 +80,30 @@ struct GpuPlatform::Impl {
     uint64_t last_sample = 0, next_sample = 0;
 
     Impl(const HwConfig& c, const BvhImage& img, Workload& w, const TimingOptions& o)
-        : cfg(c), image(img), opt(o), core(c.core_mhz), mem(c.memory_mhz),
+        : cfg(c), image(img), opt(o),
           // Treelet traversal (and with it the Treelet prefetcher, which needs it) works on treelets.
           treelets(o.order == TraversalOrder::Treelet ? std::make_unique<Treelets>(form_treelets(img, c.prefetch.treelet_budget, c.prefetch.treelet_contiguous,
                                                                                                      c.prefetch.treelet_stride))
                                                       : nullptr),
-          driver(w, c.sms, c.warp_size, c.shade_latency, c.resident_warps, sampling_options(c, img, o, treelets.get())) {}
+          driver(w, c.sms, c.warp_size, c.shade_latency, c.resident_warps, sampling_options(c, img, o, treelets.get())),
+          gpu("gpu", c, img, o.order, driver, o.fidelity, treelets.get(), o.check_protocol),
+          core(gpu.core_clock()),
+          mem(gpu.memory_clock()) {}
 };
 
+// rtsim's platform: the RT complex fed by the workload driver, the monitor, the waveforms. Its
+// process-wide settings (report actions, time resolution) are rtsim's sc_main's; the LT quantum
+// is the RT units' own (tlm/rt_unit.h).
 GpuPlatform::GpuPlatform(const HwConfig& cfg, const BvhImage& image, Workload& workload, const TimingOptions& opt)
     : impl_(new Impl(cfg, image, workload, opt)) {
     Impl& m = *impl_;
-    // SystemC's informational reports ("simulation stopped by user", "timescale unit set") would
-    // clutter the run's own output; warnings and errors still show.
-    sc_report_handler::set_actions(SC_INFO, SC_DO_NOTHING);
-    if (opt.fidelity == Fidelity::LT)
-        tlm::tlm_global_quantum::instance().set(m.core.period() * double(cfg.quantum));
-    // Binds initiator to target, through a protocol checker when asked for.
-    const bool check = opt.check_protocol && opt.fidelity == Fidelity::AT;
-    auto link = [&](auto& initiator, auto& target, const std::string& name) {
-        if (!check) {
-            initiator.bind(target);
-            return;
-        }
-        m.checkers.emplace_back(new ProtocolChecker(("check_" + name).c_str()));
-        initiator.bind(m.checkers.back()->in);
-        m.checkers.back()->out.bind(target);
-    };
-    for (uint32_t s = 0; s < cfg.sms; ++s) {
-        const std::string id = std::to_string(s);
-        m.rt.emplace_back(new RtUnit(("rt_unit_" + id).c_str(), s, cfg, image, opt.order, m.driver, m.pool, m.core, opt.fidelity,
-                                     m.treelets.get()));
-        m.l1.emplace_back(new Cache(("l1_" + id).c_str(), CacheRole::L1, cfg.l1, cfg.l1_hit_latency, m.pool, m.core, opt.fidelity));
-        link(m.rt[s]->socket, m.l1[s]->in, "rt_unit_" + id + "_l1_" + id);
-    }
-    m.xbar.reset(new Crossbar("crossbar", cfg.address_map(), cfg.l2_slices, cfg.xbar_latency, m.core, opt.fidelity));
-    for (uint32_t s = 0; s < cfg.sms; ++s) link(m.l1[s]->out, m.xbar->in, "l1_" + std::to_string(s) + "_crossbar");
-    m.dram.reset(new Dram("dram", cfg.dram, cfg.address_map(), m.mem, m.core.period(), opt.fidelity));
-    for (uint32_t s = 0; s < cfg.l2_slices; ++s) {
-        const std::string id = std::to_string(s);
-        m.l2.emplace_back(new Cache(("l2_" + id).c_str(), CacheRole::L2, cfg.l2, cfg.l2.latency, m.pool, m.core, opt.fidelity));
-        link(m.xbar->out, m.l2[s]->in, "crossbar_l2_" + id);
-        link(m.l2[s]->out, m.dram->in, "l2_" + id + "_dram");
-    }
-
     m.driver.keep_rays(opt.keep_rays);
     // Sampled run: when a simulated cluster starts, the caches are warmed with the node fetches
     // of the clusters skipped before it (L1 of the SM that made them, then L2 on an L1 miss).
     m.driver.on_warm = [impl = impl_.get(), sector = cfg.l1.sector](const std::vector<WarmFetch>& fetches) {
         for (const WarmFetch& f : fetches)
-            for (uint32_t o = 0; o < f.bytes; o += sector) {
-                const uint64_t a = (impl->treelets ? impl->treelets->placed(f.addr) : f.addr) + o;
-                if (!impl->l1[f.sm]->warm(a)) impl->l2[impl->xbar->slice_of(a)]->warm(a);
-            }
+            for (uint32_t o = 0; o < f.bytes; o += sector)
+                impl->gpu.warm(f.sm, (impl->treelets ? impl->treelets->placed(f.addr) : f.addr) + o);
     };
 
     if (!opt.vcd.empty()) {
@@ -156,7 +116,7 @@ GpuPlatform::GpuPlatform(const HwConfig& cfg, const BvhImage& image, Workload& w
             sc_trace(m.tf, m.rt_trace[s].maq, p + "memory_access_queue_depth");
             sc_trace(m.tf, m.rt_trace[s].fifo, p + "response_fifo_depth");
             sc_trace(m.tf, m.rt_trace[s].active, p + "active_threads");
-            RtUnit* unit = m.rt[s].get();
+            RtUnit* unit = m.gpu.rt_units()[s].get();
             Impl::RtTrace* tr = &m.rt_trace[s];
             const bool traced_warp = int(s) == opt.trace_sm;
             if (traced_warp) {
@@ -190,8 +150,8 @@ GpuPlatform::GpuPlatform(const HwConfig& cfg, const BvhImage& image, Workload& w
                 sc_trace(m.tf, rate[i], prefix + std::to_string(i) + ".miss_rate_window");
             }
         };
-        trace_caches(m.l1, m.l1_mshr, m.l1_missrate, m.l1_prev, "l1_");
-        trace_caches(m.l2, m.l2_mshr, m.l2_missrate, m.l2_prev, "l2_");
+        trace_caches(m.gpu.l1(), m.l1_mshr, m.l1_missrate, m.l1_prev, "l1_");
+        trace_caches(m.gpu.l2(), m.l2_mshr, m.l2_missrate, m.l2_prev, "l2_");
         sc_trace(m.tf, m.dram_queue, "dram.queue_depth");
         sc_trace(m.tf, m.dram_bw, "dram.bandwidth_utilisation_window");
         Impl* impl = &m;
@@ -211,10 +171,10 @@ GpuPlatform::GpuPlatform(const HwConfig& cfg, const BvhImage& image, Workload& w
                     prev[i] = now;
                 }
             };
-            upd(impl->l1, impl->l1_mshr, impl->l1_missrate, impl->l1_prev);
-            upd(impl->l2, impl->l2_mshr, impl->l2_missrate, impl->l2_prev);
-            impl->dram_queue = int(impl->dram->queue_depth());
-            const uint64_t busy = total(impl->dram->stats()).data_cycles;
+            upd(impl->gpu.l1(), impl->l1_mshr, impl->l1_missrate, impl->l1_prev);
+            upd(impl->gpu.l2(), impl->l2_mshr, impl->l2_missrate, impl->l2_prev);
+            impl->dram_queue = int(impl->gpu.dram().queue_depth());
+            const uint64_t busy = total(impl->gpu.dram().stats()).data_cycles;
             const double window_mem = double(cycle - impl->last_sample) * impl->core.period_fs() / double(impl->mem.period_fs());
             impl->dram_bw = double(busy - impl->dram_prev_busy) / (window_mem * impl->cfg.dram.channels);
             impl->dram_prev_busy = busy;
@@ -226,7 +186,7 @@ GpuPlatform::GpuPlatform(const HwConfig& cfg, const BvhImage& image, Workload& w
     m.monitor.reset(new Monitor("monitor", m.driver, m.core, cfg.watchdog, opt.progress, period));
     m.monitor->describe_stuck = [this]() {
         std::string s;
-        for (const auto& u : impl_->rt) {
+        for (const auto& u : impl_->gpu.rt_units()) {
             const RtUnitCore& c = u->core();
             if (c.warps_resident())
                 s += std::string(u->name()) + ": " + std::to_string(c.warps_resident()) + " warps, " +
@@ -261,24 +221,24 @@ TimingResult GpuPlatform::run() {
     r.counts.cycles_simulated = r.cycles_simulated;
     r.counts.core_period_fs = double(m.core.period_fs());
     r.counts.memory_cycles = double(r.cycles_simulated) * double(m.core.period_fs()) / double(m.mem.period_fs());
-    for (const auto& u : m.rt) {
+    for (const auto& u : m.gpu.rt_units()) {
         u->core().account(r.cycles_simulated);
         r.counts.rt.push_back(u->core().stats());
     }
-    for (const auto& c : m.l1) r.counts.l1.push_back(c->tags().counts());
-    for (const auto& c : m.l2) r.counts.l2.push_back(c->tags().counts());
-    r.counts.dram = m.dram->stats();
+    for (const auto& c : m.gpu.l1()) r.counts.l1.push_back(c->tags().counts());
+    for (const auto& c : m.gpu.l2()) r.counts.l2.push_back(c->tags().counts());
+    r.counts.dram = m.gpu.dram().stats();
     r.sampled = m.driver.sampled();
     r.estimate = est;
-    r.payloads_allocated = m.pool.allocated();
-    for (const auto& c : m.checkers) {
+    r.payloads_allocated = m.gpu.pool().allocated();
+    for (const auto& c : m.gpu.checkers()) {
         r.protocol_transactions += c->transactions();
         r.protocol_violations.insert(r.protocol_violations.end(), c->violations().begin(), c->violations().end());
         if (!r.stuck && c->open()) r.protocol_violations.push_back(std::string(c->name()) + ": " + std::to_string(c->open()) + " transactions left open");
     }
     // Invariants.
     if (!r.stuck) {
-        if (m.pool.outstanding() != 0) r.invariant_failures.push_back(std::to_string(m.pool.outstanding()) + " requests never got their response");
+        if (m.gpu.pool().outstanding() != 0) r.invariant_failures.push_back(std::to_string(m.gpu.pool().outstanding()) + " requests never got their response");
         if (m.driver.rays_retired() != m.driver.rays_issued()) r.invariant_failures.push_back("not every ray retired");
         for (const std::string& f : counter_invariants(r.counts, r.summary)) r.invariant_failures.push_back(f);
     }

@@ -306,7 +306,12 @@ int run(const Args& a) {
 }  // namespace
 
 int sc_main(int argc, char** argv) {
+    // Process-wide SystemC settings are rtsim's, not the model's (tlm/rt_complex.h): the clocks'
+    // periods are whole femtoseconds, and SystemC's informational reports ("simulation stopped
+    // by user", "timescale unit set") would clutter the run's own output (warnings and errors
+    // still show).
     sc_core::sc_set_time_resolution(1, sc_core::SC_FS);
+    sc_core::sc_report_handler::set_actions(sc_core::SC_INFO, sc_core::SC_DO_NOTHING);
     Args a;
     // Every option is in the usage lines (a test checks it against the option table).
     const std::string usage =

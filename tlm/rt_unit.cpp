@@ -8,10 +8,36 @@ namespace rtu {
 
 using namespace sc_core;
 
+namespace {
+
+// The LT unit's quantum keeper: its own quantum, sim.quantum core cycles, or the platform's
+// global quantum where that is set and smaller (a virtual platform running with a quantum of
+// milliseconds keeps the unit at the quantum its accuracy was measured at, docs/timing.md).
+// Sync points fall on multiples of the quantum, as tlm_global_quantum places them, so that the
+// unit reads no process-wide state it does not need and rtsim sets none.
+class LocalQuantumKeeper : public tlm_utils::tlm_quantumkeeper {
+public:
+    explicit LocalQuantumKeeper(const sc_time& own) : own_(own) {}
+
+protected:
+    sc_time compute_local_quantum() override {
+        sc_time q = own_;
+        const sc_time& global = tlm::tlm_global_quantum::instance().get();
+        if (global != SC_ZERO_TIME && global < q) q = global;
+        if (q == SC_ZERO_TIME) return q;
+        return q - sc_time::from_value(sc_time_stamp().value() % q.value());
+    }
+
+private:
+    sc_time own_;
+};
+
+}  // namespace
+
 RtUnit::RtUnit(sc_module_name name, uint32_t sm, const HwConfig& cfg, const BvhImage& image, TraversalOrder order,
                TraceSource& source, PayloadPool& pool, const ClockDomain& clock, Fidelity fidelity, const Treelets* treelets)
     : sc_module(name), socket("to_l1"), sm_(sm), core_(cfg, image, order, treelets), image_(image), source_(source), pool_(pool),
-      clock_(clock) {
+      clock_(clock), quantum_(clock.period() * double(cfg.quantum)) {
     if (fidelity == Fidelity::AT) {
         socket.register_nb_transport_bw(this, &RtUnit::nb_transport_bw);
         SC_METHOD(tick);
@@ -121,7 +147,7 @@ void RtUnit::admit_held_response(uint64_t c) {
 }
 
 void RtUnit::lt_loop() {
-    tlm_utils::tlm_quantumkeeper qk;
+    LocalQuantumKeeper qk(quantum_);
     qk.reset();
     struct Resp {
         uint64_t at;   // cycle the response reaches the FIFO

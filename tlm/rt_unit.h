@@ -1,7 +1,8 @@
 // The RT unit of one SM as a SystemC module: RtUnitCore (model/) behind one TLM-2.0 initiator
 // socket to the SM's L1. AT: non-blocking transport, one 32 B request per cycle, an SC_METHOD that
 // sleeps until its next event. LT: blocking transport with a quantum keeper; the unit runs ahead
-// of simulated time by up to one quantum. Its traces come from a TraceSource (model/trace_source.h).
+// of simulated time by up to one quantum (sim.quantum core cycles, or the global quantum where a
+// platform set a smaller one). Its traces come from a TraceSource (model/trace_source.h).
 #pragma once
 #include <functional>
 
@@ -48,6 +49,7 @@ private:
     const ClockDomain& clock_;
     bool waiting_end_req_ = false;
     tlm::tlm_generic_payload* held_response_ = nullptr;  // AT: BEGIN_RESP accepted, END_RESP withheld while the response FIFO is full
+    sc_core::sc_time quantum_;  // LT
     uint64_t last_cycle_ = ~0ull;
     sc_core::sc_event wake_;
 };

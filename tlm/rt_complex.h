@@ -1,0 +1,58 @@
+// The RT complex: the RT units of the SMs, their L1s, the crossbar, the L2 slices and the DRAM,
+// as child modules of one module, wired
+//   TraceSource -> RtUnit[sm] -> L1[sm] -> Crossbar -> L2[slice] -> Dram
+// and timed by its own core and memory clocks. rtsim's platform (platforms/gpu_platform.h) builds
+// one; an SoC peripheral would build another around its own trace source. It has no process-wide
+// side effects: it sets no global quantum (an LT RT unit keeps its own, tlm/rt_unit.h), no report
+// actions, and never stops or starts the simulation, so several may live in one simulation.
+#pragma once
+#include <memory>
+#include <vector>
+
+#include <systemc>
+
+#include "cache.h"
+#include "clock.h"
+#include "crossbar.h"
+#include "dram.h"
+#include "model/fidelity.h"
+#include "model/trace_source.h"
+#include "payload.h"
+#include "protocol_checker.h"
+#include "rt_unit.h"
+
+namespace rtu {
+
+class Treelets;
+
+class RtComplex : public sc_core::sc_module {
+public:
+    // `treelets`: with treelet traversal, the treelets the RT units traverse by (and the image's
+    // placement of them); else null. `check_protocol` (AT): a base-protocol checker on every link.
+    RtComplex(sc_core::sc_module_name name, const HwConfig& cfg, const BvhImage& image, TraversalOrder order, TraceSource& source,
+              Fidelity fidelity, const Treelets* treelets = nullptr, bool check_protocol = false);
+    ~RtComplex() override;
+
+    const ClockDomain& core_clock() const { return core_; }
+    const ClockDomain& memory_clock() const { return mem_; }
+    const std::vector<std::unique_ptr<RtUnit>>& rt_units() const { return rt_; }
+    const std::vector<std::unique_ptr<Cache>>& l1() const { return l1_; }
+    const std::vector<std::unique_ptr<Cache>>& l2() const { return l2_; }
+    const Dram& dram() const { return *dram_; }
+    const PayloadPool& pool() const { return pool_; }
+    const std::vector<std::unique_ptr<ProtocolChecker>>& checkers() const { return checkers_; }
+    // Functional warming (sampled runs): the sector at `addr` into SM `sm`'s L1, and into its L2
+    // slice when the L1 did not hold it (tags and LRU only).
+    void warm(uint32_t sm, uint64_t addr);
+
+private:
+    ClockDomain core_, mem_;
+    PayloadPool pool_;
+    std::vector<std::unique_ptr<RtUnit>> rt_;
+    std::vector<std::unique_ptr<Cache>> l1_, l2_;
+    std::unique_ptr<Crossbar> xbar_;
+    std::unique_ptr<Dram> dram_;
+    std::vector<std::unique_ptr<ProtocolChecker>> checkers_;
+};
+
+}  // namespace rtu
