@@ -15,6 +15,7 @@
 #include "tlm/payload.h"
 #include "tlm/protocol_checker.h"
 #include "tlm/rt_complex.h"
+#include <nlohmann/json.hpp>
 #include "workloads/workload_driver.h"
 
 #include <glm/common.hpp>
@@ -645,18 +646,22 @@ TEST(PaperFigure3, DfsWithTtpWalkInAt) { figure3::check(Fidelity::AT, false); }
 TEST(PaperFigure3, DfsWithTtpWalkInLt) { figure3::check(Fidelity::LT, false); }
 TEST(PaperFigure3, DfsWithTtpWalkInInterval) { figure3::check(Fidelity::AT, true); }
 
-// The RT complex as a library module (tlm/rt_complex.h): two in one simulation, on different
-// scenes and fidelities, each fed by its own workload driver, retire every ray with the hits the
-// functional model finds; the modules are children named in the hierarchy; and building and
-// running them touches no process-wide state: the global quantum stays unset (the LT units keep
-// their own) and nobody calls sc_stop. Their cycles are not compared with rtsim's: both AT's and
-// LT's depend on the order in which the kernel runs processes due at the same time, which other
-// modules change (rtsim's own monitor: wknd 24x24 primary, LT 2053 cycles with it, 2009 without;
-// docs/status.md).
-TEST(RtComplex, TwoInOneSimulationShareNothingGlobal) {
+// The RT complex as a library module (tlm/rt_complex.h): three in one simulation (cornell and
+// wknd in LT, wknd in AT), each fed by its own workload driver, retire every ray with the hits the
+// functional model finds; the modules are children named in the hierarchy; building and running
+// them touches no process-wide state (the global quantum stays unset, nobody calls sc_stop); and
+// the LT ones take exactly the cycles rtsim takes on their workload alone, so they share nothing.
+// AT's cycles are not compared: they depend on the order in which the kernel runs processes due at
+// the same time, which the other modules change (docs/status.md).
+TEST(RtComplex, SeveralInOneSimulationShareNothing) {
     FsResolution resolution;
-    const std::string names[] = {"cornell", "wknd"};
-    const Fidelity fidelities[] = {Fidelity::LT, Fidelity::AT};
+    struct Unit {
+        std::string scene;
+        Fidelity fidelity;
+        const char* fidelity_name;
+    };
+    const Unit units[] = {{"cornell", Fidelity::LT, "lt"}, {"wknd", Fidelity::LT, "lt"}, {"wknd", Fidelity::AT, "at"}};
+    const size_t n = std::size(units);
     const HwConfig hw = Config::load("mobile").resolve();
     WorkloadParams p;
     p.width = p.height = 24;
@@ -666,35 +671,43 @@ TEST(RtComplex, TwoInOneSimulationShareNothingGlobal) {
     std::vector<std::unique_ptr<Workload>> workloads;
     std::vector<std::unique_ptr<WorkloadDriver>> drivers;
     std::vector<std::unique_ptr<RtComplex>> gpus;
-    std::vector<std::map<std::pair<uint32_t, uint32_t>, Hit>> expected(2);
-    for (size_t i = 0; i < 2; ++i) {
-        scenes.push_back(load_scene(names[i], ""));
+    std::vector<std::map<std::pair<uint32_t, uint32_t>, Hit>> expected(n);
+    for (const Unit& u : units) {
+        scenes.push_back(load_scene(u.scene, ""));
         images.push_back(build_bvh_image(scenes.back()));
     }
-    for (size_t i = 0; i < 2; ++i) {
+    for (size_t i = 0; i < n; ++i) {
         auto fw = make_scene_workload(WorkloadKind::Primary, scenes[i], p);
         const FunctionalResult f = run_functional(scenes[i], images[i], *fw, FunctionalOptions{}, nullptr);
         for (size_t r = 0; r < f.rays.size(); ++r) expected[i][{f.path[r], f.seq[r]}] = f.hits[r];
         workloads.push_back(make_scene_workload(WorkloadKind::Primary, scenes[i], p));
         drivers.emplace_back(new WorkloadDriver(*workloads[i], hw.sms, hw.warp_size, hw.shade_latency, hw.resident_warps));
-        drivers[i]->keep_rays(true);
-        gpus.emplace_back(new RtComplex(("gpu_" + std::to_string(i)).c_str(), hw, images[i], TraversalOrder::DFS, *drivers[i], fidelities[i]));
+        gpus.emplace_back(new RtComplex(("gpu_" + std::to_string(i)).c_str(), hw, images[i], TraversalOrder::DFS, *drivers[i], units[i].fidelity));
     }
     EXPECT_EQ(std::string(gpus[1]->rt_units()[3]->name()), "gpu_1.rt_unit_3");
     EXPECT_EQ(std::string(gpus[0]->dram().name()), "gpu_0.dram");
     sc_core::sc_start();
     EXPECT_FALSE(sc_core::sc_end_of_simulation_invoked()) << "something called sc_stop";
     EXPECT_EQ(tlm::tlm_global_quantum::instance().get(), sc_core::SC_ZERO_TIME);
-    for (size_t i = 0; i < 2; ++i) {
-        ASSERT_TRUE(drivers[i]->finished()) << names[i];
-        EXPECT_EQ(gpus[i]->pool().outstanding(), 0u) << names[i];
+    rtu::test::TempDir dir;
+    for (size_t i = 0; i < n; ++i) {
+        const std::string what = units[i].scene + " " + units[i].fidelity_name;
+        ASSERT_TRUE(drivers[i]->finished()) << what;
+        EXPECT_EQ(gpus[i]->pool().outstanding(), 0u) << what;
         const std::vector<TracedRay> rays = drivers[i]->results();
-        ASSERT_EQ(rays.size(), expected[i].size()) << names[i];
+        ASSERT_EQ(rays.size(), expected[i].size()) << what;
         for (const TracedRay& t : rays) {
             const Hit& h = expected[i].at({t.path, t.seq});
-            EXPECT_EQ(t.hit.hit, h.hit) << names[i];
-            EXPECT_EQ(t.hit.t, h.t) << names[i];
-            EXPECT_EQ(t.hit.prim, h.prim) << names[i];
+            EXPECT_EQ(t.hit.hit, h.hit) << what;
+            EXPECT_EQ(t.hit.t, h.t) << what;
+            EXPECT_EQ(t.hit.prim, h.prim) << what;
         }
+        if (units[i].fidelity != Fidelity::LT) continue;
+        const std::string stats = dir.file(std::to_string(i) + ".json");
+        const std::string cmd = std::string(RTU_RTSIM) + " --scene " + units[i].scene +
+                                " --workload primary --width 24 --height 24 --seed 3 --config mobile --fidelity lt --quiet --stats " + stats;
+        ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+        const auto j = nlohmann::json::parse(rtu::test::read_text(stats));
+        EXPECT_EQ(drivers[i]->last_progress(), j["cycles"].get<uint64_t>()) << what;
     }
 }

@@ -1,6 +1,9 @@
 #include "rt_complex.h"
 
+#include <algorithm>
 #include <string>
+
+#include <tlm>
 
 namespace rtu {
 
@@ -8,7 +11,7 @@ using namespace sc_core;
 
 RtComplex::RtComplex(sc_module_name name, const HwConfig& cfg, const BvhImage& image, TraversalOrder order, TraceSource& source,
                      Fidelity fidelity, const Treelets* treelets, bool check_protocol)
-    : sc_module(name), core_(cfg.core_mhz), mem_(cfg.memory_mhz) {
+    : sc_module(name), core_(cfg.core_mhz), mem_(cfg.memory_mhz), quantum_(core_.period() * double(cfg.quantum)) {
     // Binds initiator to target, through a protocol checker when asked for (AT only: LT's
     // blocking transport has no phases to check).
     const bool check = check_protocol && fidelity == Fidelity::AT;
@@ -39,9 +42,27 @@ RtComplex::RtComplex(sc_module_name name, const HwConfig& cfg, const BvhImage& i
         link(xbar_->out, l2_[s]->in, "crossbar_l2_" + id);
         link(l2_[s]->out, dram_->in, "l2_" + id + "_dram");
     }
+    if (fidelity == Fidelity::LT) SC_THREAD(lt_schedule);
 }
 
 RtComplex::~RtComplex() = default;
+
+void RtComplex::lt_schedule() {
+    for (;;) {
+        uint64_t first = ~0ull;
+        for (const auto& u : rt_) first = std::min(first, u->lt_next());
+        if (first == ~0ull) return;  // no unit has work, and none will get any
+        const sc_time t = core_.time_of(first);
+        if (t > sc_time_stamp()) wait(t - sc_time_stamp());
+        // The quantum holding `first`: windows on multiples of the quantum, as
+        // tlm_global_quantum places sync points.
+        sc_time q = quantum_;
+        const sc_time& global = tlm::tlm_global_quantum::instance().get();
+        if (global != SC_ZERO_TIME && global < q) q = global;
+        const uint64_t end = std::max(first + 1, q == SC_ZERO_TIME ? first + 1 : core_.cycle_at_or_after(t - sc_time::from_value(t.value() % q.value()) + q));
+        for (const auto& u : rt_) u->lt_run(end);
+    }
+}
 
 void RtComplex::warm(uint32_t sm, uint64_t addr) {
     if (!l1_[sm]->warm(addr)) l2_[xbar_->slice_of(addr)]->warm(addr);

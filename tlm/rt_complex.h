@@ -3,8 +3,13 @@
 //   TraceSource -> RtUnit[sm] -> L1[sm] -> Crossbar -> L2[slice] -> Dram
 // and timed by its own core and memory clocks. rtsim's platform (platforms/gpu_platform.h) builds
 // one; an SoC peripheral would build another around its own trace source. It has no process-wide
-// side effects: it sets no global quantum (an LT RT unit keeps its own, tlm/rt_unit.h), no report
-// actions, and never stops or starts the simulation, so several may live in one simulation.
+// side effects: it sets no global quantum, no report actions, and never stops or starts the
+// simulation, so several may live in one simulation.
+// LT: one thread (lt_schedule) runs the RT units' cycles quantum by quantum, each unit's cycles of
+// the quantum in turn, SM 0 first, ahead of simulated time, then waits for the next quantum with
+// work. The quantum is sim.quantum core cycles, or a platform's global quantum where that is
+// smaller. With a thread per unit, the kernel chose which unit ran its quantum first, and any
+// other process in the simulation (rtsim's own monitor) changed that choice and LT's cycles.
 #pragma once
 #include <memory>
 #include <vector>
@@ -32,6 +37,7 @@ public:
     RtComplex(sc_core::sc_module_name name, const HwConfig& cfg, const BvhImage& image, TraversalOrder order, TraceSource& source,
               Fidelity fidelity, const Treelets* treelets = nullptr, bool check_protocol = false);
     ~RtComplex() override;
+    SC_HAS_PROCESS(RtComplex);
 
     const ClockDomain& core_clock() const { return core_; }
     const ClockDomain& memory_clock() const { return mem_; }
@@ -46,7 +52,10 @@ public:
     void warm(uint32_t sm, uint64_t addr);
 
 private:
+    void lt_schedule();  // LT
+
     ClockDomain core_, mem_;
+    sc_core::sc_time quantum_;  // LT: sim.quantum core cycles
     PayloadPool pool_;
     std::vector<std::unique_ptr<RtUnit>> rt_;
     std::vector<std::unique_ptr<Cache>> l1_, l2_;

@@ -2,49 +2,20 @@
 
 #include <queue>
 
-#include <tlm_utils/tlm_quantumkeeper.h>
 
 namespace rtu {
 
 using namespace sc_core;
 
-namespace {
-
-// The LT unit's quantum keeper: its own quantum, sim.quantum core cycles, or the platform's
-// global quantum where that is set and smaller (a virtual platform running with a quantum of
-// milliseconds keeps the unit at the quantum its accuracy was measured at, docs/timing.md).
-// Sync points fall on multiples of the quantum, as tlm_global_quantum places them, so that the
-// unit reads no process-wide state it does not need and rtsim sets none.
-class LocalQuantumKeeper : public tlm_utils::tlm_quantumkeeper {
-public:
-    explicit LocalQuantumKeeper(const sc_time& own) : own_(own) {}
-
-protected:
-    sc_time compute_local_quantum() override {
-        sc_time q = own_;
-        const sc_time& global = tlm::tlm_global_quantum::instance().get();
-        if (global != SC_ZERO_TIME && global < q) q = global;
-        if (q == SC_ZERO_TIME) return q;
-        return q - sc_time::from_value(sc_time_stamp().value() % q.value());
-    }
-
-private:
-    sc_time own_;
-};
-
-}  // namespace
-
 RtUnit::RtUnit(sc_module_name name, uint32_t sm, const HwConfig& cfg, const BvhImage& image, TraversalOrder order,
                TraceSource& source, PayloadPool& pool, const ClockDomain& clock, Fidelity fidelity, const Treelets* treelets)
     : sc_module(name), socket("to_l1"), sm_(sm), core_(cfg, image, order, treelets), image_(image), source_(source), pool_(pool),
-      clock_(clock), quantum_(clock.period() * double(cfg.quantum)) {
+      clock_(clock) {
     if (fidelity == Fidelity::AT) {
         socket.register_nb_transport_bw(this, &RtUnit::nb_transport_bw);
         SC_METHOD(tick);
         sensitive << wake_;  // runs once at time 0, then only when woken
-    } else {
-        SC_THREAD(lt_loop);
-    }
+    }  // LT: no process of its own; the RT complex steps it (lt_run)
 }
 
 void RtUnit::wake_at(uint64_t cycle) {
@@ -146,35 +117,26 @@ void RtUnit::admit_held_response(uint64_t c) {
     t->release();
 }
 
-void RtUnit::lt_loop() {
-    LocalQuantumKeeper qk(quantum_);
-    qk.reset();
-    struct Resp {
-        uint64_t at;   // cycle the response reaches the FIFO
-        uint64_t seq;  // order of sending: responses due the same cycle arrive in it
-        uint64_t id;
-        bool l1_miss, dram;
-        bool operator>(const Resp& o) const { return at != o.at ? at > o.at : seq > o.seq; }
-    };
-    std::priority_queue<Resp, std::vector<Resp>, std::greater<Resp>> responses;
-    uint64_t sent = 0;
-    uint64_t port_free = 0;  // a reservation fail holds the request port until the L1 accepts
-    uint64_t c = clock_.cycle_at_or_after(sc_time_stamp());
-    for (;;) {
+// LT: the unit's cycles from its next one up to `end` (exclusive), sending its requests by
+// blocking transport annotated with their cycle's offset from the current simulated time.
+void RtUnit::lt_run(uint64_t end) {
+    LtState& st = lt_;
+    uint64_t c = st.next;
+    while (c < end) {
         last_cycle_ = c;
         // Responses due enter the response FIFO while it has room (the rest wait in the L1).
-        while (!responses.empty() && responses.top().at <= c && core_.takes_response(responses.top().id)) {
-            core_.on_response(responses.top().id, responses.top().l1_miss, responses.top().dram, c);
-            responses.pop();
+        while (!st.responses.empty() && st.responses.top().at <= c && core_.takes_response(st.responses.top().id)) {
+            core_.on_response(st.responses.top().id, st.responses.top().l1_miss, st.responses.top().dram, c);
+            st.responses.pop();
         }
         pull_work(c);
-        if (c >= port_free && core_.has_request(c)) {
+        if (c >= st.port_free && core_.has_request(c)) {
             tlm::tlm_generic_payload* t = make_payload(core_.front_request(c));
             sc_time d = clock_.time_of(c) - sc_time_stamp();
             socket->b_transport(*t, d);
             const RtExtension& e = ext(*t);
-            port_free = e.accepted_at + 1;
-            responses.push({std::max(c + 1, clock_.cycle_at_or_after(sc_time_stamp() + d)), sent++, e.id, e.l1_miss, e.dram});
+            st.port_free = e.accepted_at + 1;
+            st.responses.push({std::max(c + 1, clock_.cycle_at_or_after(sc_time_stamp() + d)), st.sent++, e.id, e.l1_miss, e.dram});
             t->release();
             core_.pop_request(c);
         }
@@ -184,18 +146,15 @@ void RtUnit::lt_loop() {
         if (on_cycle) on_cycle(c);
 
         uint64_t next = core_.next_event(c);
-        if (core_.has_request(c + 1)) next = std::max(c + 1, port_free);
-        if (!responses.empty()) next = std::min(next, std::max(c + 1, responses.top().at));
+        if (core_.has_request(c + 1)) next = std::max(c + 1, st.port_free);
+        if (!st.responses.empty()) next = std::min(next, std::max(c + 1, st.responses.top().at));
         if (core_.has_free_slot()) {
             const uint64_t r = source_.earliest_ready(sm_);
             if (r != ~0ull) next = std::min(next, std::max(c + 1, r));
         }
-        if (next == ~0ull) break;  // nothing in flight and no trace will come for this SM
-        c = next;
-        qk.set(clock_.time_of(c) - sc_time_stamp());
-        if (qk.need_sync()) qk.sync();
+        c = next;  // ~0: nothing in flight and no trace will come for this SM
     }
-    qk.sync();
+    st.next = c;
 }
 
 }  // namespace rtu

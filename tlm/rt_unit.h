@@ -1,10 +1,12 @@
 // The RT unit of one SM as a SystemC module: RtUnitCore (model/) behind one TLM-2.0 initiator
 // socket to the SM's L1. AT: non-blocking transport, one 32 B request per cycle, an SC_METHOD that
-// sleeps until its next event. LT: blocking transport with a quantum keeper; the unit runs ahead
-// of simulated time by up to one quantum (sim.quantum core cycles, or the global quantum where a
-// platform set a smaller one). Its traces come from a TraceSource (model/trace_source.h).
+// sleeps until its next event. LT: blocking transport; the unit has no process of its own: the RT
+// complex (tlm/rt_complex.h) runs each unit's cycles of a quantum in turn, in a fixed order, ahead
+// of simulated time. Its traces come from a TraceSource (model/trace_source.h).
 #pragma once
 #include <functional>
+#include <queue>
+#include <vector>
 
 #include <systemc>
 #include <tlm>
@@ -28,13 +30,16 @@ public:
     SC_HAS_PROCESS(RtUnit);
 
     RtUnitCore& core() { return core_; }
+    // LT: the next cycle the unit has work in (~0: none, and none will come), and running its
+    // cycles before `end`.
+    uint64_t lt_next() const { return lt_.next; }
+    void lt_run(uint64_t end);
     const RtUnitCore& core() const { return core_; }
     // Called after every cycle the unit works (waveform sampling); may be empty.
     std::function<void(uint64_t cycle)> on_cycle;
 
 private:
     void tick();     // AT
-    void lt_loop();  // LT
     void pull_work(uint64_t c);
     void admit_held_response(uint64_t c);
     tlm::tlm_sync_enum nb_transport_bw(tlm::tlm_generic_payload& t, tlm::tlm_phase& ph, sc_core::sc_time& d);
@@ -49,7 +54,20 @@ private:
     const ClockDomain& clock_;
     bool waiting_end_req_ = false;
     tlm::tlm_generic_payload* held_response_ = nullptr;  // AT: BEGIN_RESP accepted, END_RESP withheld while the response FIFO is full
-    sc_core::sc_time quantum_;  // LT
+    // LT: what lt_run carries from one quantum to the next.
+    struct LtResponse {
+        uint64_t at;   // cycle the response reaches the FIFO
+        uint64_t seq;  // order of sending: responses due the same cycle arrive in it
+        uint64_t id;
+        bool l1_miss, dram;
+        bool operator>(const LtResponse& o) const { return at != o.at ? at > o.at : seq > o.seq; }
+    };
+    struct LtState {
+        std::priority_queue<LtResponse, std::vector<LtResponse>, std::greater<LtResponse>> responses;
+        uint64_t sent = 0;
+        uint64_t port_free = 0;  // a reservation fail holds the request port until the L1 accepts
+        uint64_t next = 0;       // the next cycle with work
+    } lt_;
     uint64_t last_cycle_ = ~0ull;
     sc_core::sc_event wake_;
 };
