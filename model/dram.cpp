@@ -1,6 +1,7 @@
 #include "dram.h"
 
 #include <algorithm>
+#include <iterator>
 
 namespace rtu {
 
@@ -67,33 +68,50 @@ uint64_t DramBookings::access(uint64_t addr, uint32_t bytes, uint64_t now, uint6
     const DramCoord at = map_.dram(addr);
     Bank& b = banks_[at.channel][at.bank];
     DramStats& st = stats_[at.channel];
-    const bool hit = b.open && b.row == at.row;
-    const uint64_t pre = !hit && b.open ? cfg_.tRP : 0;  // precharge before the activation
-    if (hit)
-        ++st.row_hits;
-    else
-        (b.open ? st.row_conflicts : st.row_misses)++;
-    b.open = true;
-    b.row = at.row;
+    std::deque<Epoch>& epochs = b.epochs;
+    // Epochs closed by the horizon cannot take a read any more (no read comes before it); the
+    // last stays, as the bank's open row.
+    while (epochs.size() > 1 && epochs.front().until <= horizon) epochs.pop_front();
+    // FR-FCFS: the earliest epoch of this row open at or after the read's arrival serves it.
+    // FCFS (dram.scheduler fcfs): only the bank's last epoch, as reads are served in turn.
+    const Epoch* open = nullptr;
+    for (const Epoch& e : epochs) {
+        if (e.row == at.row && e.until > now && (cfg_.frfcfs || e.until == ~0ull)) {
+            open = &e;
+            break;
+        }
+    }
     const uint64_t xfer = dram_transfer_cycles(cfg_, bytes);
     const uint64_t slot = std::max<uint64_t>(cfg_.tCCD, xfer);  // column-to-column
-    // The bank: a row hit holds it for one column command, an activation from its precharge
-    // to its first column command.
-    const uint64_t hold = hit ? cfg_.tCCD : pre + cfg_.tRCD + cfg_.tCCD;
-    const uint64_t bank_start = b.busy.book(now, std::max<uint64_t>(hold, 1), horizon);
-    // The channel's command sequence, as AT's scheduler issues it: one request at a time, a
-    // row miss's ACT overlapping the transfer ahead of it, a conflict's precharge not.
     uint64_t column;
-    if (hit) {
-        column = commands_[at.channel].book(bank_start, slot, horizon);
+    if (open) {
+        ++st.row_hits;
+        // The bank: a row hit holds it for one column command, not before its row is open.
+        const uint64_t bank_start = b.busy.book(now, std::max<uint64_t>(cfg_.tCCD, 1), horizon);
+        column = commands_[at.channel].book(std::max(bank_start, open->first_column), slot, horizon);
+        st.queue_wait += column - now;  // beyond the unloaded latency
     } else {
-        column = commands_[at.channel].book(bank_start + cfg_.tRCD, pre + slot, horizon) + pre;
+        // An activation, after a precharge unless the bank was never opened. The bank is held
+        // from its precharge to its first column command; on the channel's command sequence the
+        // ACT overlaps the transfer ahead of it (tRCD), a conflict's precharge does not.
+        const uint64_t pre = epochs.empty() ? 0 : cfg_.tRP;
+        (epochs.empty() ? st.row_misses : st.row_conflicts)++;
+        const uint64_t bank_start = b.busy.book(now, pre + cfg_.tRCD + cfg_.tCCD, horizon);
+        const uint64_t sequence = commands_[at.channel].book(bank_start + cfg_.tRCD, pre + slot, horizon);
+        column = sequence + pre;
+        st.queue_wait += column - now - pre - cfg_.tRCD;  // beyond the unloaded latency
+        // The new epoch goes in at its decision; the one before it closes there.
+        Epoch e{at.row, sequence - cfg_.tRCD, column, ~0ull};
+        auto pos = std::upper_bound(epochs.begin(), epochs.end(), e.decision,
+                                    [](uint64_t d, const Epoch& x) { return d < x.decision; });
+        if (pos != epochs.end()) e.until = pos->decision;
+        if (pos != epochs.begin()) std::prev(pos)->until = e.decision;
+        epochs.insert(pos, e);
     }
     const uint64_t bus_start = bus_[at.channel].book(column + cfg_.tCL, xfer, horizon);
     ++st.reads;
     st.bytes += bytes;
     st.data_cycles += xfer;
-    st.queue_wait += column - now - (hit ? 0 : pre + cfg_.tRCD);  // beyond the unloaded latency
     return bus_start + xfer;
 }
 

@@ -418,6 +418,47 @@ TEST(DramBookings, HandWorkedCommandSequence) {
     EXPECT_EQ(d.stats()[1].reads, 1u);
 }
 
+// FR-FCFS in the fast fidelities' DRAM: a read is a row hit when its row's epoch is open at its
+// arrival or later, whatever the order of the calls. Mobile timing as above; ch0 bank0, rows 0
+// and 1 (addresses 0 and 32: row 0; 131072 and 131104: row 1). In this call order:
+//   A row 0 at 0, closed bank: bank [0,24), slot [20,28), data 40..48. Epoch row 0 from 0.
+//   C row 1 at 0 (conflict): bank from 24, 44 cycles: [24,68); precharge and slot on the command
+//     sequence from 24 + tRCD = 44: [44,72), column 64, data 84..92. Its decision, 44 - tRCD =
+//     24, closes row 0's epoch there.
+//   F row 0 at 10: row 0 is open until 24, so FR-FCFS serves F as a hit before C (call order
+//     would have made it a conflict). Bank after C's hold: 68; slot [72,80); data 92..100.
+//   K row 1 at 50: C's epoch is open: a hit (call order, after F, a conflict). Bank [72,76),
+//     slot [80,88), data 100..108.
+//   G row 0 at 30: row 0's first epoch closed at 24, row 1 is open: a conflict. Bank [76,120),
+//     command sequence from 96: [96,124), column 116, data 136..144. Decision 76.
+//   L row 0 at 40, called after G but arriving before G's row opens: in AT it waits in the queue
+//     until G opens row 0, then is a hit. Bank after G's hold: 120; slot [124,132); data 144..152.
+TEST(DramBookings, RowHitsFollowTimeNotCallOrder) {
+    const HwConfig hw = Config::load("mobile").resolve();
+    DramBookings d(hw.dram, hw.address_map());
+    EXPECT_EQ(d.access(0, 32, 0, 0), 48u);         // A
+    EXPECT_EQ(d.access(131072, 32, 0, 0), 92u);    // C
+    EXPECT_EQ(d.access(32, 32, 10, 0), 100u);      // F
+    EXPECT_EQ(d.access(131104, 32, 50, 0), 108u);  // K
+    EXPECT_EQ(d.access(32, 32, 30, 0), 144u);      // G
+    EXPECT_EQ(d.access(0, 32, 40, 0), 152u);       // L
+    const DramStats& s = d.stats()[0];
+    EXPECT_EQ(s.reads, 6u);
+    EXPECT_EQ(s.row_misses, 1u);     // A
+    EXPECT_EQ(s.row_conflicts, 2u);  // C, G
+    EXPECT_EQ(s.row_hits, 3u);       // F, K, L
+    // FCFS serves reads in turn: only the bank's last row is a hit. F finds C's row 1 open, K
+    // then F's row 0, G then K's row 1: conflicts; L follows G in row 0.
+    HwConfig fcfs = hw;
+    fcfs.dram.frfcfs = false;
+    DramBookings f(fcfs.dram, fcfs.address_map());
+    for (auto [addr, now] : {std::pair<uint64_t, uint64_t>{0, 0}, {131072, 0}, {32, 10}, {131104, 50}, {32, 30}, {0, 40}})
+        f.access(addr, 32, now, 0);
+    EXPECT_EQ(f.stats()[0].row_misses, 1u);
+    EXPECT_EQ(f.stats()[0].row_conflicts, 4u);
+    EXPECT_EQ(f.stats()[0].row_hits, 1u);
+}
+
 // Calendar against a plain set of busy cycles: each booking gets the earliest run of `len` free
 // cycles at or after its timestamp, in any order of timestamps, with horizons that only forget
 // bookings no later request can reach.
