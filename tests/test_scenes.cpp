@@ -197,6 +197,26 @@ TEST(MeshFiles, PlyAsciiBinaryAndGzipAgree) {
     }
 }
 
+// PLY lists its elements in any order: a face element before the vertex element is read (its
+// indices checked against the vertex count the header declares), the same mesh as ascii_ply().
+TEST(MeshFiles, PlyFacesBeforeVertices) {
+    TempDir dir;
+    const std::string header = "ply\nformat ascii 1.0\nelement face 2\nproperty list uchar int vertex_indices\nelement vertex 5\n"
+                               "property float x\nproperty float y\nproperty float z\nend_header\n";
+    Scene s;
+    load_mesh_file(s, write_text(dir.file("f.ply"), header + "4 0 1 2 3\n3 3 2 4\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n0.5 2 0\n"));
+    const Mesh& m = s.meshes[0];
+    ASSERT_EQ(m.vertices.size(), 5u);
+    ASSERT_EQ(m.triangles.size(), 3u);
+    EXPECT_EQ(m.triangles[1], glm::uvec3(0, 2, 3));
+    EXPECT_EQ(m.triangles[2], glm::uvec3(3, 2, 4));
+    EXPECT_EQ(m.vertices[4], glm::vec3(0.5f, 2, 0));
+    // An index past the declared vertices is still an error, on its line.
+    EXPECT_NE(load_error(write_text(dir.file("g.ply"), header + "4 0 1 2 3\n3 3 2 5\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n0.5 2 0\n"))
+                  .find("g.ply:11: face index 5.000000 out of range (0..4)"),
+              std::string::npos);
+}
+
 TEST(MeshFiles, GltfThroughAssimp) {
     TempDir dir;
     // One triangle; buffer: 3 float3 positions (36 bytes) as a base64 data URI.

@@ -239,6 +239,12 @@ public:
 
     void load(Mesh& mesh, uint32_t material) {
         parse_header();
+        // Faces may come before the vertices (the format orders elements as the header lists
+        // them): their indices are checked against the vertex element's count in the header.
+        const size_t base = mesh.vertices.size();
+        size_t vertices = 0;
+        for (const PlyElement& e : elements_)
+            if (e.name == "vertex") vertices += e.count;
         for (const PlyElement& e : elements_) {
             const bool vertex = e.name == "vertex", face = e.name == "face";
             int ix = -1, iy = -1, iz = -1, ilist = -1;
@@ -267,10 +273,10 @@ public:
                             if (list.size() < 3) fail("face with fewer than 3 vertices");
                             poly.clear();
                             for (double x : list) {
-                                if (x < 0 || x >= double(mesh.vertices.size()) || x != std::floor(x))
+                                if (x < 0 || x >= double(vertices) || x != std::floor(x))
                                     fail("face index " + std::to_string(x) + " out of range (0.." +
-                                         std::to_string(mesh.vertices.size()) + ")");
-                                poly.push_back(uint32_t(x));
+                                         std::to_string(vertices ? vertices - 1 : 0) + ")");
+                                poly.push_back(uint32_t(base + size_t(x)));
                             }
                             fan(mesh, poly, material);
                         }
