@@ -217,6 +217,29 @@ TEST(MeshFiles, PlyFacesBeforeVertices) {
               std::string::npos);
 }
 
+// Counts a file cannot hold are refused before any work; an element without properties in a
+// binary file holds nothing, whatever its count (it once looped 2^64 times).
+TEST(MeshFiles, PlyCountsAreBoundedByTheFile) {
+    TempDir dir;
+    const std::string vertex = "element vertex 5\nproperty float x\nproperty float y\nproperty float z\n";
+    EXPECT_NE(load_error(write_text(dir.file("n.ply"), "ply\nformat ascii 1.0\nelement vertex -5\nproperty float x\nend_header\n"))
+                  .find("n.ply:3: bad element count '-5'"),
+              std::string::npos);
+    EXPECT_NE(load_error(write_text(dir.file("o.ply"), "ply\nformat ascii 1.0\nelement vertex 99999999999999999999\nproperty float x\nend_header\n"))
+                  .find("bad element count"),
+              std::string::npos);
+    EXPECT_NE(load_error(write_text(dir.file("h.ply"), "ply\nformat ascii 1.0\nelement vertex 1000000000\nproperty float x\n"
+                                                       "property float y\nproperty float z\nend_header\n0 0 0\n"))
+                  .find("element 'vertex' declares 1000000000 records, more than the 6 bytes left in the file can hold"),
+              std::string::npos);
+    // Binary: an empty element of 2^64 - 1 records before the mesh of binary_ply().
+    std::string b = binary_ply(false);
+    b.replace(b.find("element vertex"), 0, "element nothing 18446744073709551615\n");
+    Scene s;
+    load_mesh_file(s, write_text(dir.file("e.ply"), b));
+    EXPECT_EQ(s.meshes[0].triangles.size(), 3u);
+}
+
 TEST(MeshFiles, GltfThroughAssimp) {
     TempDir dir;
     // One triangle; buffer: 3 float3 positions (36 bytes) as a base64 data URI.

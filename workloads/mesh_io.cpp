@@ -257,6 +257,18 @@ public:
             }
             if (vertex && (ix < 0 || iy < 0 || iz < 0)) throw input_error(path_, 0, "vertex element lacks x, y or z");
             if (face && ilist < 0) throw input_error(path_, 0, "face element lacks a vertex_indices list");
+            // Bounded work for bounded input: a record takes at least its values' sizes (binary) or
+            // a line of two bytes (ASCII: a character and a newline), so a count the rest of the
+            // file cannot hold is refused before any iteration. A binary element without
+            // properties holds nothing to read.
+            if (!ascii_ && e.props.empty()) continue;
+            size_t record_bytes = ascii_ ? 2 : 0;
+            if (!ascii_)
+                for (const PlyProperty& pr : e.props) record_bytes += ply_type_size(pr.count_type.empty() ? pr.type : pr.count_type);
+            const size_t left = data_.size() - std::min(pos_, data_.size());
+            if (e.count > (left + 1) / record_bytes)  // + 1: the last line may lack its newline
+                fail("element '" + e.name + "' declares " + std::to_string(e.count) + " records, more than the " + std::to_string(left) +
+                     " bytes left in the file can hold");
             std::vector<double> list;
             std::vector<uint32_t> poly;
             for (size_t i = 0; i < e.count; ++i) {
@@ -329,8 +341,11 @@ private:
                 e.name = t[1];
                 const std::string count(t[2]);
                 char* end = nullptr;
+                errno = 0;
                 e.count = std::strtoull(count.c_str(), &end, 10);
-                if (*end) fail("bad element count '" + count + "'");
+                // strtoull takes "-5" as 2^64 - 5: only digits are a count.
+                if (count.empty() || *end || errno == ERANGE || count.find_first_not_of("0123456789") != std::string::npos)
+                    fail("bad element count '" + count + "' (a whole number of records)");
                 elements_.push_back(e);
             } else if (t[0] == "property") {
                 if (elements_.empty()) fail("property before any element");
