@@ -208,7 +208,7 @@ Config Config::load(const std::string& name) {
     nlohmann::json j;
     try {
         j = nlohmann::json::parse(text);
-    } catch (const nlohmann::json::parse_error& e) {
+    } catch (const nlohmann::json::exception& e) {  // parse errors, and numbers out of range (1e400)
         throw ConfigError(source + ": not valid JSON: " + e.what());
     }
     c.apply(j, "", source);

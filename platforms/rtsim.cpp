@@ -10,6 +10,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <new>
 #include <sstream>
 #include <iostream>
 #include <optional>
@@ -392,6 +393,12 @@ int sc_main(int argc, char** argv) {
         return run(a);
     } catch (const InputError& e) {
         std::cerr << "rtsim: " << e.what() << "\n";
+        return 2;
+    } catch (const std::bad_alloc&) {
+        // The input asked for more than this machine holds; nothing was written (outputs are
+        // written whole at the end).
+        std::cerr << "rtsim: out of memory for a frame of " << a.width << "x" << a.height << " at " << a.spp
+                  << " spp; try a smaller frame, fewer samples per pixel, or --sample\n";
         return 2;
     } catch (const std::exception& e) {
         std::cerr << "rtsim: internal error: " << e.what() << "\n";

@@ -1,6 +1,8 @@
 // Cache tags/LRU/MSHR logic and DRAM timing, checked against hand-worked sequences.
 #include <gtest/gtest.h>
 
+#include "test_util.h"
+
 #include <random>
 #include <set>
 
@@ -260,6 +262,19 @@ TEST(SectorCache, AnL2SliceUsesAllItsSets) {
     EXPECT_EQ(ipoly_index(1, 0, 16), 3u);
     EXPECT_EQ(ipoly_index(0, 5, 32), 5u);
     EXPECT_THROW(ipoly_index(0, 0, 8), std::invalid_argument);
+}
+
+// A configuration file whose number JSON cannot hold (1e400) is bad input naming the file, not an
+// internal error (issue 16: it ended in exit 3).
+TEST(Config, NumberOutOfRangeInAFileIsAConfigError) {
+    rtu::test::TempDir dir;
+    const std::string path = rtu::test::write_text(dir.file("big.json"), "{\"l1\": {\"size_kb\": 1e400}}");
+    try {
+        Config::load(path);
+        FAIL() << "1e400 was accepted";
+    } catch (const ConfigError& e) {
+        EXPECT_NE(std::string(e.what()).find(path + ": not valid JSON"), std::string::npos) << e.what();
+    }
 }
 
 TEST(Config, PresetsLoadAndBadValuesAreRejectedByKey) {

@@ -129,6 +129,9 @@ TEST(Rtsim, BadInputExitsWithStatus2AndWritesNothing) {
         {"--scene cornell --fidelity at --quantum 100", "it needs --fidelity lt"},
         {"--scene cornell --fidelity at --sample 0.5 --threads -1", "--threads -1"},
         {"--scene cornell stray", "unexpected argument 'stray'"},
+        // Paths are numbered in 32 bits: 2^32 paths is one too many (it once ran, and a larger
+        // frame ended in std::bad_alloc, exit 3).
+        {"--scene cornell --width 4096 --height 4096 --spp 256", "4294967296 paths: at most 4294967295"},
         // Output paths are checked before the run (a VCD into a missing folder used to end in
         // SIGFPE after the whole simulation).
         {"--scene cornell --fidelity at --vcd " + dir.file("nodir/w.vcd"), "does not exist"},

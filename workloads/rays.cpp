@@ -327,6 +327,11 @@ std::unique_ptr<Workload> make_scene_workload(WorkloadKind kind, const Scene& sc
         throw InputError("--width/--height must be 1..16384 (got " + std::to_string(p.width) + "x" + std::to_string(p.height) + ")");
     if (p.spp < 1 || p.spp > 4096) throw InputError("--spp must be 1..4096 (got " + std::to_string(p.spp) + ")");
     if (p.bounces < 1 || p.bounces > 64) throw InputError("--bounces must be 1..64 (got " + std::to_string(p.bounces) + ")");
+    // Paths are numbered in 32 bits; counted in 64, so the product itself cannot overflow.
+    const uint64_t paths = uint64_t(p.width) * uint64_t(p.height) * uint64_t(p.spp);
+    if (paths > UINT32_MAX)
+        throw InputError("--width x --height x --spp = " + std::to_string(paths) + " paths: at most " + std::to_string(UINT32_MAX) +
+                         " (paths are numbered in 32 bits)");
     switch (kind) {
         case WorkloadKind::Primary: return std::make_unique<PrimaryWorkload>(scene, p);
         case WorkloadKind::PathTrace: return std::make_unique<PathTraceWorkload>(scene, p);
