@@ -48,6 +48,7 @@ RtComplex::RtComplex(sc_module_name name, const HwConfig& cfg, const BvhImage& i
 RtComplex::~RtComplex() = default;
 
 void RtComplex::lt_schedule() {
+    uint64_t window = 0;
     for (;;) {
         uint64_t first = ~0ull;
         for (const auto& u : rt_) first = std::min(first, u->lt_next());
@@ -60,7 +61,12 @@ void RtComplex::lt_schedule() {
         const sc_time& global = tlm::tlm_global_quantum::instance().get();
         if (global != SC_ZERO_TIME && global < q) q = global;
         const uint64_t end = std::max(first + 1, q == SC_ZERO_TIME ? first + 1 : core_.cycle_at_or_after(t - sc_time::from_value(t.value() % q.value()) + q));
-        for (const auto& u : rt_) u->lt_run(end);
+        // The units take turns at going first (window by window), as no RT unit of a GPU has
+        // precedence: with SM 0 always first, its fetches always took the L2 first, and on sprng
+        // primary rays 192x192 (mobile, seed 2) L2 hits fell to 54 % of AT's and LT ran 22.6 %
+        // slow (taking turns: 103 %, -1.6 %).
+        const size_t n = rt_.size(), first_unit = size_t(window++ % n);
+        for (size_t i = 0; i < n; ++i) rt_[(first_unit + i) % n]->lt_run(end);
     }
 }
 
