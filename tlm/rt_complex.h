@@ -7,9 +7,10 @@
 // simulation, so several may live in one simulation.
 // LT: one thread (lt_schedule) runs the RT units' cycles quantum by quantum, each unit's cycles of
 // the quantum in turn (SM k first in the k-th quantum with work, then k + 1, ...), ahead of
-// simulated time, then waits for the next quantum with work. The quantum is sim.quantum core cycles, or a platform's global quantum where that is
-// smaller. With a thread per unit, the kernel chose which unit ran its quantum first, and any
-// other process in the simulation (rtsim's own monitor) changed that choice and LT's cycles.
+// simulated time, then waits for the next quantum with work. The quantum is sim.quantum core
+// cycles, or a platform's global quantum where that is smaller. With a thread per unit, the
+// kernel chose which unit ran its quantum first, and any other process in the simulation
+// (rtsim's own monitor) changed that choice and LT's cycles.
 #pragma once
 #include <memory>
 #include <vector>

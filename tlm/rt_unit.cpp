@@ -2,7 +2,6 @@
 
 #include <queue>
 
-
 namespace rtu {
 
 using namespace sc_core;

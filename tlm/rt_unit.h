@@ -1,8 +1,7 @@
 // The RT unit of one SM as a SystemC module: RtUnitCore (model/) behind one TLM-2.0 initiator
 // socket to the SM's L1. AT: non-blocking transport, one 32 B request per cycle, an SC_METHOD that
 // sleeps until its next event. LT: blocking transport; the unit has no process of its own: the RT
-// complex (tlm/rt_complex.h) runs each unit's cycles of a quantum in turn, in a fixed order, ahead
-// of simulated time. Its traces come from a TraceSource (model/trace_source.h).
+// complex (tlm/rt_complex.h) runs each unit's cycles of a quantum in turn, ahead of simulated time. Its traces come from a TraceSource (model/trace_source.h).
 #pragma once
 #include <functional>
 #include <queue>
