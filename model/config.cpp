@@ -205,6 +205,28 @@ Config Config::load(const std::string& name) {
         text = ss.str();
         source = name;
     }
+    // Nesting is checked before parsing: applying (and the parse's own recursion) would
+    // overflow the stack on a file of 100 k nested objects (issue 16: SIGSEGV). A configuration
+    // nests two levels; 32 leaves room for comments' structures.
+    {
+        constexpr int kMaxDepth = 32;
+        int depth = 0;
+        bool in_string = false, escaped = false;
+        for (const char ch : text) {
+            if (in_string) {
+                if (escaped) escaped = false;
+                else if (ch == '\\') escaped = true;
+                else if (ch == '"') in_string = false;
+            } else if (ch == '"') {
+                in_string = true;
+            } else if (ch == '{' || ch == '[') {
+                if (++depth > kMaxDepth)
+                    throw ConfigError(source + ": nested deeper than " + std::to_string(kMaxDepth) + " levels (a configuration nests two)");
+            } else if (ch == '}' || ch == ']') {
+                --depth;
+            }
+        }
+    }
     nlohmann::json j;
     try {
         j = nlohmann::json::parse(text);

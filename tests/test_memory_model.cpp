@@ -266,7 +266,7 @@ TEST(SectorCache, AnL2SliceUsesAllItsSets) {
 
 // A configuration file whose number JSON cannot hold (1e400) is bad input naming the file, not an
 // internal error (issue 16: it ended in exit 3).
-TEST(Config, NumberOutOfRangeInAFileIsAConfigError) {
+TEST(Config, OutOfRangeNumbersAndDeepNestingAreConfigErrors) {
     rtu::test::TempDir dir;
     const std::string path = rtu::test::write_text(dir.file("big.json"), "{\"l1\": {\"size_kb\": 1e400}}");
     try {
@@ -275,6 +275,20 @@ TEST(Config, NumberOutOfRangeInAFileIsAConfigError) {
     } catch (const ConfigError& e) {
         EXPECT_NE(std::string(e.what()).find(path + ": not valid JSON"), std::string::npos) << e.what();
     }
+    // 100 k nested objects: refused before parsing (it overflowed the stack), a string's braces
+    // not counted.
+    std::string deep;
+    for (int i = 0; i < 100000; ++i) deep += "{\"a\":";
+    deep += "1" + std::string(100000, '}');
+    const std::string deep_path = rtu::test::write_text(dir.file("deep.json"), deep);
+    try {
+        Config::load(deep_path);
+        FAIL() << "100 k levels were accepted";
+    } catch (const ConfigError& e) {
+        EXPECT_NE(std::string(e.what()).find(deep_path + ": nested deeper than 32 levels"), std::string::npos) << e.what();
+    }
+    const std::string braces = rtu::test::write_text(dir.file("b.json"), "{\"_comment\": \"" + std::string(100, '{') + "\", \"gpu\": {\"sms\": 4}}");
+    EXPECT_EQ(Config::load(braces).resolve().sms, 4u);
 }
 
 TEST(Config, PresetsLoadAndBadValuesAreRejectedByKey) {
