@@ -25,15 +25,26 @@ public:
     // (290 k internal nodes) a 16 MB table of the top of the tree ran its traversal about as fast
     // as a table of all of them (60 MB): the host's caches hold the top, not the rest.
     static constexpr size_t kDecodedBudgetBytes = size_t(16) << 20;
+    // An image that owns its bytes.
     explicit BvhImage(std::vector<uint8_t> bytes, size_t decoded_budget = kDecodedBudgetBytes);
+    // A view of `size` bytes owned elsewhere (an image in a virtual platform's memory, or another
+    // image's bytes); they must outlive the view and not change while it is used.
+    static BvhImage view(const uint8_t* data, size_t size, size_t decoded_budget = kDecodedBudgetBytes);
+    // A copy of an owning image owns a copy of the bytes; a copy of a view views the same bytes.
+    BvhImage(const BvhImage& o);
+    BvhImage& operator=(const BvhImage& o);
+    BvhImage(BvhImage&&) noexcept = default;  // a vector's move keeps its buffer: data_ stays valid
+    BvhImage& operator=(BvhImage&&) noexcept = default;
+
     const ImageHeader& header() const { return header_; }
-    size_t size() const { return bytes_.size(); }
-    const std::vector<uint8_t>& bytes() const { return bytes_; }
+    size_t size() const { return size_; }
+    const uint8_t* data() const { return data_; }
+    bool owns_bytes() const { return !owned_.empty(); }
     // Bytes of the node at `addr`; throws if [addr, addr+len) is outside the image.
     const uint8_t* at(uint64_t addr, uint32_t len) const {
-        if (addr + len > bytes_.size() || addr + len < addr)
+        if (addr + len > size_ || addr + len < addr)
             throw std::out_of_range("BVH image read outside the image at " + std::to_string(addr));
-        return bytes_.data() + addr;
+        return data_ + addr;
     }
     // The internal node at `addr` decoded, or nullptr when it is not among those decoded up
     // front: the internal nodes reachable from the root, breadth first, within the budget (by
@@ -54,7 +65,10 @@ public:
 
 private:
     static constexpr uint32_t kNotDecoded = ~0u;
-    std::vector<uint8_t> bytes_;
+    void decode(size_t decoded_budget);
+    std::vector<uint8_t> owned_;  // empty for a view
+    const uint8_t* data_ = nullptr;
+    size_t size_ = 0;
     ImageHeader header_;
     std::vector<uint32_t> decoded_index_;  // per 64 B block: index into decoded_, or kNotDecoded
     std::vector<InternalNode> decoded_;

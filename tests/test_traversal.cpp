@@ -155,8 +155,17 @@ TEST(Traversal, NodesDecodedUpFrontChangeNoResult) {
     RTU_NEED_SHARED_SCENES();
     for (const std::string name : {"bunny", "wknd"}) {
         const Loaded l = load(name);
-        const BvhImage none(l.image.bytes(), 0);
-        const BvhImage top(l.image.bytes(), 7 * sizeof(InternalNode));
+        // Views of the same bytes (BvhImage::view: no copy), as a peripheral takes an image in
+        // a platform's memory; an owning copy of a view... of the owning image owns new bytes.
+        const BvhImage none = BvhImage::view(l.image.data(), l.image.size(), 0);
+        const BvhImage top = BvhImage::view(l.image.data(), l.image.size(), 7 * sizeof(InternalNode));
+        EXPECT_EQ(none.data(), l.image.data());
+        EXPECT_FALSE(none.owns_bytes());
+        const BvhImage copy = l.image;
+        EXPECT_TRUE(copy.owns_bytes());
+        EXPECT_NE(copy.data(), l.image.data());
+        EXPECT_EQ(std::memcmp(copy.data(), l.image.data(), l.image.size()), 0);
+        EXPECT_EQ(BvhImage(top).data(), l.image.data());  // a copy of a view views the same bytes
         const uint64_t root = l.image.header().root;
         ASSERT_NE(l.image.decoded_internal(root), nullptr);
         EXPECT_EQ(none.decoded_internal(root), nullptr);
