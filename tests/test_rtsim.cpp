@@ -878,7 +878,7 @@ TEST(RtsimConfig, PaperPresetTableMatchesTheJson) {
     const std::vector<std::string> presets = {"paper", "desktop", "mobile"};
     std::vector<std::map<std::string, nlohmann::json>> values;
     for (const std::string& p : presets) values.push_back(flat(Config::load(p).to_json()));
-    for (const std::string& p : {"paper", "desktop"}) {
+    for (const char* p : {"paper", "desktop"}) {
         const auto file = flat(nlohmann::ordered_json::parse(read_text(std::string(RTU_SOURCE_DIR) + "/platforms/configs/" + p + ".json")));
         for (const Config::KeyInfo& k : Config::keys()) EXPECT_TRUE(file.count(k.name)) << p << ".json does not write '" << k.name << "'";
     }
