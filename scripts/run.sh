@@ -50,5 +50,5 @@ Wrote:
   out/ttp.json             statistics of the TTP run
   out/ttp_vs_baseline.png  cycles, L1 misses and DRAM reads of the two runs
   out/ttp.vcd              waveforms of the TTP run; open them with
-                           gtkwave out/ttp.vcd waveforms/rtunit.gtkw
+                           gtkwave --rcvar 'do_initial_zoom_fit 1' out/ttp.vcd waveforms/rtunit.gtkw
 DONE
