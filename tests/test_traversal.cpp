@@ -10,6 +10,7 @@
 #include "platforms/functional_run.h"
 #include "test_util.h"
 #include "workloads/bvh_builder.h"
+#include "workloads/input_error.h"
 #include "workloads/scenes.h"
 
 using namespace rtu;
@@ -344,4 +345,29 @@ TEST(Traversal, SameSeedGivesBitIdenticalResults) {
         ASSERT_EQ(a.hits[i].t, b.hits[i].t) << i;
         ASSERT_EQ(a.hits[i].prim, b.hits[i].prim) << i;
     }
+}
+
+// Coordinates near the float limit made Embree's SAH costs NaN and its builder abort the process
+// (issue 16); they are bad input, named, and the limit itself builds.
+TEST(BvhBuilder, CoordinatesBeyondTheBuildersRangeAreInputErrors) {
+    auto triangle_at = [](float x) {
+        Scene s;
+        Mesh m;
+        m.name = "huge.obj";
+        m.vertices = {{-x, -x, 0.0f}, {x, -x, 0.0f}, {0.0f, x, 0.0f}};
+        m.triangles = {{0, 1, 2}};
+        m.material = {0};
+        s.meshes.push_back(m);
+        s.materials.push_back(Material{});
+        s.instances.push_back({0, identity_affine()});
+        return s;
+    };
+    try {
+        build_bvh_image(triangle_at(3e38f));
+        FAIL() << "a triangle at +-3e38 was built";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("mesh 0 (huge.obj): vertex 0 coordinate -3e+38 is beyond +-1e15"), std::string::npos) << e.what();
+    }
+    const BvhImage image = build_bvh_image(triangle_at(1e15f));
+    EXPECT_EQ(image.stats.triangle_leaves, 1u);
 }

@@ -1,11 +1,14 @@
 #include "bvh_builder.h"
 
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <stdexcept>
 
 #include <embree3/rtcore.h>
 #include <glm/common.hpp>
+
+#include "input_error.h"
 
 namespace rtu {
 namespace {
@@ -171,7 +174,40 @@ Aabb transformed_box(const Aabb& b, const Affine& m) {
 
 }  // namespace
 
+namespace {
+
+// Coordinates Embree's builder can take. Its SAH multiplies half-areas of boxes by primitive
+// counts in float: coordinates near the float limit (3e38) make areas infinite and the costs NaN,
+// and a debug assertion in the builder aborts the process (issue 16: a triangle at +-3e38). With
+// every coordinate within 1e15, a box's half-area stays below 1.2e31, and times 10 million
+// primitives below FLT_MAX.
+constexpr float kMaxCoordinate = 1e15f;
+
+void check_coordinates(const Scene& scene) {
+    auto refuse = [](const Mesh& m, size_t geom, const std::string& what, float v) {
+        char value[32];
+        std::snprintf(value, sizeof value, "%g", double(v));
+        throw InputError("mesh " + std::to_string(geom) + (m.name.empty() ? std::string() : " (" + m.name + ")") + ": " + what + " " +
+                         value + " is beyond +-1e15, the coordinates the BVH builder takes (scale the scene down)");
+    };
+    for (size_t g = 0; g < scene.meshes.size(); ++g) {
+        const Mesh& m = scene.meshes[g];
+        for (size_t i = 0; i < m.vertices.size(); ++i)
+            for (int a = 0; a < 3; ++a)
+                if (!(std::fabs(m.vertices[i][a]) <= kMaxCoordinate)) refuse(m, g, "vertex " + std::to_string(i) + " coordinate", m.vertices[i][a]);
+        for (size_t i = 0; i < m.spheres.size(); ++i) {
+            const Sphere& sp = m.spheres[i];
+            for (int a = 0; a < 3; ++a)
+                if (!(std::fabs(sp.center[a]) + std::fabs(sp.radius) <= kMaxCoordinate))
+                    refuse(m, g, "sphere " + std::to_string(i) + " extent", std::fabs(sp.center[a]) + std::fabs(sp.radius));
+        }
+    }
+}
+
+}  // namespace
+
 BvhImage build_bvh_image(const Scene& scene) {
+    check_coordinates(scene);
     EmbreeDevice device;
     ImageWriter w;
     ImageHeader header;
