@@ -349,6 +349,12 @@ RunResult run_simulation(const RunSpec& spec, std::ostream* log) {
             rec.hits += r.hit.hit;
         }
     }
+    // A frame of nothing but invalid rays is all misses and would look like an empty scene (a
+    // camera near the float limit does it); a ray file warns per line already.
+    if (kind != WorkloadKind::RayFile && rec.rays > 0 && rec.invalid == rec.rays)
+        std::cerr << "warning: every one of the " << rec.rays
+                  << " rays is invalid (an origin or direction out of range): check the camera (eye, look-at) and the scene's "
+                     "coordinates; the frame is all misses\n";
     // What the scene needs in memory against what the process holds at its peak.
     uint64_t scene_bytes = 0;
     for (const Mesh& m : scene.meshes)

@@ -155,6 +155,21 @@ TEST(Rtsim, BadInputExitsWithStatus2AndWritesNothing) {
 
 // rtsim with no arguments runs nothing: it prints the usage and exits 2; the usage lines name
 // every option of the --help table.
+// A camera near the float limit makes every primary ray invalid: the run is all misses, which
+// would read as an empty scene, so it says so (issue 16); one invalid ray among valid ones does not.
+TEST(Rtsim, AFrameOfOnlyInvalidRaysWarns) {
+    TempDir dir;
+    std::filesystem::create_directory(dir.file("scene"));
+    write_text(dir.file("scene/a.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    write_text(dir.file("scene/view.camera"), "3e38 3e38 3e38\n0 0 0\n");
+    const Result r = rtsim(dir, "--scene " + dir.file("scene") + " --workload primary --width 8 --height 8 --quiet");
+    EXPECT_EQ(r.status, 0) << r.err;
+    EXPECT_NE(r.err.find("warning: every one of the 128 rays is invalid"), std::string::npos) << r.err;
+    const Result fine = rtsim(dir, "--scene cornell --workload primary --width 8 --height 8 --quiet");
+    EXPECT_EQ(fine.status, 0) << fine.err;
+    EXPECT_EQ(fine.err.find("invalid"), std::string::npos) << fine.err;
+}
+
 TEST(Rtsim, NoArgumentsPrintsAUsageThatNamesEveryOption) {
     TempDir dir;
     const Result none = rtsim(dir, "");
