@@ -38,6 +38,25 @@ Scene scene_named(const std::string& name) {
 
 enum class Model { AT, LT, Interval };
 
+// Every ray a timing run retired (keyed by path and order within its path) got exactly the hit
+// the functional model finds on the same workload, and no ray is missing or extra.
+void expect_functional_hits(const Scene& scene, const BvhImage& image, WorkloadKind kind, const WorkloadParams& p,
+                            const std::vector<TracedRay>& rays, const std::string& what = "") {
+    auto fw = make_scene_workload(kind, scene, p);
+    const FunctionalResult f = run_functional(scene, image, *fw, FunctionalOptions{}, nullptr);
+    std::map<std::pair<uint32_t, uint32_t>, Hit> expected;
+    for (size_t i = 0; i < f.rays.size(); ++i) expected[{f.path[i], f.seq[i]}] = f.hits[i];
+    ASSERT_EQ(rays.size(), f.rays.size()) << what;
+    for (const TracedRay& t : rays) {
+        const auto it = expected.find({t.path, t.seq});
+        ASSERT_NE(it, expected.end()) << what << " ray " << t.path << "/" << t.seq << " not in the functional run";
+        EXPECT_EQ(t.hit.hit, it->second.hit) << what;
+        EXPECT_EQ(t.hit.t, it->second.t) << what;
+        EXPECT_EQ(t.hit.geom, it->second.geom) << what;
+        EXPECT_EQ(t.hit.prim, it->second.prim) << what;
+    }
+}
+
 // Runs the functional model and the timing model on the same workload and checks that every ray
 // (keyed by path and order within its path) got exactly the same hit.
 void timing_equals_functional(const std::string& name, Model model, WorkloadKind kind, uint32_t response_fifo = 0) {
@@ -47,11 +66,6 @@ void timing_equals_functional(const std::string& name, Model model, WorkloadKind
     WorkloadParams p;
     p.width = p.height = 24;
     p.seed = 3;
-    auto fw = make_scene_workload(kind, scene, p);
-    const FunctionalResult f = run_functional(scene, image, *fw, FunctionalOptions{}, nullptr);
-    std::map<std::pair<uint32_t, uint32_t>, Hit> expected;
-    for (size_t i = 0; i < f.rays.size(); ++i) expected[{f.path[i], f.seq[i]}] = f.hits[i];
-
     auto tw = make_scene_workload(kind, scene, p);
     TimingOptions opt;
     opt.fidelity = model == Model::LT ? Fidelity::LT : Fidelity::AT;
@@ -67,15 +81,7 @@ void timing_equals_functional(const std::string& name, Model model, WorkloadKind
     }
     ASSERT_FALSE(r.stuck) << r.stuck_report;
     EXPECT_TRUE(r.invariant_failures.empty()) << r.invariant_failures.front();
-    ASSERT_EQ(r.rays.size(), f.rays.size());
-    for (const TracedRay& t : r.rays) {
-        const auto it = expected.find({t.path, t.seq});
-        ASSERT_NE(it, expected.end()) << "ray " << t.path << "/" << t.seq << " not in the functional run";
-        EXPECT_EQ(t.hit.hit, it->second.hit);
-        EXPECT_EQ(t.hit.t, it->second.t);
-        EXPECT_EQ(t.hit.geom, it->second.geom);
-        EXPECT_EQ(t.hit.prim, it->second.prim);
-    }
+    expect_functional_hits(scene, image, kind, p, r.rays);
     EXPECT_GT(r.cycles, 0u);
     if (model == Model::AT) {
         EXPECT_GT(r.protocol_transactions, r.rays.size());
@@ -671,15 +677,11 @@ TEST(RtComplex, SeveralInOneSimulationShareNothing) {
     std::vector<std::unique_ptr<Workload>> workloads;
     std::vector<std::unique_ptr<WorkloadDriver>> drivers;
     std::vector<std::unique_ptr<RtComplex>> gpus;
-    std::vector<std::map<std::pair<uint32_t, uint32_t>, Hit>> expected(n);
     for (const Unit& u : units) {
         scenes.push_back(load_scene(u.scene, ""));
         images.push_back(build_bvh_image(scenes.back()));
     }
     for (size_t i = 0; i < n; ++i) {
-        auto fw = make_scene_workload(WorkloadKind::Primary, scenes[i], p);
-        const FunctionalResult f = run_functional(scenes[i], images[i], *fw, FunctionalOptions{}, nullptr);
-        for (size_t r = 0; r < f.rays.size(); ++r) expected[i][{f.path[r], f.seq[r]}] = f.hits[r];
         workloads.push_back(make_scene_workload(WorkloadKind::Primary, scenes[i], p));
         drivers.emplace_back(new WorkloadDriver(*workloads[i], hw.sms, hw.warp_size, hw.shade_latency, hw.resident_warps));
         gpus.emplace_back(new RtComplex(("gpu_" + std::to_string(i)).c_str(), hw, images[i], TraversalOrder::DFS, *drivers[i], units[i].fidelity));
@@ -694,14 +696,7 @@ TEST(RtComplex, SeveralInOneSimulationShareNothing) {
         const std::string what = units[i].scene + " " + units[i].fidelity_name;
         ASSERT_TRUE(drivers[i]->finished()) << what;
         EXPECT_EQ(gpus[i]->pool().outstanding(), 0u) << what;
-        const std::vector<TracedRay> rays = drivers[i]->results();
-        ASSERT_EQ(rays.size(), expected[i].size()) << what;
-        for (const TracedRay& t : rays) {
-            const Hit& h = expected[i].at({t.path, t.seq});
-            EXPECT_EQ(t.hit.hit, h.hit) << what;
-            EXPECT_EQ(t.hit.t, h.t) << what;
-            EXPECT_EQ(t.hit.prim, h.prim) << what;
-        }
+        expect_functional_hits(scenes[i], images[i], WorkloadKind::Primary, p, drivers[i]->results(), what);
         if (units[i].fidelity != Fidelity::LT) continue;
         const std::string stats = dir.file(std::to_string(i) + ".json");
         const std::string cmd = std::string(RTU_RTSIM) + " --scene " + units[i].scene +
