@@ -16,6 +16,9 @@ packages=(
 )
 # --reports: also what the experiment sweeps and reports need (GNU parallel, matplotlib).
 if [ "${1:-}" = "--reports" ]; then packages+=(parallel python3-matplotlib gawk); fi
+# --slurm: also Slurm's controller, node daemon and client (scripts/sweep/test_slurm.sh starts a
+# throw-away cluster with them; the packages' own services are not started).
+if [ "${1:-}" = "--slurm" ]; then packages+=(slurmctld slurmd slurm-client); fi
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
@@ -67,6 +70,13 @@ apt_step() {  # apt_step NAME ARGS...: runs apt-get ARGS, retrying while a lock 
     exit 1
   done
 }
+# Package scripts must not start services (Slurm's daemons, for one): a policy-rc.d that forbids
+# it, only if there is none already, removed afterwards only if we made it.
+policy=/usr/sbin/policy-rc.d made_policy=""
+if [ ! -e "$policy" ]; then
+  printf '#!/bin/sh\nexit 101\n' | $SUDO tee "$policy" >/dev/null && $SUDO chmod +x "$policy" && made_policy=1
+  trap 'if [ -n "$made_policy" ]; then $SUDO rm -f "$policy"; fi' EXIT
+fi
 apt_step update update -qq
 apt_step install install -y -qq --no-install-recommends "${missing[@]}"
 echo "setup: installed ${#missing[@]} packages" >&2

@@ -3,4 +3,5 @@
 # rates) on our scenes with and without TTP, and writes reports/speed-vs-error/README.md with a
 # Pareto plot. Resumable like scripts/paper.sh.
 # Usage: scripts/speed_error.sh [--size N (default 256)] [--spp N] [--scenes a,b] [--jobs N] [--work DIR]
+#        [--engine local|slurm] [Slurm options: docs/sweeps.md]
 exec "$(dirname "$0")/sweep/experiment.sh" scripts/speed_error/experiments.py scripts/speed_error/report.py reports/speed-vs-error out/speed-error-runs "$@"
