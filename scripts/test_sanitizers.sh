@@ -1,0 +1,14 @@
+#!/usr/bin/env bash
+# Builds the project with AddressSanitizer and UndefinedBehaviorSanitizer in build-asan/ (beside
+# the Release build in build/) and runs the test suite there: a heap overflow, a use after free,
+# a leak, a signed overflow or an invalid shift fails the test that hits it. CI runs it after the
+# Release suite. Extra arguments go to ctest (e.g. -R Rtsim).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+scripts/setup.sh
+cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DRTU_SANITIZE=address,undefined >/dev/null
+cmake --build build-asan -j"$(nproc)"
+export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1:detect_stack_use_after_return=0}
+export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
+cd build-asan
+ctest --output-on-failure -j"$(nproc)" "$@"
