@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <set>
 
+#include <sys/stat.h>
+
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
 
@@ -238,6 +240,14 @@ TEST(MeshFiles, PlyCountsAreBoundedByTheFile) {
     Scene s;
     load_mesh_file(s, write_text(dir.file("e.ply"), b));
     EXPECT_EQ(s.meshes[0].triangles.size(), 3u);
+}
+
+// A FIFO named as a glTF scene blocked Assimp forever; any file that is not a regular file is bad input.
+TEST(MeshFiles, FifoIsRefusedNotReadForever) {
+    TempDir dir;
+    const std::string fifo = dir.file("pipe.gltf");
+    ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+    EXPECT_NE(load_error(fifo).find("pipe.gltf: not a regular file"), std::string::npos) << load_error(fifo);
 }
 
 TEST(MeshFiles, GltfThroughAssimp) {

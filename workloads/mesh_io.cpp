@@ -488,6 +488,9 @@ bool is_mesh_file(const std::string& path) {
 uint32_t load_mesh_file(Scene& scene, const std::string& path) {
     std::error_code ec;
     if (!fs::exists(path, ec)) throw input_error(path, 0, "file not found");
+    // A FIFO, socket or device would block the reader (Assimp waits forever on a FIFO) or never end.
+    if (!fs::is_regular_file(path, ec))
+        throw input_error(path, 0, "not a regular file (a mesh is read from a file, not a FIFO, socket or device)");
     if (!is_mesh_file(path))
         throw input_error(path, 0, "unknown mesh format '" + mesh_extension(path) +
                                        "' (allowed: .obj, .ply, optionally .gz; .gltf, .glb, .off and other Assimp formats)");
