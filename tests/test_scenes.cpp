@@ -242,6 +242,27 @@ TEST(MeshFiles, PlyCountsAreBoundedByTheFile) {
     EXPECT_EQ(s.meshes[0].triangles.size(), 3u);
 }
 
+// OFF is read by our reader: a quad fanned like OBJ's; indices out of range, counts the file cannot
+// hold and short faces are bad input with the line (Assimp clamped the index, asserted on faces).
+TEST(MeshFiles, OffReadHereWithIndicesChecked) {
+    TempDir dir;
+    Scene s;
+    load_mesh_file(s, write_text(dir.file("q.off"), "OFF # a unit quad\n4 2 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n"
+                                                     "4 0 1 2 3\n2 0 1\n"));
+    ASSERT_EQ(s.meshes[0].triangles.size(), 2u);  // the quad fanned; the 2-vertex face skipped
+    EXPECT_EQ(s.meshes[0].triangles[0], glm::uvec3(0, 1, 2));
+    EXPECT_EQ(s.meshes[0].triangles[1], glm::uvec3(0, 2, 3));
+    const std::string tri = "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n";
+    EXPECT_NE(load_error(write_text(dir.file("i.off"), tri + "3 0 1 5\n")).find("i.off:6: face 0: vertex index '5' out of range (0 to 2)"),
+              std::string::npos);
+    EXPECT_NE(load_error(write_text(dir.file("n.off"), tri + "4 0 1 2\n")).find("n.off:6: face 0: vertex count '4'"), std::string::npos);
+    EXPECT_NE(load_error(write_text(dir.file("t.off"), "OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n")).find("ends after 1 of 2 faces"),
+              std::string::npos);
+    EXPECT_NE(load_error(write_text(dir.file("h.off"), "OFF\n3 99999999 0\n0 0 0\n")).find("more than the 6 bytes left"),
+              std::string::npos);
+    EXPECT_NE(load_error(write_text(dir.file("c.off"), "OFF\n-3 1 0\n")).find("c.off:2: bad counts line"), std::string::npos);
+}
+
 // A FIFO named as a glTF scene blocked Assimp forever; any file that is not a regular file is bad input.
 TEST(MeshFiles, FifoIsRefusedNotReadForever) {
     TempDir dir;

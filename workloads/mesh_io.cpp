@@ -415,7 +415,71 @@ private:
     size_t tok_ = 0;
 };
 
-// --- Assimp (glTF/GLB, OFF, ...) ---------------------------------------------------------------
+// --- OFF -----------------------------------------------------------------------------------------
+// "OFF", then "vertices faces edges" (on the same line or the next), then one line "x y z [...]"
+// per vertex and one line "n i_1 .. i_n [colour]" per face; '#' starts a comment. Read here, not
+// by Assimp, whose reader clamped out-of-range indices silently and asserted (abort) on malformed
+// faces. Faces of fewer than 3 vertices carry no surface and are skipped, as on the Assimp path.
+void load_off(Mesh& mesh, uint32_t material, const std::string& path) {
+    const std::string data = read_file_maybe_gz(path);
+    size_t pos = 0, line_no = 0;
+    std::vector<std::string_view> tok;
+    const auto next = [&]() {  // the next line with tokens, comments removed
+        std::string_view line;
+        while (next_line(data, pos, line)) {
+            ++line_no;
+            split(line.substr(0, line.find('#')), tok);
+            if (!tok.empty()) return true;
+        }
+        return false;
+    };
+    if (!next() || tok[0] != "OFF")
+        throw input_error(path, line_no, "not an OFF file: the first line must be 'OFF' (COFF, NOFF and binary OFF are not read)");
+    tok.erase(tok.begin());
+    if (tok.empty() && !next()) throw input_error(path, line_no, "the file ends before the counts 'vertices faces edges'");
+    long nv = -1, nf = -1;
+    if (tok.size() < 2 || !parse_number(tok[0], &nv) || !parse_number(tok[1], &nf) || nv < 0 || nf < 0)
+        throw input_error(path, line_no, "bad counts line '" + std::string(tok.empty() ? "" : tok[0]) +
+                                             " ...': expected 'vertices faces edges', integers >= 0");
+    // Counts checked against the bytes left before anything is reserved: a vertex line takes at
+    // least 6 bytes ("0 0 0\n"), a face line at least 2 ("0\n").
+    const uint64_t left = data.size() - std::min(pos, data.size());
+    if (uint64_t(nv) > left / 6 || uint64_t(nf) > (left - uint64_t(nv) * 6) / 2)
+        throw input_error(path, line_no, "declares " + std::to_string(nv) + " vertices and " + std::to_string(nf) +
+                                             " faces, more than the " + std::to_string(left) + " bytes left in the file can hold");
+    const uint32_t base = uint32_t(mesh.vertices.size());
+    mesh.vertices.reserve(base + size_t(nv));
+    for (long v = 0; v < nv; ++v) {
+        if (!next()) throw input_error(path, line_no, "the file ends after " + std::to_string(v) + " of " + std::to_string(nv) + " vertices");
+        if (tok.size() < 3) throw input_error(path, line_no, "a vertex needs 3 coordinates, the line has " + std::to_string(tok.size()));
+        glm::vec3 p;
+        for (int k = 0; k < 3; ++k) {
+            if (!parse_float(tok[size_t(k)], &p[k]))
+                throw input_error(path, line_no, "vertex coordinate '" + std::string(tok[size_t(k)]) + "' is not a number");
+            check_finite(path, line_no, tok[size_t(k)], p[k]);
+        }
+        mesh.vertices.push_back(p);
+    }
+    std::vector<uint32_t> poly;
+    for (long f = 0; f < nf; ++f) {
+        if (!next()) throw input_error(path, line_no, "the file ends after " + std::to_string(f) + " of " + std::to_string(nf) + " faces");
+        long n = -1;
+        if (!parse_number(tok[0], &n) || n < 0 || uint64_t(n) > tok.size() - 1)
+            throw input_error(path, line_no, "face " + std::to_string(f) + ": vertex count '" + std::string(tok[0]) +
+                                                 "' is not an integer from 0 to the " + std::to_string(tok.size() - 1) + " indices on the line");
+        poly.clear();
+        for (long k = 1; k <= n; ++k) {
+            long i = -1;
+            if (!parse_number(tok[size_t(k)], &i) || i < 0 || i >= nv)
+                throw input_error(path, line_no, "face " + std::to_string(f) + ": vertex index '" + std::string(tok[size_t(k)]) +
+                                                     "' out of range (0 to " + std::to_string(nv - 1) + ")");
+            poly.push_back(base + uint32_t(i));
+        }
+        if (poly.size() >= 3) fan(mesh, poly, material);
+    }
+}
+
+// --- Assimp (glTF/GLB and other formats) ---------------------------------------------------------
 
 void load_assimp(Scene& scene, Mesh& mesh, const std::string& path) {
     Assimp::Importer imp;
@@ -502,6 +566,8 @@ uint32_t load_mesh_file(Scene& scene, const std::string& path) {
     } else if (ext == "ply") {
         const uint32_t mat = add_material(scene, Material{});
         PlyReader(path, read_file_maybe_gz(path)).load(mesh, mat);
+    } else if (ext == "off") {
+        load_off(mesh, add_material(scene, Material{}), path);
     } else {
         load_assimp(scene, mesh, path);
     }
