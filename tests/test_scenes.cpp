@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <set>
 
+#include <sys/resource.h>
 #include <sys/stat.h>
 
 #include <glm/common.hpp>
@@ -261,6 +262,32 @@ TEST(MeshFiles, OffReadHereWithIndicesChecked) {
     EXPECT_NE(load_error(write_text(dir.file("h.off"), "OFF\n3 99999999 0\n0 0 0\n")).find("more than the 6 bytes left"),
               std::string::npos);
     EXPECT_NE(load_error(write_text(dir.file("c.off"), "OFF\n-3 1 0\n")).find("c.off:2: bad counts line"), std::string::npos);
+}
+
+// A 50-byte GLB whose JSON chunk claims almost 4 GiB made Assimp allocate 4.2 GB and run for over
+// a minute inside rtsim. The importer now runs in a child process with an address-space limit:
+// bad input, and neither this process nor the child holds gigabytes.
+TEST(MeshFiles, ImporterBombStaysInItsLimits) {
+#ifdef __SANITIZE_ADDRESS__
+    GTEST_SKIP() << "under AddressSanitizer the importer runs without its address-space limit";
+#endif
+    TempDir dir;
+    const std::string json = R"({"asset":{"version":"2.0"}}   )";
+    std::string glb = "glTF";
+    const auto u32 = [&glb](uint32_t v) { glb.append(reinterpret_cast<const char*>(&v), 4); };
+    u32(2);                                   // version
+    u32(uint32_t(12 + 8 + json.size()));      // total length: the file's own
+    u32(0xFFFFFF00u);                         // the JSON chunk's length: a lie
+    glb += "JSON" + json;
+    const std::string path = write_text(dir.file("bomb.glb"), glb);
+    rusage self_before{};
+    getrusage(RUSAGE_SELF, &self_before);
+    EXPECT_NE(load_error(path).find("bomb.glb: "), std::string::npos);
+    rusage self_after{}, children{};
+    getrusage(RUSAGE_SELF, &self_after);
+    getrusage(RUSAGE_CHILDREN, &children);
+    EXPECT_LT(self_after.ru_maxrss - self_before.ru_maxrss, 256L << 10) << "KiB taken in this process";
+    EXPECT_LT(children.ru_maxrss, 2560L << 10) << "KiB taken by the importer's process";
 }
 
 // A FIFO named as a glTF scene blocked Assimp forever; any file that is not a regular file is bad input.

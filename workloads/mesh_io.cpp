@@ -4,6 +4,7 @@
 #include <cerrno>
 #include <charconv>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -15,6 +16,10 @@
 #include <assimp/Importer.hpp>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
+#include <signal.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
 #include <zlib.h>
 
 #include "input_error.h"
@@ -518,6 +523,164 @@ void load_assimp(Scene& scene, Mesh& mesh, const std::string& path) {
     }
 }
 
+// --- Assimp in a child process ------------------------------------------------------------------
+// Assimp trusts the sizes a file declares: a 50-byte GLB whose JSON chunk claims 4 GB made it
+// allocate 4.2 GB and run for over a minute, and its asserts abort the process. So it runs in a
+// forked child with limits on its address space (what the process had at the fork plus 2 GiB plus
+// 16 bytes per byte of the file) and CPU time (30 s plus 1 s per MB); the child sends the mesh
+// back through a pipe, and any failure there (an exception, running out of memory, an abort, a
+// crash, the CPU limit) is an InputError naming the file. Under AddressSanitizer, whose shadow
+// memory takes terabytes of address space, the address-space limit is left out.
+
+constexpr uint64_t kImporterExtraBytes = uint64_t(2) << 30;
+
+uint64_t address_space_now() {
+    std::FILE* f = std::fopen("/proc/self/statm", "r");
+    unsigned long pages = 0;
+    if (f) {
+        if (std::fscanf(f, "%lu", &pages) != 1) pages = 0;
+        std::fclose(f);
+    }
+    return uint64_t(pages) * uint64_t(sysconf(_SC_PAGESIZE));
+}
+
+template <class T>
+void put(std::string& out, const T& v) {
+    static_assert(std::is_trivially_copyable_v<T>);
+    out.append(reinterpret_cast<const char*>(&v), sizeof v);
+}
+template <class T>
+void put_vector(std::string& out, const std::vector<T>& v) {
+    put(out, uint64_t(v.size()));
+    out.append(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T));
+}
+// Reads what put wrote, from the same binary; a short message is the child's fault, reported.
+struct Reader {
+    const std::string& in;
+    size_t pos = 1;  // after the tag
+    template <class T>
+    T get() {
+        T v;
+        if (in.size() - pos < sizeof v) throw std::runtime_error("short message");
+        std::memcpy(&v, in.data() + pos, sizeof v);
+        pos += sizeof v;
+        return v;
+    }
+    template <class T>
+    void get_vector(std::vector<T>& v) {
+        const uint64_t n = get<uint64_t>();
+        if (n > (in.size() - pos) / sizeof(T)) throw std::runtime_error("short message");
+        v.resize(size_t(n));
+        std::memcpy(v.data(), in.data() + pos, size_t(n) * sizeof(T));
+        pos += size_t(n) * sizeof(T);
+    }
+};
+
+// The child's answer: 'M' and the materials and mesh, or 'E' and a message.
+std::string import_in_child(const std::string& path) {
+    Scene scene;
+    Mesh mesh;
+    try {
+        load_assimp(scene, mesh, path);
+    } catch (const std::bad_alloc&) {
+        return "E" + path + ": the mesh importer (Assimp) needs more memory than its limit for this file (" +
+               std::to_string(kImporterExtraBytes >> 20) + " MiB beyond rtsim's own)";
+    } catch (const std::exception& e) {
+        return std::string("E") + e.what();
+    }
+    std::string out = "M";
+    put(out, uint64_t(scene.materials.size()));
+    for (const Material& m : scene.materials) {  // Assimp's materials carry no name
+        put(out, m.kind);
+        put(out, m.albedo);
+        put(out, m.fuzz);
+        put(out, m.ior);
+        put(out, m.emission);
+    }
+    put_vector(out, mesh.vertices);
+    put_vector(out, mesh.triangles);
+    put_vector(out, mesh.material);
+    return out;
+}
+
+void load_assimp_isolated(Scene& scene, Mesh& mesh, const std::string& path) {
+    std::error_code ec;
+    const uint64_t file_bytes = fs::file_size(path, ec);
+    int fd[2];
+    if (pipe(fd) != 0) throw input_error(path, 0, std::string("cannot start the mesh importer: ") + std::strerror(errno));
+    std::fflush(nullptr);
+    const pid_t pid = fork();
+    if (pid < 0) {
+        close(fd[0]);
+        close(fd[1]);
+        throw input_error(path, 0, std::string("cannot start the mesh importer: ") + std::strerror(errno));
+    }
+    if (pid == 0) {  // the child: limits, import, answer, and _exit (no destructors, no atexit)
+        close(fd[0]);
+#ifndef __SANITIZE_ADDRESS__
+        const rlim_t as = rlim_t(address_space_now() + kImporterExtraBytes + 16 * (ec ? 0 : file_bytes));
+        const rlimit as_limit{as, as};
+        setrlimit(RLIMIT_AS, &as_limit);
+#endif
+        const rlim_t cpu = rlim_t(30 + (ec ? 0 : file_bytes >> 20));
+        const rlimit cpu_limit{cpu, cpu + 1};
+        setrlimit(RLIMIT_CPU, &cpu_limit);
+        const std::string out = import_in_child(path);
+        for (size_t done = 0; done < out.size();) {
+            const ssize_t n = write(fd[1], out.data() + done, out.size() - done);
+            if (n < 0 && errno == EINTR) continue;
+            if (n <= 0) _exit(1);
+            done += size_t(n);
+        }
+        _exit(0);
+    }
+    close(fd[1]);
+    std::string in;
+    char buf[1 << 16];
+    for (;;) {
+        const ssize_t n = read(fd[0], buf, sizeof buf);
+        if (n < 0 && errno == EINTR) continue;
+        if (n <= 0) break;
+        in.append(buf, size_t(n));
+    }
+    close(fd[0]);
+    int status = 0;
+    while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+    }
+    if (WIFSIGNALED(status)) {
+        const int sig = WTERMSIG(status);
+        const char* why = sig == SIGABRT   ? " (an assertion inside Assimp)"
+                          : sig == SIGXCPU || sig == SIGKILL ? " (more CPU time than its limit for this file)"
+                          : sig == SIGSEGV   ? " (a crash inside Assimp, or its memory limit)"
+                                             : "";
+        throw input_error(path, 0, "the mesh importer (Assimp) died on this file: signal " + std::to_string(sig) + why);
+    }
+    if (in.empty() || (in[0] != 'M' && in[0] != 'E'))
+        throw input_error(path, 0, "the mesh importer (Assimp) ended without an answer (exit status " +
+                                       std::to_string(WIFEXITED(status) ? WEXITSTATUS(status) : -1) + ")");
+    if (in[0] == 'E') throw InputError(in.substr(1));
+    try {
+        Reader r{in};
+        const uint32_t base = uint32_t(scene.materials.size());
+        const uint64_t materials = r.get<uint64_t>();
+        for (uint64_t i = 0; i < materials; ++i) {
+            Material m;
+            m.kind = r.get<Material::Kind>();
+            m.albedo = r.get<glm::vec3>();
+            m.fuzz = r.get<float>();
+            m.ior = r.get<float>();
+            m.emission = r.get<glm::vec3>();
+            add_material(scene, m);
+        }
+        r.get_vector(mesh.vertices);
+        r.get_vector(mesh.triangles);
+        r.get_vector(mesh.material);
+        for (uint32_t& m : mesh.material) m += base;
+    } catch (const std::runtime_error&) {
+        throw input_error(path, 0, "the mesh importer (Assimp) sent back a broken answer");
+    }
+}
+
 }  // namespace
 
 std::string read_file_maybe_gz(const std::string& path) {
@@ -569,7 +732,7 @@ uint32_t load_mesh_file(Scene& scene, const std::string& path) {
     } else if (ext == "off") {
         load_off(mesh, add_material(scene, Material{}), path);
     } else {
-        load_assimp(scene, mesh, path);
+        load_assimp_isolated(scene, mesh, path);
     }
     scene.meshes.push_back(std::move(mesh));
     return uint32_t(scene.meshes.size() - 1);
