@@ -19,6 +19,8 @@ if [ "${1:-}" = "--reports" ]; then packages+=(parallel python3-matplotlib gawk)
 # --slurm: also Slurm's controller, node daemon and client (scripts/sweep/test_slurm.sh starts a
 # throw-away cluster with them; the packages' own services are not started).
 if [ "${1:-}" = "--slurm" ]; then packages+=(slurmctld slurmd slurm-client); fi
+# --fuzz: also clang and its libFuzzer runtime (scripts/fuzz.sh).
+if [ "${1:-}" = "--fuzz" ]; then packages+=(clang libclang-rt-14-dev); fi
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
