@@ -290,6 +290,16 @@ TEST(MeshFiles, ImporterBombStaysInItsLimits) {
     EXPECT_LT(children.ru_maxrss, 2560L << 10) << "KiB taken by the importer's process";
 }
 
+// Found by fuzz/fuzz_mesh: an OFF body in a .glb file reaches Assimp's OFF reader (it sniffs the
+// content), whose triangulation asserts (abort). The abort stays in the importer's process.
+TEST(MeshFiles, AssimpAssertionIsBadInput) {
+    TempDir dir;
+    const std::string path = write_text(dir.file("off.glb"), "OFF\n# quzd\n2 10\n4 0 1 2 0\n4 0 1 2 31");
+    EXPECT_NE(load_error(path).find("off.glb: the mesh importer (Assimp) died on this file: signal 6 (an assertion inside Assimp)"),
+              std::string::npos)
+        << load_error(path);
+}
+
 // A FIFO named as a glTF scene blocked Assimp forever; any file that is not a regular file is bad input.
 TEST(MeshFiles, FifoIsRefusedNotReadForever) {
     TempDir dir;

@@ -552,7 +552,7 @@ void put(std::string& out, const T& v) {
 template <class T>
 void put_vector(std::string& out, const std::vector<T>& v) {
     put(out, uint64_t(v.size()));
-    out.append(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T));
+    if (!v.empty()) out.append(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T));
 }
 // Reads what put wrote, from the same binary; a short message is the child's fault, reported.
 struct Reader {
@@ -571,7 +571,7 @@ struct Reader {
         const uint64_t n = get<uint64_t>();
         if (n > (in.size() - pos) / sizeof(T)) throw std::runtime_error("short message");
         v.resize(size_t(n));
-        std::memcpy(v.data(), in.data() + pos, size_t(n) * sizeof(T));
+        if (n) std::memcpy(v.data(), in.data() + pos, size_t(n) * sizeof(T));  // data() may be null when empty
         pos += size_t(n) * sizeof(T);
     }
 };
@@ -617,6 +617,9 @@ void load_assimp_isolated(Scene& scene, Mesh& mesh, const std::string& path) {
     }
     if (pid == 0) {  // the child: limits, import, answer, and _exit (no destructors, no atexit)
         close(fd[0]);
+        // Die plainly on a fault: a handler inherited from the parent (a fuzzer's or a
+        // sanitizer's crash report) would otherwise treat the child's fault as the parent's.
+        for (const int sig : {SIGABRT, SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGXCPU}) signal(sig, SIG_DFL);
 #ifndef __SANITIZE_ADDRESS__
         const rlim_t as = rlim_t(address_space_now() + kImporterExtraBytes + 16 * (ec ? 0 : file_bytes));
         const rlimit as_limit{as, as};
