@@ -534,6 +534,13 @@ void load_assimp(Scene& scene, Mesh& mesh, const std::string& path) {
 
 constexpr uint64_t kImporterExtraBytes = uint64_t(2) << 30;
 
+}  // namespace
+}  // namespace rtu
+// Present only in sanitizer builds (weak: null otherwise).
+extern "C" void __sanitizer_set_death_callback(void (*callback)(void)) __attribute__((weak));
+namespace rtu {
+namespace {
+
 uint64_t address_space_now() {
     std::FILE* f = std::fopen("/proc/self/statm", "r");
     unsigned long pages = 0;
@@ -620,6 +627,7 @@ void load_assimp_isolated(Scene& scene, Mesh& mesh, const std::string& path) {
         // Die plainly on a fault: a handler inherited from the parent (a fuzzer's or a
         // sanitizer's crash report) would otherwise treat the child's fault as the parent's.
         for (const int sig : {SIGABRT, SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGXCPU}) signal(sig, SIG_DFL);
+        if (&__sanitizer_set_death_callback) __sanitizer_set_death_callback(nullptr);  // likewise a fuzzer's death report
 #ifndef __SANITIZE_ADDRESS__
         const rlim_t as = rlim_t(address_space_now() + kImporterExtraBytes + 16 * (ec ? 0 : file_bytes));
         const rlimit as_limit{as, as};
