@@ -529,10 +529,20 @@ void load_assimp(Scene& scene, Mesh& mesh, const std::string& path) {
 // forked child with limits on its address space (what the process had at the fork plus 2 GiB plus
 // 16 bytes per byte of the file) and CPU time (30 s plus 1 s per MB); the child sends the mesh
 // back through a pipe, and any failure there (an exception, running out of memory, an abort, a
-// crash, the CPU limit) is an InputError naming the file. Under AddressSanitizer, whose shadow
-// memory takes terabytes of address space, the address-space limit is left out.
+// crash, the CPU limit, twice that in wall time) is an InputError naming the file. Under
+// AddressSanitizer, whose shadow memory takes terabytes of address space, the address-space limit
+// is left out.
 
 constexpr uint64_t kImporterExtraBytes = uint64_t(2) << 30;
+
+// GCC says __SANITIZE_ADDRESS__; clang (14) only answers __has_feature.
+#if defined(__SANITIZE_ADDRESS__)
+#define RTU_ADDRESS_SANITIZER 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define RTU_ADDRESS_SANITIZER 1
+#endif
+#endif
 
 }  // namespace
 }  // namespace rtu
@@ -541,6 +551,7 @@ extern "C" void __sanitizer_set_death_callback(void (*callback)(void)) __attribu
 namespace rtu {
 namespace {
 
+#ifndef RTU_ADDRESS_SANITIZER
 uint64_t address_space_now() {
     std::FILE* f = std::fopen("/proc/self/statm", "r");
     unsigned long pages = 0;
@@ -550,6 +561,7 @@ uint64_t address_space_now() {
     }
     return uint64_t(pages) * uint64_t(sysconf(_SC_PAGESIZE));
 }
+#endif
 
 template <class T>
 void put(std::string& out, const T& v) {
@@ -626,9 +638,9 @@ void load_assimp_isolated(Scene& scene, Mesh& mesh, const std::string& path) {
         close(fd[0]);
         // Die plainly on a fault: a handler inherited from the parent (a fuzzer's or a
         // sanitizer's crash report) would otherwise treat the child's fault as the parent's.
-        for (const int sig : {SIGABRT, SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGXCPU}) signal(sig, SIG_DFL);
+        for (const int sig : {SIGABRT, SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGXCPU, SIGALRM}) signal(sig, SIG_DFL);
         if (&__sanitizer_set_death_callback) __sanitizer_set_death_callback(nullptr);  // likewise a fuzzer's death report
-#ifndef __SANITIZE_ADDRESS__
+#ifndef RTU_ADDRESS_SANITIZER
         const rlim_t as = rlim_t(address_space_now() + kImporterExtraBytes + 16 * (ec ? 0 : file_bytes));
         const rlimit as_limit{as, as};
         setrlimit(RLIMIT_AS, &as_limit);
@@ -636,6 +648,7 @@ void load_assimp_isolated(Scene& scene, Mesh& mesh, const std::string& path) {
         const rlim_t cpu = rlim_t(30 + (ec ? 0 : file_bytes >> 20));
         const rlimit cpu_limit{cpu, cpu + 1};
         setrlimit(RLIMIT_CPU, &cpu_limit);
+        alarm(unsigned(2 * cpu + 10));  // and in wall time, should it block (on a FIFO it names, say)
         const std::string out = import_in_child(path);
         for (size_t done = 0; done < out.size();) {
             const ssize_t n = write(fd[1], out.data() + done, out.size() - done);
@@ -662,6 +675,7 @@ void load_assimp_isolated(Scene& scene, Mesh& mesh, const std::string& path) {
         const int sig = WTERMSIG(status);
         const char* why = sig == SIGABRT   ? " (an assertion inside Assimp)"
                           : sig == SIGXCPU || sig == SIGKILL ? " (more CPU time than its limit for this file)"
+                          : sig == SIGALRM   ? " (more wall time than its limit for this file)"
                           : sig == SIGSEGV   ? " (a crash inside Assimp, or its memory limit)"
                                              : "";
         throw input_error(path, 0, "the mesh importer (Assimp) died on this file: signal " + std::to_string(sig) + why);
