@@ -97,6 +97,7 @@ const Key kSchema[] = {
     {"energy.static_w", "W", Type::Real, 0, 1e4, false, "static power of the modelled RT units and memory system (W)"},
     {"sim.quantum", "core cycles", Type::Int, 1, 1e9, false, "LT quantum (core cycles)"},
     {"sim.watchdog", "core cycles", Type::Int, 1000, 1e12, false, "cycles without progress before the run is stopped"},
+    {"sim.trace_window", "core cycles", Type::Int, 1, 1e9, false, "--vcd: cycles per sample of the windowed waveforms (L1/L2 MSHR occupancy and miss rate, DRAM bandwidth)"},
 };
 
 // Keys that earlier versions had, with why they are gone (a configuration naming one is refused
@@ -373,6 +374,7 @@ HwConfig Config::resolve() const {
                 num("energy.dram_write_pj"), num("energy.dram_activate_pj"), num("energy.static_w")};
     h.quantum = values_.at("sim.quantum").get<uint64_t>();
     h.watchdog = values_.at("sim.watchdog").get<uint64_t>();
+    h.trace_window = values_.at("sim.trace_window").get<uint64_t>();
     return h;
 }
 

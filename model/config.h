@@ -65,7 +65,7 @@ struct HwConfig {
     CacheConfig l2;  // per slice
     uint32_t xbar_latency;
     DramConfig dram;
-    uint64_t quantum, watchdog;  // core cycles
+    uint64_t quantum, watchdog, trace_window;  // core cycles
     PrefetchConfig prefetch;
     EnergyTable energy;
     // Where addresses live (L2 slice, DRAM channel, bank, row); checked by Config::resolve.

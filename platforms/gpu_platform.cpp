@@ -128,7 +128,7 @@ GpuPlatform::GpuPlatform(const HwConfig& cfg, const BvhImage& image, Workload& w
             unit->on_cycle = [unit, tr, traced_warp, impl](uint64_t cycle) {
                 if (cycle >= impl->next_sample) {
                     impl->sample_windows(cycle);
-                    impl->next_sample = (cycle / impl->opt.trace_window + 1) * impl->opt.trace_window;
+                    impl->next_sample = (cycle / impl->cfg.trace_window + 1) * impl->cfg.trace_window;
                 }
                 const RtUnitCore& c = unit->core();
                 tr->warps = int(c.warp_buffer_occupancy());
@@ -155,7 +155,7 @@ GpuPlatform::GpuPlatform(const HwConfig& cfg, const BvhImage& image, Workload& w
         sc_trace(m.tf, m.dram_queue, "dram.queue_depth");
         sc_trace(m.tf, m.dram_bw, "dram.bandwidth_utilisation_window");
         Impl* impl = &m;
-        m.next_sample = opt.trace_window;
+        m.next_sample = cfg.trace_window;
         m.sample_windows = [impl](uint64_t cycle) {
             if (cycle <= impl->last_sample) return;
             auto upd = [](const std::vector<std::unique_ptr<Cache>>& caches, std::vector<int>& mshr, std::vector<double>& rate,

@@ -26,7 +26,6 @@ struct TimingOptions {
     bool progress = false;
     std::string vcd;                  // VCD file (without the .vcd suffix SystemC adds)
     int trace_sm = -1, trace_warp = -1;  // one warp-buffer slot whose threads' stack depths are traced
-    uint32_t trace_window = 1000;     // cycles per sample of windowed waveforms (miss rate, bandwidth)
     bool check_protocol = false;      // AT: a base-protocol checker on every socket
     double sample_rate = 1.0;         // < 1: sampled simulation of this share of the frame's warps
     uint64_t sample_seed = 1;

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <filesystem>
 #include <functional>
+#include <iterator>
 #include <map>
 #include <set>
 #include <sstream>
@@ -348,6 +349,37 @@ TEST(RtsimTiming, TracingChangesNoStatistic) {
         EXPECT_EQ(ja, jb) << args;
         ++n;
     }
+}
+
+// sim.trace_window sets how often the windowed waveforms (MSHR occupancy, miss rate, DRAM
+// bandwidth) are sampled, and nothing else: a tenth of the window gives more value changes of
+// those signals, and the same statistics but the key itself.
+TEST(RtsimTiming, TraceWindowSetsTheWaveformSamplingOnly) {
+    TempDir dir;
+    const std::string args = "--scene cornell --fidelity at --width 32 --height 32 --vcd ";
+    auto window_changes = [](const std::string& vcd) {  // value changes of the *_window signals
+        std::set<std::string> ids;
+        size_t changes = 0;
+        for (const std::string& line : lines(vcd)) {
+            std::istringstream ls(line);
+            std::vector<std::string> t{std::istream_iterator<std::string>(ls), std::istream_iterator<std::string>()};
+            if (t.size() >= 5 && t[0] == "$var" && t[4].find("_window") != std::string::npos) ids.insert(t[3]);
+            else if (t.size() == 2 && (t[0][0] == 'r' || t[0][0] == 'b') && ids.count(t[1])) ++changes;
+        }
+        return changes;
+    };
+    ASSERT_EQ(rtsim(dir, args + dir.file("a.vcd") + " --stats " + dir.file("a.json")).status, 0);
+    ASSERT_EQ(rtsim(dir, args + dir.file("b.vcd") + " --stats " + dir.file("b.json") + " --set sim.trace_window=100").status, 0);
+    const size_t coarse = window_changes(read_text(dir.file("a.vcd"))), fine = window_changes(read_text(dir.file("b.vcd")));
+    EXPECT_GT(coarse, 0u);
+    EXPECT_GT(fine, 2 * coarse) << "window 100: " << fine << " changes, window 1000: " << coarse;
+    auto ja = nlohmann::json::parse(read_text(dir.file("a.json"))), jb = nlohmann::json::parse(read_text(dir.file("b.json")));
+    EXPECT_EQ(jb["config"]["sim"]["trace_window"], 100);
+    for (auto* j : {&ja, &jb}) {
+        for (const char* k : {"time_s", "simulation_rate", "memory_mb"}) j->erase(k);
+        (*j)["config"]["sim"].erase("trace_window");
+    }
+    EXPECT_EQ(ja, jb);
 }
 
 // Prefetchers change timing, never answers: the hits file is the same under every prefetcher
@@ -958,6 +990,8 @@ TEST(RtsimConfig, EveryKeyOfEveryPresetIsRead) {
     };
     // Read by the DRAM model's write path and the energy figures, which no run reaches.
     const std::set<std::string> write_path = {"dram.tWL", "dram.tWR", "energy.dram_write_pj"};
+    // Changes only the waveforms: RtsimTiming.TraceWindowSetsTheWaveformSamplingOnly shows it read.
+    const std::string waveforms_only = "sim.trace_window";
     {
         DramConfig d = Config::load("mobile").resolve().dram;
         auto write_done = [&](const DramConfig& c) {
@@ -996,6 +1030,7 @@ TEST(RtsimConfig, EveryKeyOfEveryPresetIsRead) {
     }
     // Every key of the schema has a case.
     std::set<std::string> covered = write_path;
+    covered.insert(waveforms_only);
     for (const Case& c : cases)
         for (const std::string& s : c.sets) covered.insert(s.substr(0, s.find('=')));
     for (const Config::KeyInfo& k : Config::keys()) EXPECT_TRUE(covered.count(k.name)) << "no case shows that '" << k.name << "' is read";
