@@ -15,6 +15,8 @@ import subprocess
 import sys
 
 HERE = pathlib.Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+import manifest  # noqa: E402
 STREAK = ["not_a_pop", "pop_1", "pop_2", "pop_3", "pop_4_or_more"]
 THREAD_STATUS = ["waiting_to_be_scheduled", "waiting_on_memory", "in_math", "done_waiting_for_warp"]
 
@@ -66,24 +68,21 @@ def schema_keys():
 
 
 def main():
-    manifest, outdir = pathlib.Path(sys.argv[1]), pathlib.Path(sys.argv[2])
+    manifest_path, outdir = pathlib.Path(sys.argv[1]), pathlib.Path(sys.argv[2])
     keys = schema_keys()
     unknown = [path for _, path in ALWAYS + TIMING + SAMPLED if path not in keys]
     if unknown:
         sys.exit(f"collect: statistics not in rtsim --stats-schema: {', '.join(unknown)}")
     rows, missing = [], []
-    with open(manifest) as f:
-        lines = f.read().splitlines()[1:]
-    for line in lines:
-        rid, args, output = line.split("\t")
+    for run in manifest.read(manifest_path):
+        rid = run.id
         exp, scene = rid.split("/", 1)
-        stats = outdir / output
-        status = outdir / (output + ".status")
+        stats, status, _ = manifest.outputs(outdir, run)
         row = {"id": rid, "experiment": exp, "scene": scene, "exit": "", "wall_s": ""}
         if status.exists():
             st = json.loads(status.read_text())
             row["exit"], row["wall_s"] = st["exit"], st["wall_s"]
-        if stats.exists() and stats.stat().st_size:
+        if manifest.finished(outdir, run):
             j = json.loads(stats.read_text())
             wanted = ALWAYS + (TIMING if "timing" in j else []) + (SAMPLED if "sampling" in j.get("timing", {}) else [])
             for name, path in wanted:

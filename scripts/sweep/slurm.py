@@ -21,6 +21,7 @@ Environment: RTSIM (default build/rtsim), SHARED (passed to the tasks as it is).
 Exit status: 0 every run finished, 1 some runs failed (listed), 2 bad usage or Slurm refused a
 submission, 75 submitted and not waited for (--no-wait)."""
 import argparse
+import json
 import math
 import os
 import pathlib
@@ -130,10 +131,8 @@ class Book:
 
 
 def describe_failure(outdir, run, log):
-    status = manifest.outputs(outdir, run)[1]
-    err = manifest.outputs(outdir, run)[2]
+    _, status, err = manifest.outputs(outdir, run)
     if status.exists():
-        import json
         st = json.loads(status.read_text())
         what = f"rtsim exit {st['exit']} after {st['wall_s']} s"
     else:
