@@ -49,6 +49,12 @@ public:
     // No lookup will be timestamped before `floor` again.
     void advance(uint64_t floor);
 
+    // Every line invalid (SectorCache::invalidate); misses still in flight are forgotten, so call
+    // only when every booked miss has arrived.
+    void invalidate() {
+        tags_.invalidate();
+        sectors_.clear();
+    }
     SectorCache& tags() { return tags_; }
     const SectorCache& tags() const { return tags_; }
     size_t mshrs_in_use() const { return mshr_free_.size(); }

@@ -143,6 +143,17 @@ SectorCache::Way* SectorCache::allocate(uint64_t line, CacheAccessCounts* st) {
     return victim;
 }
 
+void SectorCache::invalidate() {
+    if (!mshr_.empty()) throw std::logic_error("cache invalidated with fetches pending");
+    for (Way& w : ways_) {
+        const bool accessed = w.way_accessed;  // the authors' flag stays with the way (above)
+        w = Way{};
+        w.way_accessed = accessed;
+    }
+    for (Set& s : set_) s = Set{};
+    where_.clear();
+}
+
 bool SectorCache::warm(uint64_t addr) {
     const uint64_t line = addr / line_ * line_;
     const uint32_t bit = 1u << ((addr - line) / sector_);

@@ -95,6 +95,9 @@ public:
     // A sector whose fetch is pending, or a set with every way pending, is left alone.
     bool warm(uint64_t addr);
 
+    // Every line invalid, as after a reset (statistics kept); no fetch may be pending.
+    void invalidate();
+
     size_t mshrs_in_use() const { return mshr_.size(); }
     // LT bookkeeping: a read found valid in the tags whose data was still in flight at its
     // timestamp counts as an MSHR hit; a read that had to wait for a free MSHR counts one

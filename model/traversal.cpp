@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <string>
 
 #include <glm/geometric.hpp>
 
@@ -183,7 +184,7 @@ StepInfo TraversalThread::step(const BvhImage& image) {
 }
 
 TraceResult trace_ray(const BvhImage& image, const Ray& ray, TraversalOrder order, const Treelets* treelets,
-                      std::vector<StackEntry>* fetched, bool next_node_register) {
+                      std::vector<StackEntry>* fetched, bool next_node_register, uint64_t max_nodes) {
     TraceResult r;
     if (!is_valid_ray(ray)) return r;
     Ray scaled = ray;
@@ -193,6 +194,8 @@ TraceResult trace_ray(const BvhImage& image, const Ray& ray, TraversalOrder orde
     while (!th.done()) {
         if (fetched) fetched->push_back(th.peek());
         th.step(image);
+        if (th.nodes_visited() > max_nodes)
+            throw std::length_error("traversal visited more than " + std::to_string(max_nodes) + " nodes (a cycle in the image?)");
     }
     r.hit = th.hit();
     if (r.hit.hit) r.hit.t = std::ldexp(r.hit.t, -k);

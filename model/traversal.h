@@ -102,8 +102,10 @@ struct TraceResult {
     Hit hit;
     uint32_t nodes_visited = 0;
 };
-// `fetched`, when given, receives every node the traversal reads, in order.
+// `fetched`, when given, receives every node the traversal reads, in order. More than
+// `max_nodes` node visits throw std::length_error: an image from untrusted memory (an SoC
+// peripheral's) may link its nodes into a cycle.
 TraceResult trace_ray(const BvhImage& image, const Ray& ray, TraversalOrder order, const Treelets* treelets = nullptr,
-                      std::vector<StackEntry>* fetched = nullptr, bool next_node_register = false);
+                      std::vector<StackEntry>* fetched = nullptr, bool next_node_register = false, uint64_t max_nodes = ~0ull);
 
 }  // namespace rtu

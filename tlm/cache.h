@@ -36,6 +36,8 @@ public:
     const SectorCache& tags() const { return lt_.tags(); }
     // Functional warming before a sampled run (SectorCache::warm); returns whether it hit.
     bool warm(uint64_t addr) { return tags_.warm(addr); }
+    // Every line invalid, statistics kept (a new job's image; RtComplex::start_job).
+    void invalidate() { lt_.invalidate(); }
     size_t mshrs_in_use() const { return fidelity_ == Fidelity::AT ? tags_.mshrs_in_use() : lt_.mshrs_in_use(); }
 
 private:

@@ -1,6 +1,7 @@
 #include "rt_complex.h"
 
 #include <algorithm>
+#include <stdexcept>
 #include <string>
 
 #include <tlm>
@@ -48,26 +49,48 @@ RtComplex::RtComplex(sc_module_name name, const HwConfig& cfg, const BvhImage& i
 RtComplex::~RtComplex() = default;
 
 void RtComplex::lt_schedule() {
-    uint64_t window = 0;
     for (;;) {
         uint64_t first = ~0ull;
         for (const auto& u : rt_) first = std::min(first, u->lt_next());
-        if (first == ~0ull) return;  // no unit has work, and none will get any
+        if (first == ~0ull) {  // no unit has work, and none will get any until a job starts
+            wait(work_);
+            continue;
+        }
         const sc_time t = core_.time_of(first);
         if (t > sc_time_stamp()) wait(t - sc_time_stamp());
-        // The quantum holding `first`: windows on multiples of the quantum, as
-        // tlm_global_quantum places sync points.
+        // The quantum holding `first`: windows on multiples of the quantum from the clocks'
+        // epoch (from time 0 in rtsim, as tlm_global_quantum places sync points).
         sc_time q = quantum_;
         const sc_time& global = tlm::tlm_global_quantum::instance().get();
         if (global != SC_ZERO_TIME && global < q) q = global;
-        const uint64_t end = std::max(first + 1, q == SC_ZERO_TIME ? first + 1 : core_.cycle_at_or_after(t - sc_time::from_value(t.value() % q.value()) + q));
+        const uint64_t end = std::max(first + 1, q == SC_ZERO_TIME ? first + 1 : core_.cycle_at_or_after(t - sc_time::from_value((t - core_.epoch()).value() % q.value()) + q));
         // The units take turns at going first (window by window), as no RT unit of a GPU has
         // precedence: with SM 0 always first, its fetches always took the L2 first, and on sprng
         // primary rays 192x192 (mobile, seed 2) L2 hits fell to 54 % of AT's and LT ran 22.6 %
         // slow (taking turns: 103 %, -1.6 %).
-        const size_t n = rt_.size(), first_unit = size_t(window++ % n);
+        const size_t n = rt_.size(), first_unit = size_t(window_++ % n);
         for (size_t i = 0; i < n; ++i) rt_[(first_unit + i) % n]->lt_run(end);
     }
+}
+
+void RtComplex::start_job() {
+    for (const auto& u : rt_)
+        if (!u->core().idle()) throw std::logic_error(std::string(name()) + ": a job started while the RT units were busy");
+    const bool new_epoch = !started_;
+    if (!started_) {
+        // The clocks start here: the first job runs as rtsim's frame runs from time 0.
+        core_.set_epoch(sc_time_stamp());
+        mem_.set_epoch(sc_time_stamp());
+        started_ = true;
+    } else {
+        // The caches' tags are image offsets: another image at the same offsets must not hit
+        // on the last job's lines.
+        for (const auto& c : l1_) c->invalidate();
+        for (const auto& c : l2_) c->invalidate();
+    }
+    for (const auto& u : rt_) u->wake(new_epoch);
+    window_ = 0;  // SM 0 first in the job's first window, as in a frame's
+    work_.notify(SC_ZERO_TIME);
 }
 
 void RtComplex::warm(uint32_t sm, uint64_t addr) {

@@ -48,6 +48,11 @@ public:
     const Dram& dram() const { return *dram_; }
     const PayloadPool& pool() const { return pool_; }
     const std::vector<std::unique_ptr<ProtocolChecker>>& checkers() const { return checkers_; }
+    // A job's traces are ready at the trace source (an SoC peripheral's): the RT units look for
+    // work again. The first job sets the clocks' epoch to now (cycle 0 there, so that it runs as
+    // rtsim's frame from time 0); later jobs find the DRAM as the last left it and the caches
+    // invalidated. Call only while every RT unit is idle.
+    void start_job();
     // Functional warming (sampled runs): the sector at `addr` into SM `sm`'s L1, and into its L2
     // slice when the L1 did not hold it (tags and LRU only).
     void warm(uint32_t sm, uint64_t addr);
@@ -56,6 +61,9 @@ private:
     void lt_schedule();  // LT
 
     ClockDomain core_, mem_;
+    bool started_ = false;   // start_job has set the epoch
+    sc_core::sc_event work_;  // LT: a job started
+    uint64_t window_ = 0;     // LT: windows run so far (of the current job): who goes first
     sc_core::sc_time quantum_;  // LT: sim.quantum core cycles
     PayloadPool pool_;
     std::vector<std::unique_ptr<RtUnit>> rt_;

@@ -1,5 +1,6 @@
 #include "rt_unit.h"
 
+#include <algorithm>
 #include <queue>
 
 namespace rtu {
@@ -20,6 +21,13 @@ RtUnit::RtUnit(sc_module_name name, uint32_t sm, const HwConfig& cfg, const BvhI
 void RtUnit::wake_at(uint64_t cycle) {
     const sc_time t = clock_.time_of(cycle);
     wake_.notify(t > sc_time_stamp() ? t - sc_time_stamp() : SC_ZERO_TIME);
+}
+
+void RtUnit::wake(bool new_epoch) {
+    const uint64_t c = clock_.cycle_at_or_after(sc_time_stamp());
+    if (new_epoch) last_cycle_ = ~0ull;  // the cycle numbers restarted: cycle 0 is yet to run
+    lt_.next = std::min(lt_.next, c);
+    wake_at(c);
 }
 
 tlm::tlm_generic_payload* RtUnit::make_payload(const ChunkRequest& r) {

@@ -34,6 +34,10 @@ public:
     uint64_t lt_next() const { return lt_.next; }
     void lt_run(uint64_t end);
     const RtUnitCore& core() const { return core_; }
+    // New traces may be waiting at the trace source (RtComplex::start_job): AT wakes the unit,
+    // LT has it look at the current cycle again. `new_epoch`: the clocks' cycle numbers have
+    // just restarted (ClockDomain::set_epoch).
+    void wake(bool new_epoch);
     // Called after every cycle the unit works (waveform sampling); may be empty.
     std::function<void(uint64_t cycle)> on_cycle;
 
