@@ -1,0 +1,64 @@
+// The RT unit as an SoC peripheral: the RT complex of the timing model (RT units, L1s, crossbar,
+// L2 slices, DRAM) behind a register block, a system-memory master and a level interrupt, as
+// accelerators are integrated in virtual platforms (../shared/soc-vp.md; docs/peripheral.md).
+//
+//   regs  target socket, 32-bit registers in a 4 KiB aperture (rtunit/rtu_regs.h); b_transport
+//         and transport_dbg, LT; errors as TLM response statuses
+//   mem   initiator socket: reads the BVH image, the ray records and the job descriptors, writes
+//         the hit and completion records, at the addresses software programmed (b_transport)
+//   irq   level interrupt, OR(INT_STATUS & INT_ENABLE), written by one process; may stay unbound
+//
+// Software writes a job (BVH image, rays, hit buffer) into the JOB registers or a chain of
+// descriptors, then CTRL.START. The unit reads the image and the rays, traces them with the
+// configured fidelity, writes one hit record per ray and raises JOB_DONE. Functional, LT and AT
+// fidelities; the memory path is private (the RT complex's own caches and DRAM, so its cycles do
+// not depend on the SoC). No process-wide side effects: no global quantum, no report actions, no
+// sc_stop; any number of instances per simulation.
+#pragma once
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <systemc>
+#include <tlm>
+#include <tlm_utils/simple_initiator_socket.h>
+#include <tlm_utils/simple_target_socket.h>
+
+namespace rtu {
+
+struct PeripheralConfig {
+    std::string config = "mobile";  // a preset (mobile, desktop, paper) or a JSON file, as rtsim --config
+    std::vector<std::string> sets;  // key=value overrides of the configuration, as rtsim --set
+    std::string fidelity = "lt";    // functional, lt or at
+    std::string traversal = "dfs";  // dfs or bfs
+    sc_core::sc_time reg_latency = sc_core::sc_time(10, sc_core::SC_NS);  // added to every register access
+    // By name, for platforms that configure modules from strings (QBox, VCML, Lua):
+    // fidelity=, traversal=, config=, reg_latency_ns=; any other key=value is a configuration key
+    // (l1.size_kb=64, prefetch.kind=ttp, ...). Checked when the peripheral is built.
+    void set(const std::string& key_value);
+};
+
+class RtUnitPeripheral : public sc_core::sc_module {
+public:
+    tlm_utils::simple_target_socket<RtUnitPeripheral, 32> regs;
+    tlm_utils::simple_initiator_socket<RtUnitPeripheral, 32> mem;
+    sc_core::sc_port<sc_core::sc_signal_inout_if<bool>, 1, sc_core::SC_ZERO_OR_MORE_BOUND> irq;
+
+    // Throws std::invalid_argument for a bad configuration (naming the key or value).
+    RtUnitPeripheral(sc_core::sc_module_name name, const PeripheralConfig& cfg = {});
+    ~RtUnitPeripheral() override;
+    SC_HAS_PROCESS(RtUnitPeripheral);
+
+    struct Impl;  // defined in tlm/peripheral.cpp
+
+private:
+    void b_transport(tlm::tlm_generic_payload& t, sc_core::sc_time& delay);
+    unsigned int transport_dbg(tlm::tlm_generic_payload& t);
+    void run_jobs();   // SC_THREAD: one job or chain per START
+    void drive_irq();  // SC_METHOD: the interrupt line's only writer
+    void end_of_elaboration() override;
+
+    std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace rtu

@@ -1,0 +1,458 @@
+// rtu::RtUnitPeripheral (include/rtunit/peripheral.h): the register block (tlm/rtu_registers.h),
+// the job engine (one SC_THREAD: descriptors, DMA over `mem`, the RT complex through the job
+// feeder), and the interrupt line (one SC_METHOD, its only writer).
+#include <rtunit/peripheral.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <cstring>
+#include <stdexcept>
+#include <utility>
+
+#include "job_feeder.h"
+#include "model/config.h"
+#include "model/job_records.h"
+#include "model/prefetcher.h"
+#include "tlm/rt_complex.h"
+#include "tlm/rtu_registers.h"
+#include "workloads/rays.h"
+
+namespace rtu {
+
+using namespace sc_core;
+
+void PeripheralConfig::set(const std::string& kv) {
+    const auto eq = kv.find('=');
+    if (eq == std::string::npos || eq == 0) throw std::invalid_argument("peripheral option '" + kv + "': expected key=value");
+    const std::string k = kv.substr(0, eq), v = kv.substr(eq + 1);
+    if (k == "fidelity") fidelity = v;
+    else if (k == "traversal") traversal = v;
+    else if (k == "config") config = v;
+    else if (k == "reg_latency_ns") {
+        size_t used = 0;
+        double ns = -1;
+        try {
+            ns = std::stod(v, &used);
+        } catch (const std::exception&) {
+        }
+        if (used != v.size() || !(ns >= 0 && ns < 1e9)) throw std::invalid_argument("peripheral option reg_latency_ns='" + v + "': a number of ns in [0, 1e9)");
+        reg_latency = sc_time(ns, SC_NS);
+    } else sets.push_back(kv);
+}
+
+namespace {
+
+// A job as software gave it (registers or descriptor).
+struct Job {
+    uint64_t bvh_base = 0, bvh_size = 0, ray_base = 0, hit_base = 0, next = 0;
+    uint32_t ray_count = 0, ray_stride = sizeof(rtu_ray), hit_stride = sizeof(rtu_hit), flags = 0, job_id = 0;
+};
+
+// What ends a job early: an error code and the system address it concerns.
+struct JobError {
+    uint32_t code;
+    uint64_t addr;
+};
+
+uint32_t stride_or_default(uint32_t s, uint32_t dflt) { return s == 0 ? dflt : s; }
+
+// What one job did, for the completion record and the counters.
+struct JobResult {
+    uint64_t rays = 0, hits = 0, invalid = 0, nodes_visited = 0;
+    uint64_t traversal_cycles = 0;
+    uint64_t node_fetches = 0, l1_accesses = 0, l1_misses = 0, l2_accesses = 0, l2_misses = 0, dram_reads = 0;
+    uint64_t prefetches_sent = 0, prefetches_useful = 0;
+};
+
+// The counters that add up over jobs, and what each counts.
+constexpr std::pair<uint32_t, uint64_t JobResult::*> kCounted[] = {
+    {RTU_PERF_RAYS, &JobResult::rays},
+    {RTU_PERF_HITS, &JobResult::hits},
+    {RTU_PERF_INVALID_RAYS, &JobResult::invalid},
+    {RTU_PERF_NODES_VISITED, &JobResult::nodes_visited},
+    {RTU_PERF_NODE_FETCHES, &JobResult::node_fetches},
+    {RTU_PERF_L1_ACCESSES, &JobResult::l1_accesses},
+    {RTU_PERF_L1_MISSES, &JobResult::l1_misses},
+    {RTU_PERF_L2_ACCESSES, &JobResult::l2_accesses},
+    {RTU_PERF_L2_MISSES, &JobResult::l2_misses},
+    {RTU_PERF_DRAM_READS, &JobResult::dram_reads},
+    {RTU_PERF_PREFETCHES_SENT, &JobResult::prefetches_sent},
+    {RTU_PERF_PREFETCHES_USEFUL, &JobResult::prefetches_useful},
+};
+
+// The RT complex's counters summed, to take differences across a job.
+JobResult complex_totals(const RtComplex& gpu) {
+    JobResult r;
+    for (const auto& u : gpu.rt_units()) {
+        r.node_fetches += u->core().stats().node_fetches;
+        r.prefetches_sent += u->core().stats().prefetch_queue.sent;
+    }
+    auto caches = [](const std::vector<std::unique_ptr<Cache>>& cs, uint64_t& acc, uint64_t& miss, uint64_t* useful) {
+        for (const auto& c : cs) {
+            const CacheCounts& k = c->tags().counts();
+            acc += k.demand.accesses + k.prefetch.accesses;
+            miss += k.demand.sector_misses + k.demand.line_misses + k.prefetch.sector_misses + k.prefetch.line_misses;
+            if (useful) *useful += k.prefetched.useful;
+        }
+    };
+    caches(gpu.l1(), r.l1_accesses, r.l1_misses, &r.prefetches_useful);
+    caches(gpu.l2(), r.l2_accesses, r.l2_misses, nullptr);
+    for (const DramStats& d : gpu.dram().stats()) r.dram_reads += d.reads;
+    return r;
+}
+
+HwConfig resolve_config(const PeripheralConfig& pc, TraversalOrder order) {
+    try {
+        Config c = Config::load(pc.config);
+        for (const std::string& s : pc.sets) c.set(s);
+        HwConfig hw = c.resolve();
+        check_prefetcher(hw.prefetch, order);
+        return hw;
+    } catch (const ConfigError& e) {
+        throw std::invalid_argument(e.what());
+    }
+}
+
+TraversalOrder parse_order(const std::string& t) {
+    if (t == "dfs") return TraversalOrder::DFS;
+    if (t == "bfs") return TraversalOrder::BFS;
+    throw std::invalid_argument("peripheral traversal '" + t + "': allowed are dfs, bfs (treelet traversal needs the image's treelets)");
+}
+
+Fidelity parse_peripheral_fidelity(const std::string& f) {
+    const Fidelity fid = parse_fidelity(f);
+    if (fid == Fidelity::Interval) throw std::invalid_argument("peripheral fidelity 'interval': not built yet; allowed are functional, lt, at");
+    return fid;
+}
+
+uint32_t fidelity_code(Fidelity f) {
+    switch (f) {
+        case Fidelity::Functional: return RTU_FIDELITY_FUNCTIONAL;
+        case Fidelity::Interval: return RTU_FIDELITY_INTERVAL;
+        case Fidelity::LT: return RTU_FIDELITY_LT;
+        case Fidelity::AT: return RTU_FIDELITY_AT;
+    }
+    return 0;
+}
+
+}  // namespace
+
+struct RtUnitPeripheral::Impl {
+    PeripheralConfig pc;
+    TraversalOrder order;
+    HwConfig hw;
+    Fidelity fidelity;
+    RtuRegisters regs;
+    BvhImage image;  // the current job's snapshot; the RT complex reads it by reference
+    JobFeeder feeder;
+    std::unique_ptr<RtComplex> gpu;  // LT, AT
+    ClockDomain core;                // functional: the clock the counters count in
+    sc_event start, irq_update;
+    bool chain = false;  // the accepted START's mode
+    bool abort_requested = false;
+    uint64_t desc_addr = 0;
+    Job latched;
+
+    Impl(const PeripheralConfig& c, TraversalOrder o, const HwConfig& h, Fidelity f)
+        : pc(c), order(o), hw(h), fidelity(f),
+          regs(std::min<uint32_t>(h.sms, 255) | std::min<uint32_t>(h.warp_size, 255) << 8 | std::min<uint32_t>(h.warp_buffer, 255) << 16 |
+                   fidelity_code(f) << 24 | RTU_MEMORY_PRIVATE << 28,
+               uint32_t(o == TraversalOrder::BFS) | uint32_t(h.prefetch.kind) << 4 | uint32_t(h.core_mhz) << 8),
+          core(h.core_mhz) {}
+};
+
+RtUnitPeripheral::RtUnitPeripheral(sc_module_name name, const PeripheralConfig& cfg) : sc_module(name), regs("regs"), mem("mem"), irq("irq") {
+    const TraversalOrder order = parse_order(cfg.traversal);
+    const Fidelity fidelity = parse_peripheral_fidelity(cfg.fidelity);
+    impl_.reset(new Impl(cfg, order, resolve_config(cfg, order), fidelity));
+    Impl& m = *impl_;
+    if (fidelity != Fidelity::Functional) {
+        m.gpu.reset(new RtComplex("rt_complex", m.hw, m.image, order, m.feeder, fidelity));
+        m.feeder.set_clock(m.gpu->core_clock());
+    }
+    regs.register_b_transport(this, &RtUnitPeripheral::b_transport);
+    regs.register_transport_dbg(this, &RtUnitPeripheral::transport_dbg);
+    SC_THREAD(run_jobs);
+    SC_METHOD(drive_irq);
+    sensitive << m.irq_update;
+    dont_initialize();
+}
+
+RtUnitPeripheral::~RtUnitPeripheral() = default;
+
+void RtUnitPeripheral::end_of_elaboration() {
+    if (irq.size()) irq->write(false);  // reset value (no process runs yet: this is the only other write)
+}
+
+void RtUnitPeripheral::drive_irq() {
+    if (irq.size()) irq->write(impl_->regs.irq_level());
+}
+
+void RtUnitPeripheral::b_transport(tlm::tlm_generic_payload& t, sc_time& delay) {
+    Impl& m = *impl_;
+    const RtuRegisters::Commands c = m.regs.access(t, uint32_t(t.get_address() & (RTU_APERTURE_BYTES - 1)), false);
+    delay += m.pc.reg_latency;  // the register target never waits; its effects come at now + delay
+    RtuRegisters::State& s = m.regs.state;
+    if (c.soft_reset && !s.busy) {
+        m.regs.reset();
+        m.irq_update.notify(delay);
+    }
+    if (c.start) {
+        if (s.busy) {
+            s.start_ignored = true;
+        } else {
+            // START latches the job (or the chain's head) and sets BUSY at once, so that a second
+            // START before the job begins is ignored too.
+            s = RtuRegisters::State{};
+            s.busy = true;
+            m.abort_requested = false;
+            m.chain = m.regs.word(RTU_CTRL) & RTU_CTRL_MODE_CHAIN;
+            m.desc_addr = m.regs.pair(RTU_DESC_ADDR_LO);
+            Job& j = m.latched;
+            j.bvh_base = m.regs.pair(RTU_BVH_BASE_LO);
+            j.bvh_size = m.regs.pair(RTU_BVH_SIZE_LO);
+            j.ray_base = m.regs.pair(RTU_RAY_BASE_LO);
+            j.hit_base = m.regs.pair(RTU_HIT_BASE_LO);
+            j.ray_count = m.regs.word(RTU_RAY_COUNT);
+            j.ray_stride = stride_or_default(m.regs.word(RTU_STRIDES) & 0xFFFFu, sizeof(rtu_ray));
+            j.hit_stride = stride_or_default(m.regs.word(RTU_STRIDES) >> 16, sizeof(rtu_hit));
+            j.flags = m.regs.word(RTU_JOB_FLAGS);
+            j.job_id = m.regs.word(RTU_JOB_ID);
+            j.next = 0;
+            m.start.notify(delay);
+        }
+    }
+    if (c.abort && s.busy) {  // the job engine ends the job, then sets ABORTED
+        m.abort_requested = true;
+        m.feeder.abort();
+    }
+    if (c.irq_changed) m.irq_update.notify(delay);
+}
+
+unsigned int RtUnitPeripheral::transport_dbg(tlm::tlm_generic_payload& t) {
+    impl_->regs.access(t, uint32_t(t.get_address() & (RTU_APERTURE_BYTES - 1)), true);
+    return t.is_response_ok() ? t.get_data_length() : 0;
+}
+
+namespace {
+
+// The job engine's use of the memory socket: blocking transport from the job thread, each
+// access's annotated delay waited out before the next (the thread is the unit's only initiator).
+class Dma {
+public:
+    Dma(tlm_utils::simple_initiator_socket<RtUnitPeripheral, 32>& s, RtuRegisters& regs) : socket_(s), regs_(regs) {}
+    void read(uint64_t addr, uint8_t* out, uint64_t bytes) { transfer(tlm::TLM_READ_COMMAND, addr, out, bytes); }
+    void write(uint64_t addr, const uint8_t* in, uint64_t bytes) { transfer(tlm::TLM_WRITE_COMMAND, addr, const_cast<uint8_t*>(in), bytes); }
+
+private:
+    static constexpr uint64_t kChunk = 4096;  // at most 4 KiB per transaction
+    void transfer(tlm::tlm_command cmd, uint64_t addr, uint8_t* data, uint64_t bytes) {
+        for (uint64_t done = 0; done < bytes;) {
+            const uint32_t n = uint32_t(std::min(kChunk, bytes - done));
+            tlm::tlm_generic_payload t;
+            t.set_command(cmd);
+            t.set_address(addr + done);
+            t.set_data_ptr(data + done);
+            t.set_data_length(n);
+            t.set_streaming_width(n);
+            t.set_byte_enable_ptr(nullptr);
+            t.set_dmi_allowed(false);
+            t.set_response_status(tlm::TLM_INCOMPLETE_RESPONSE);
+            sc_time d = SC_ZERO_TIME;
+            socket_->b_transport(t, d);
+            if (!t.is_response_ok()) throw JobError{RTU_ERR_MEM_FAULT, addr + done};
+            wait(d);
+            regs_.count(cmd == tlm::TLM_READ_COMMAND ? RTU_PERF_MEM_BYTES_RD : RTU_PERF_MEM_BYTES_WR, n);
+            done += n;
+        }
+    }
+    tlm_utils::simple_initiator_socket<RtUnitPeripheral, 32>& socket_;
+    RtuRegisters& regs_;
+};
+
+// One job: the image and the rays read, checked and traced, the hits written.
+class JobRun {
+public:
+    JobRun(RtUnitPeripheral::Impl& m, Dma& dma) : m_(m), dma_(dma) {}
+    JobResult run(const Job& j);
+
+private:
+    RtUnitPeripheral::Impl& m_;
+    Dma& dma_;
+};
+
+}  // namespace
+
+namespace {
+
+void check_job(const Job& j) {
+    if (j.flags & ~RTU_JOB_IRQ_ON_DONE) throw JobError{RTU_ERR_BAD_FLAGS, 0};
+    if (j.bvh_base % 64) throw JobError{RTU_ERR_BAD_ALIGN, j.bvh_base};
+    if (j.ray_base % 16) throw JobError{RTU_ERR_BAD_ALIGN, j.ray_base};
+    if (j.hit_base % 16) throw JobError{RTU_ERR_BAD_ALIGN, j.hit_base};
+    for (uint32_t s : {j.ray_stride, j.hit_stride})
+        if (s < 48 || s % 16) throw JobError{RTU_ERR_BAD_ALIGN, s == j.ray_stride ? j.ray_base : j.hit_base};
+    // The image is snapshotted into host memory: a size no BVH image has is refused, not allocated.
+    if (j.bvh_size < kBlockBytes || j.bvh_size > (uint64_t(4) << 30)) throw JobError{RTU_ERR_BAD_BVH, j.bvh_base};
+}
+
+}  // namespace
+
+JobResult JobRun::run(const Job& j) {
+    check_job(j);
+    JobResult r;
+    std::vector<uint8_t> bytes(j.bvh_size);
+    dma_.read(j.bvh_base, bytes.data(), bytes.size());
+    try {
+        m_.image = BvhImage(std::move(bytes));
+    } catch (const std::runtime_error&) {
+        throw JobError{RTU_ERR_BAD_BVH, j.bvh_base};
+    }
+    std::vector<rtu_ray> rays(j.ray_count);
+    if (j.ray_stride == sizeof(rtu_ray)) {
+        dma_.read(j.ray_base, reinterpret_cast<uint8_t*>(rays.data()), uint64_t(j.ray_count) * sizeof(rtu_ray));
+    } else {
+        for (uint32_t i = 0; i < j.ray_count; ++i) dma_.read(j.ray_base + uint64_t(i) * j.ray_stride, reinterpret_cast<uint8_t*>(&rays[i]), sizeof(rtu_ray));
+    }
+    // The functional model answers every ray first: it finds a broken image (a node outside it,
+    // a cycle) before the timing model runs into it, and its hits are the ones the timing model
+    // must reproduce.
+    std::vector<rtu_hit> hits(j.ray_count);
+    try {
+        for (uint32_t i = 0; i < j.ray_count; ++i) hits[i] = trace_record(m_.image, rays[i], m_.order);
+    } catch (const std::out_of_range&) {
+        throw JobError{RTU_ERR_BVH_OUT_OF_RANGE, j.bvh_base};
+    } catch (const std::exception&) {
+        throw JobError{RTU_ERR_BAD_BVH, j.bvh_base};
+    }
+    for (const rtu_hit& h : hits) {
+        r.rays += 1;
+        r.hits += (h.status & RTU_HIT_HIT) != 0;
+        r.invalid += (h.status & RTU_HIT_INVALID_RAY) != 0;
+        r.nodes_visited += h.nodes_visited;
+    }
+    if (m_.gpu) {
+        // The timing model: the rays as rtsim reads a ray file, through the same driver.
+        std::vector<RayFileEntry> entries(j.ray_count);
+        for (uint32_t i = 0; i < j.ray_count; ++i) entries[i].ray = ray_of_record(rays[i], entries[i].valid);
+        const std::unique_ptr<Workload> workload = make_ray_file_workload(entries);
+        auto driver = std::make_unique<WorkloadDriver>(*workload, m_.hw.sms, m_.hw.warp_size, m_.hw.shade_latency, m_.hw.resident_warps);
+        driver->keep_rays(true);
+        const JobResult before = complex_totals(*m_.gpu);
+        m_.feeder.start(std::move(driver));
+        m_.gpu->start_job();
+        const uint64_t first = m_.gpu->core_clock().cycle_at_or_after(sc_time_stamp());
+        wait(m_.feeder.done);
+        const WorkloadDriver& d = *m_.feeder.driver();
+        r.traversal_cycles = d.rays_retired() ? d.last_progress() - first : 0;
+        const JobResult after = complex_totals(*m_.gpu);
+        for (uint64_t JobResult::*f : {&JobResult::node_fetches, &JobResult::l1_accesses, &JobResult::l1_misses, &JobResult::l2_accesses,
+                                       &JobResult::l2_misses, &JobResult::dram_reads, &JobResult::prefetches_sent, &JobResult::prefetches_useful})
+            r.*f = after.*f - before.*f;
+        if (m_.feeder.aborted()) return r;
+        // The timing model traverses with the same code as the functional one: its answers must
+        // be the same, bit for bit.
+        const std::vector<TracedRay> traced = d.results();
+        for (const TracedRay& t : traced) {
+            const rtu_hit h = hit_record(t.hit, t.nodes_visited, !t.valid, rays[t.path].user);
+            if (std::memcmp(&h, &hits[t.path], sizeof h) != 0)
+                throw std::logic_error("ray " + std::to_string(t.path) + ": the timing model's hit differs from the functional model's");
+        }
+    }
+    if (m_.abort_requested) return r;
+    if (j.hit_stride == sizeof(rtu_hit)) {
+        dma_.write(j.hit_base, reinterpret_cast<const uint8_t*>(hits.data()), uint64_t(j.ray_count) * sizeof(rtu_hit));
+    } else {
+        for (uint32_t i = 0; i < j.ray_count; ++i) dma_.write(j.hit_base + uint64_t(i) * j.hit_stride, reinterpret_cast<const uint8_t*>(&hits[i]), sizeof(rtu_hit));
+    }
+    return r;
+}
+
+void RtUnitPeripheral::run_jobs() {
+    Impl& m = *impl_;
+    Dma dma(mem, m.regs);
+    JobRun job_run(m, dma);
+    for (;;) {
+        wait(m.start);
+        RtuRegisters::State& s = m.regs.state;
+        const sc_time busy_from = sc_time_stamp();
+        uint32_t raise = 0;
+        uint64_t next = m.chain ? m.desc_addr : 0;
+        uint32_t descs = 0;
+        try {
+            do {
+                Job j = m.latched;
+                const sc_time job_from = sc_time_stamp();
+                uint64_t desc = 0;
+                if (m.chain) {
+                    if (descs >= m.regs.word(RTU_MAX_CHAIN)) throw JobError{RTU_ERR_CHAIN_LOOP, next};
+                    desc = next;
+                    if (desc % 64) throw JobError{RTU_ERR_BAD_ALIGN, desc};
+                    rtu_job_desc d;
+                    dma.read(desc, reinterpret_cast<uint8_t*>(&d), 64);
+                    if (d.magic != RTU_DESC_MAGIC) throw JobError{RTU_ERR_BAD_DESC_MAGIC, desc};
+                    j.bvh_base = d.bvh_base, j.bvh_size = d.bvh_size, j.ray_base = d.ray_base, j.hit_base = d.hit_base;
+                    j.ray_count = d.ray_count, j.flags = d.flags, j.job_id = d.job_id, j.next = d.next;
+                    j.ray_stride = stride_or_default(d.ray_stride, sizeof(rtu_ray));
+                    j.hit_stride = stride_or_default(d.hit_stride, sizeof(rtu_hit));
+                }
+                JobError error{0, 0};
+                JobResult r;
+                try {
+                    r = job_run.run(j);
+                } catch (const JobError& e) {
+                    if (!m.chain) throw;
+                    error = e;
+                }
+                const uint64_t job_cycles = m.core.cycle_at_or_after(sc_time_stamp() - job_from);
+                if (m.chain) {  // the completion half, then its status word last
+                    rtu_job_desc c{};
+                    c.rays = uint32_t(std::min<uint64_t>(r.rays, UINT32_MAX));
+                    c.job_cycles = job_cycles;
+                    c.traversal_cycles = r.traversal_cycles;
+                    c.hits = uint32_t(std::min<uint64_t>(r.hits, UINT32_MAX));
+                    c.invalid_rays = uint32_t(std::min<uint64_t>(r.invalid, UINT32_MAX));
+                    c.nodes_visited = r.nodes_visited;
+                    c.node_fetches = r.node_fetches;
+                    c.l1_misses = uint32_t(std::min<uint64_t>(r.l1_misses, UINT32_MAX));
+                    c.l2_misses = uint32_t(std::min<uint64_t>(r.l2_misses, UINT32_MAX));
+                    c.start_ps = uint64_t(job_from.to_seconds() * 1e12 + 0.5);
+                    const uint8_t* p = reinterpret_cast<const uint8_t*>(&c);
+                    dma.write(desc + 0x44, p + 0x44, 128 - 0x44);
+                    c.status = error.code ? RTU_DESC_STATUS_ERROR | error.code : m.abort_requested ? RTU_DESC_STATUS_ABORTED : RTU_DESC_STATUS_DONE;
+                    dma.write(desc + 0x40, p + 0x40, 4);
+                    if (error.code) throw error;
+                }
+                m.regs.set_counter(RTU_PERF_JOB_CYCLES, job_cycles);
+                m.regs.set_counter(RTU_PERF_TRAVERSAL_CYCLES, r.traversal_cycles);
+                for (const auto& [offset, field] : kCounted) m.regs.count(offset, r.*field);
+                if (m.abort_requested) break;
+                ++descs;
+                s.descs_done = descs;
+                if (!m.chain || (j.flags & RTU_JOB_IRQ_ON_DONE)) raise |= RTU_INT_JOB_DONE;
+                next = j.next;
+            } while (m.chain && next != 0);
+            if (m.abort_requested) raise |= RTU_INT_ABORTED;
+            else if (m.chain) raise |= RTU_INT_CHAIN_DONE;
+        } catch (const JobError& e) {
+            s.error = true;
+            s.err_code = e.code;
+            s.err_addr = e.addr;
+            raise |= RTU_INT_ERROR;
+            // A warning, not SC_REPORT_ERROR: an error's default action throws out of sc_start,
+            // and a bad job must not take the platform down (the registers say what went wrong).
+            char addr[24];
+            std::snprintf(addr, sizeof addr, "0x%llx", static_cast<unsigned long long>(e.addr));
+            SC_REPORT_WARNING(name(), ("job failed: error code " + std::to_string(e.code) + " (rtunit/rtu_regs.h RTU_ERR_*) at " + addr).c_str());
+        }
+        m.regs.count(RTU_PERF_BUSY_CYCLES, m.core.cycle_at_or_after(sc_time_stamp() - busy_from));
+        // Every write of the job has returned: DONE and the interrupt come now, never earlier.
+        s.busy = false;
+        s.aborted = m.abort_requested && !s.error;
+        s.done = !s.error && !s.aborted;
+        m.regs.raise(raise);
+        m.irq_update.notify(SC_ZERO_TIME);
+    }
+}
+
+}  // namespace rtu

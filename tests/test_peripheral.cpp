@@ -1,0 +1,696 @@
+// The RT unit as an SoC peripheral (include/rtunit/peripheral.h): the register block's access
+// rules, the interrupt path, jobs in register and descriptor mode against the functional
+// reference, the timing against rtsim on the same rays, errors, abort, two instances. A scripted
+// bus master stands in for the CPU and a RAM model for the SoC's memory. Each test elaborates
+// its own platform (one process per test).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <functional>
+
+#include <nlohmann/json.hpp>
+#include <systemc>
+#include <tlm>
+#include <tlm_utils/simple_initiator_socket.h>
+#include <tlm_utils/simple_target_socket.h>
+
+#include <rtunit/job.h>
+#include <rtunit/peripheral.h>
+#include <rtunit/rtu_regs.h>
+
+#include "model/node_format.h"
+#include "test_util.h"
+#include "tlm/rtu_registers.h"
+#include "workloads/bvh_builder.h"
+#include "workloads/rays.h"
+#include "workloads/scenes.h"
+
+using namespace rtu;
+using namespace sc_core;
+
+namespace {
+
+constexpr uint64_t kRegBase = 0x10000000, kRamBase = 0x80000000, kRamBytes = 32 << 20;
+constexpr uint64_t kBvhAt = 0x81234040;  // 64 B aligned, deliberately no power of two
+
+// A register access's payload (`be`: a byte-enable mask of `len` bytes, or null).
+void set_access(tlm::tlm_generic_payload& t, tlm::tlm_command cmd, uint32_t off, void* data, unsigned len, unsigned char* be) {
+    t.set_command(cmd);
+    t.set_address(kRegBase + off);
+    t.set_data_ptr(static_cast<unsigned char*>(data));
+    t.set_data_length(len);
+    t.set_streaming_width(len);
+    t.set_byte_enable_ptr(be);
+    if (be) t.set_byte_enable_length(len);
+    t.set_response_status(tlm::TLM_INCOMPLETE_RESPONSE);
+}
+
+// The SoC's memory: b_transport with a latency and a bandwidth, transport_dbg, a range that
+// answers with an address error (for the fault path), and a log of writes.
+struct Ram : sc_module {
+    tlm_utils::simple_target_socket<Ram, 32> in{"in"};
+    std::vector<uint8_t> bytes = std::vector<uint8_t>(kRamBytes, 0);
+    uint64_t fault_from = ~0ull, fault_to = 0;  // [from, to) answers TLM_ADDRESS_ERROR_RESPONSE
+    uint64_t writes = 0, bytes_read = 0;
+    sc_time last_write_done;
+    explicit Ram(sc_module_name n) : sc_module(n) {
+        in.register_b_transport(this, &Ram::b_transport);
+        in.register_transport_dbg(this, &Ram::transport_dbg);
+    }
+    uint8_t* at(uint64_t addr) { return bytes.data() + (addr - kRamBase); }
+    bool inside(uint64_t a, uint64_t n) const { return a >= kRamBase && a + n <= kRamBase + kRamBytes; }
+    void b_transport(tlm::tlm_generic_payload& t, sc_time& d) {
+        const uint64_t a = t.get_address(), n = t.get_data_length();
+        if (!inside(a, n) || (a < fault_to && a + n > fault_from)) return t.set_response_status(tlm::TLM_ADDRESS_ERROR_RESPONSE);
+        if (t.is_read()) std::memcpy(t.get_data_ptr(), at(a), n);
+        else std::memcpy(at(a), t.get_data_ptr(), n);
+        d += sc_time(50, SC_NS) + sc_time(double(n) / 16.0, SC_NS);  // 50 ns + 16 GB/s
+        if (t.is_write()) ++writes, last_write_done = sc_time_stamp() + d;
+        else bytes_read += n;
+        t.set_response_status(tlm::TLM_OK_RESPONSE);
+    }
+    unsigned transport_dbg(tlm::tlm_generic_payload& t) {
+        const uint64_t a = t.get_address(), n = t.get_data_length();
+        if (!inside(a, n)) return 0;
+        if (t.is_read()) std::memcpy(t.get_data_ptr(), at(a), n);
+        else std::memcpy(at(a), t.get_data_ptr(), n);
+        return unsigned(n);
+    }
+};
+
+// The CPU stand-in: register accesses by b_transport, each annotated delay waited out.
+struct Cpu : sc_module {
+    tlm_utils::simple_initiator_socket<Cpu, 32> bus{"bus"};
+    sc_in<bool> irq{"irq"};
+    std::function<void()> script;
+    bool finished = false;
+    SC_HAS_PROCESS(Cpu);
+    explicit Cpu(sc_module_name n) : sc_module(n) { SC_THREAD(run); }
+    void run() {
+        if (script) script();
+        finished = true;
+    }
+    tlm::tlm_response_status access(tlm::tlm_command cmd, uint32_t off, void* data, unsigned len, bool debug = false,
+                                    unsigned char* byte_enables = nullptr) {
+        tlm::tlm_generic_payload t;
+        set_access(t, cmd, off, data, len, byte_enables);
+        if (debug) {
+            bus->transport_dbg(t);
+            return t.get_response_status();
+        }
+        sc_time d = SC_ZERO_TIME;
+        bus->b_transport(t, d);
+        wait(d);
+        return t.get_response_status();
+    }
+    uint32_t rd(uint32_t off) {
+        uint32_t v = 0;
+        EXPECT_EQ(access(tlm::TLM_READ_COMMAND, off, &v, 4), tlm::TLM_OK_RESPONSE) << "read of 0x" << std::hex << off;
+        return v;
+    }
+    uint64_t rd64(uint32_t lo) {
+        const uint64_t l = rd(lo);
+        return l | uint64_t(rd(lo + 4)) << 32;
+    }
+    void wr(uint32_t off, uint32_t v) { EXPECT_EQ(access(tlm::TLM_WRITE_COMMAND, off, &v, 4), tlm::TLM_OK_RESPONSE) << "write of 0x" << std::hex << off; }
+    void wr64(uint32_t lo, uint64_t v) {
+        wr(lo, uint32_t(v));
+        wr(lo + 4, uint32_t(v >> 32));
+    }
+    // Waits for the interrupt (at most `limit`); returns whether it came.
+    bool wait_irq(sc_time limit = sc_time(1, SC_SEC)) {
+        if (!irq.read()) wait(limit, irq.posedge_event());
+        return irq.read();
+    }
+};
+
+struct Bench {
+    Ram ram{"ram"};
+    Cpu cpu{"cpu"};
+    RtUnitPeripheral rtu;
+    sc_signal<bool> line{"rtu_irq"};
+    explicit Bench(const PeripheralConfig& cfg) : rtu("rtu", cfg) {
+        cpu.bus.bind(rtu.regs);
+        rtu.mem.bind(ram.in);
+        rtu.irq.bind(line);
+        cpu.irq.bind(line);
+    }
+};
+
+struct FsResolution {
+    FsResolution() { sc_set_time_resolution(1, SC_FS); }
+};
+
+PeripheralConfig config_for(const std::string& fidelity) {
+    PeripheralConfig c;
+    c.set("fidelity=" + fidelity);
+    return c;
+}
+
+// A job's inputs: cornell's BVH image, 16x16 primary rays, and rays that test the edges
+// (invalid ones, a reserved flag bit, any-hit queries).
+struct Inputs {
+    BvhImage image;
+    std::vector<rtu_ray> rays;
+    Inputs() : image(build_bvh_image(load_scene("cornell", ""))) {
+        WorkloadParams p;
+        p.width = p.height = 16;
+        p.spp = 1;
+        std::vector<WorkRay> first;
+        make_scene_workload(WorkloadKind::Primary, load_scene("cornell", ""), p)->begin(first);
+        for (const WorkRay& w : first) {
+            const float o[3] = {w.ray.org.x, w.ray.org.y, w.ray.org.z}, d[3] = {w.ray.dir.x, w.ray.dir.y, w.ray.dir.z};
+            rays.push_back(make_ray_record(o, d, w.ray.tnear, w.ray.tfar, false, uint32_t(rays.size()) * 7 + 1));
+        }
+        for (int i = 0; i < 8; ++i) {  // any-hit copies of some camera rays
+            rtu_ray r = rays[size_t(i) * 29];
+            r.flags = RTU_RAY_ANY_HIT;
+            rays.push_back(r);
+        }
+        rtu_ray bad = rays[3];
+        bad.org[0] = std::nanf("");
+        rays.push_back(bad);
+        bad = rays[4];
+        bad.flags = 1u << 5;  // a reserved bit
+        rays.push_back(bad);
+        bad = rays[5];
+        bad.dir[0] = bad.dir[1] = bad.dir[2] = 0;
+        rays.push_back(bad);
+    }
+    std::vector<rtu_hit> reference() const {
+        return reference_hits(image.data(), image.size(), reinterpret_cast<const uint8_t*>(rays.data()), uint32_t(rays.size()));
+    }
+    uint64_t ray_at(uint64_t bvh_at) const { return (bvh_at + image.size() + 255) / 256 * 256; }
+    uint64_t hit_at(uint64_t bvh_at) const { return (ray_at(bvh_at) + rays.size() * sizeof(rtu_ray) + 4095) / 4096 * 4096; }
+    // Loads the image and the rays into RAM in zero time (as a platform's loader does) and
+    // fills the hit buffer with 0xA5.
+    void load(Ram& ram, uint64_t bvh_at) const {
+        std::memcpy(ram.at(bvh_at), image.data(), image.size());
+        std::memcpy(ram.at(ray_at(bvh_at)), rays.data(), rays.size() * sizeof(rtu_ray));
+        std::memset(ram.at(hit_at(bvh_at)), 0xA5, rays.size() * sizeof(rtu_hit));
+    }
+};
+
+void program_job(Cpu& cpu, const Inputs& in, uint64_t bvh_at, uint32_t job_id = 0) {
+    cpu.wr64(RTU_BVH_BASE_LO, bvh_at);
+    cpu.wr64(RTU_BVH_SIZE_LO, in.image.size());
+    cpu.wr64(RTU_RAY_BASE_LO, in.ray_at(bvh_at));
+    cpu.wr(RTU_RAY_COUNT, uint32_t(in.rays.size()));
+    cpu.wr64(RTU_HIT_BASE_LO, in.hit_at(bvh_at));
+    cpu.wr(RTU_JOB_ID, job_id);
+}
+
+// Every hit record bit for bit; returns the number that differ.
+size_t differing_hits(Ram& ram, uint64_t at, const std::vector<rtu_hit>& want) {
+    size_t bad = 0;
+    for (size_t i = 0; i < want.size(); ++i) bad += std::memcmp(ram.at(at + i * sizeof(rtu_hit)), &want[i], sizeof(rtu_hit)) != 0;
+    return bad;
+}
+
+}  // namespace
+
+// T1: the register block's rules, without a simulation.
+TEST(PeripheralRegisters, ResetValuesAndAccessRules) {
+    RtuRegisters regs(0x1234, 0x5678);
+    auto access = [&](tlm::tlm_command cmd, uint32_t off, void* data, unsigned len, bool debug = false, unsigned char* be = nullptr) {
+        tlm::tlm_generic_payload t;
+        set_access(t, cmd, off, data, len, be);
+        regs.access(t, off, debug);
+        return t.get_response_status();
+    };
+    auto rd = [&](uint32_t off) {
+        uint32_t v = 0xDEADBEEF;
+        EXPECT_EQ(access(tlm::TLM_READ_COMMAND, off, &v, 4), tlm::TLM_OK_RESPONSE) << std::hex << off;
+        return v;
+    };
+    auto wr = [&](uint32_t off, uint32_t v) { return access(tlm::TLM_WRITE_COMMAND, off, &v, 4); };
+    EXPECT_EQ(rd(RTU_ID), 0x31555452u);  // "RTU1"
+    EXPECT_EQ(rd(RTU_VERSION), 0x00010000u);
+    EXPECT_EQ(rd(RTU_CONFIG0), 0x1234u);
+    EXPECT_EQ(rd(RTU_CONFIG1), 0x5678u);
+    EXPECT_EQ(rd(RTU_STRIDES), 0x00300030u);
+    EXPECT_EQ(rd(RTU_MAX_CHAIN), 65536u);
+    EXPECT_EQ(rd(RTU_PERF_CTRL), RTU_PERF_ENABLE);
+    for (uint32_t off : {RTU_CTRL, RTU_STATUS, RTU_INT_STATUS, RTU_INT_ENABLE, RTU_ERR_CODE, RTU_BVH_BASE_LO, RTU_RAY_COUNT, RTU_SCRATCH})
+        EXPECT_EQ(rd(off), 0u) << std::hex << off;
+    // Read-only, write-only, unmapped, lengths, byte enables.
+    EXPECT_EQ(wr(RTU_ID, 1), tlm::TLM_COMMAND_ERROR_RESPONSE);
+    EXPECT_EQ(wr(RTU_PERF_RAYS, 1), tlm::TLM_COMMAND_ERROR_RESPONSE);
+    uint32_t v = 0;
+    EXPECT_EQ(access(tlm::TLM_READ_COMMAND, RTU_INT_SET, &v, 4), tlm::TLM_COMMAND_ERROR_RESPONSE);
+    EXPECT_EQ(access(tlm::TLM_READ_COMMAND, 0x030, &v, 4), tlm::TLM_ADDRESS_ERROR_RESPONSE);
+    EXPECT_EQ(access(tlm::TLM_READ_COMMAND, 0xFFC, &v, 4), tlm::TLM_ADDRESS_ERROR_RESPONSE);
+    EXPECT_EQ(access(tlm::TLM_READ_COMMAND, RTU_SCRATCH, &v, 2), tlm::TLM_BURST_ERROR_RESPONSE);
+    EXPECT_EQ(access(tlm::TLM_READ_COMMAND, RTU_SCRATCH + 1, &v, 4), tlm::TLM_ADDRESS_ERROR_RESPONSE);
+    uint64_t pair = 0;
+    EXPECT_EQ(access(tlm::TLM_READ_COMMAND, RTU_ID, &pair, 8), tlm::TLM_BURST_ERROR_RESPONSE);  // not a pair
+    EXPECT_EQ(access(tlm::TLM_READ_COMMAND, RTU_BVH_BASE_HI, &pair, 8), tlm::TLM_BURST_ERROR_RESPONSE);  // the HI half
+    unsigned char be[4] = {0xFF, 0, 0xFF, 0};
+    EXPECT_EQ(access(tlm::TLM_WRITE_COMMAND, RTU_SCRATCH, &v, 4, false, be), tlm::TLM_BYTE_ENABLE_ERROR_RESPONSE);
+    // A 64-bit pair in one access, and as two words.
+    pair = 0x0000000181234040ull;
+    EXPECT_EQ(access(tlm::TLM_WRITE_COMMAND, RTU_BVH_BASE_LO, &pair, 8), tlm::TLM_OK_RESPONSE);
+    EXPECT_EQ(rd(RTU_BVH_BASE_LO), 0x81234040u);
+    EXPECT_EQ(rd(RTU_BVH_BASE_HI), 1u);
+    EXPECT_EQ(regs.pair(RTU_BVH_BASE_LO), 0x181234040ull);
+    // Write 1 to clear; INT_SET sets; INT_ENABLE gates the line.
+    EXPECT_EQ(wr(RTU_INT_SET, RTU_INT_JOB_DONE | RTU_INT_ERROR | 0xF0), tlm::TLM_OK_RESPONSE);
+    EXPECT_EQ(rd(RTU_INT_STATUS), RTU_INT_JOB_DONE | RTU_INT_ERROR);
+    EXPECT_FALSE(regs.irq_level());
+    EXPECT_EQ(wr(RTU_INT_ENABLE, RTU_INT_ERROR), tlm::TLM_OK_RESPONSE);
+    EXPECT_TRUE(regs.irq_level());
+    EXPECT_EQ(wr(RTU_INT_STATUS, RTU_INT_JOB_DONE), tlm::TLM_OK_RESPONSE);
+    EXPECT_EQ(rd(RTU_INT_STATUS), RTU_INT_ERROR);
+    EXPECT_TRUE(regs.irq_level());
+    // Debug accesses: no write-1-to-clear, no latching, no commands; plain registers do take a write.
+    v = RTU_INT_ERROR;
+    EXPECT_EQ(access(tlm::TLM_WRITE_COMMAND, RTU_INT_STATUS, &v, 4, true), tlm::TLM_OK_RESPONSE);
+    EXPECT_EQ(rd(RTU_INT_STATUS), RTU_INT_ERROR);
+    v = RTU_CTRL_START;
+    EXPECT_EQ(access(tlm::TLM_WRITE_COMMAND, RTU_CTRL, &v, 4, true), tlm::TLM_OK_RESPONSE);
+    v = 0x5A5A;
+    EXPECT_EQ(access(tlm::TLM_WRITE_COMMAND, RTU_SCRATCH, &v, 4, true), tlm::TLM_OK_RESPONSE);
+    EXPECT_EQ(rd(RTU_SCRATCH), 0x5A5Au);
+    // A counter's LO latches its HI, so LO then HI reads one value; a debug read latches nothing.
+    regs.perf[RtuRegisters::perf_index(RTU_PERF_RAYS)] = 0x00000002FFFFFFFFull;
+    EXPECT_EQ(rd(RTU_PERF_RAYS), 0xFFFFFFFFu);
+    regs.perf[RtuRegisters::perf_index(RTU_PERF_RAYS)] = 0x0000000300000000ull;
+    EXPECT_EQ(rd(RTU_PERF_RAYS + 4), 2u);  // the HI latched with the LO above
+    EXPECT_EQ(access(tlm::TLM_READ_COMMAND, RTU_PERF_RAYS, &v, 4, true), tlm::TLM_OK_RESPONSE);
+    EXPECT_EQ(rd(RTU_PERF_RAYS + 4), 2u);  // still: the debug read of LO latched nothing
+    // Commands are reported, and only by real writes.
+    tlm::tlm_generic_payload t;
+    v = RTU_CTRL_START | RTU_CTRL_MODE_CHAIN;
+    set_access(t, tlm::TLM_WRITE_COMMAND, RTU_CTRL, &v, 4, nullptr);
+    EXPECT_TRUE(regs.access(t, RTU_CTRL, false).start);
+    EXPECT_EQ(rd(RTU_CTRL), RTU_CTRL_MODE_CHAIN);  // START clears itself
+    EXPECT_FALSE(regs.access(t, RTU_CTRL, true).start);
+    regs.reset();
+    EXPECT_EQ(rd(RTU_SCRATCH), 0u);
+    EXPECT_EQ(rd(RTU_INT_STATUS), 0u);
+}
+
+// T2: the interrupt line without a job.
+TEST(Peripheral, InterruptLineFollowsStatusAndEnable) {
+    FsResolution res;
+    Bench b(config_for("functional"));
+    std::vector<bool> seen;
+    b.cpu.script = [&] {
+        Cpu& c = b.cpu;
+        auto line_after = [&] {
+            wait(SC_ZERO_TIME);  // one delta: the line is written by the peripheral's process
+            return b.line.read();
+        };
+        c.wr(RTU_INT_SET, RTU_INT_JOB_DONE);
+        seen.push_back(line_after());  // enable 0: low
+        c.wr(RTU_INT_ENABLE, RTU_INT_ALL);
+        seen.push_back(line_after());  // enabled later: high
+        c.wr(RTU_INT_SET, RTU_INT_ERROR);
+        c.wr(RTU_INT_STATUS, RTU_INT_JOB_DONE);
+        seen.push_back(line_after());  // a second bit pending: still high
+        c.wr(RTU_INT_STATUS, RTU_INT_ERROR);
+        seen.push_back(line_after());  // cleared: low
+        c.wr(RTU_INT_SET, RTU_INT_ABORTED);
+        c.wr(RTU_INT_ENABLE, 0);
+        seen.push_back(line_after());  // masked: low
+    };
+    sc_start();
+    ASSERT_TRUE(b.cpu.finished);
+    EXPECT_EQ(seen, (std::vector<bool>{false, true, true, false, false}));
+}
+
+// T3, T6, T8: a job in register mode, per fidelity: the hit records bit for bit against the
+// reference, the interrupt's time against the job's cycles, and the traversal cycles against
+// rtsim on the same rays.
+class PeripheralJob : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(PeripheralJob, HitsEqualTheReferenceAndCyclesEqualRtsim) {
+    FsResolution res;
+    const std::string fidelity = GetParam();
+    Bench b(config_for(fidelity));
+    const Inputs in;
+    in.load(b.ram, kBvhAt);
+    const std::vector<rtu_hit> want = in.reference();
+    uint64_t job_cycles = 0, traversal_cycles = 0, rays = 0, hits = 0, invalid = 0, fetches = 0;
+    sc_time t_start, t_irq;
+    uint32_t int_status = 0, status = 0;
+    bool irq_came = false, line_low_after_clear = false;
+    b.cpu.script = [&] {
+        Cpu& c = b.cpu;
+        EXPECT_EQ(c.rd(RTU_ID), RTU_ID_VALUE);
+        c.wr(RTU_INT_ENABLE, RTU_INT_ALL);
+        program_job(c, in, kBvhAt, 42);
+        c.wr(RTU_CTRL, RTU_CTRL_START);
+        t_start = sc_time_stamp();  // the write's effect: its annotated delay is waited out
+        irq_came = c.wait_irq();
+        t_irq = sc_time_stamp();
+        int_status = c.rd(RTU_INT_STATUS);
+        c.wr(RTU_INT_STATUS, int_status);
+        wait(SC_ZERO_TIME);
+        line_low_after_clear = !b.line.read();
+        status = c.rd(RTU_STATUS);
+        job_cycles = c.rd64(RTU_PERF_JOB_CYCLES);
+        traversal_cycles = c.rd64(RTU_PERF_TRAVERSAL_CYCLES);
+        rays = c.rd64(RTU_PERF_RAYS);
+        hits = c.rd64(RTU_PERF_HITS);
+        invalid = c.rd64(RTU_PERF_INVALID_RAYS);
+        fetches = c.rd64(RTU_PERF_NODE_FETCHES);
+    };
+    sc_start();
+    ASSERT_TRUE(b.cpu.finished);
+    ASSERT_TRUE(irq_came);
+    EXPECT_EQ(int_status, RTU_INT_JOB_DONE);
+    EXPECT_TRUE(line_low_after_clear);
+    EXPECT_EQ(status & 0xFFFFu, RTU_STATUS_DONE);
+    EXPECT_EQ(differing_hits(b.ram, in.hit_at(kBvhAt), want), 0u);
+    EXPECT_EQ(rays, in.rays.size());
+    EXPECT_EQ(invalid, 3u);
+    uint64_t want_hits = 0;
+    for (const rtu_hit& h : want) want_hits += h.status & RTU_HIT_HIT;
+    EXPECT_GT(want_hits, 100u);  // cornell's camera sees the box
+    EXPECT_EQ(hits, want_hits);
+    // The interrupt comes when the job's last write has returned: START's effect plus the job's
+    // cycles, within one core period (the job's cycles are rounded up to one).
+    const double period_s = 1e-6 / 1365.0;
+    EXPECT_LE(std::fabs((t_irq - t_start).to_seconds() - double(job_cycles) * period_s), period_s) << (t_irq - t_start);
+    EXPECT_EQ(b.ram.last_write_done, t_irq);
+    if (fidelity == "functional") {
+        EXPECT_EQ(traversal_cycles, 0u);
+        EXPECT_EQ(fetches, 0u);
+        return;
+    }
+    EXPECT_GT(fetches, 0u);
+    EXPECT_GT(traversal_cycles, 0u);
+    EXPECT_LT(traversal_cycles, job_cycles);
+    // rtsim on the same rays (a ray file: %.9g prints a float exactly; invalid rays as NaN).
+    rtu::test::TempDir dir;
+    std::string text;
+    for (size_t i = 0; i < in.rays.size(); ++i) {
+        const rtu_ray& r = in.rays[i];
+        const bool valid = (r.flags & ~RTU_RAY_ANY_HIT) == 0;
+        char line[400];
+        std::snprintf(line, sizeof line, "%.9g %.9g %.9g %.9g %.9g %.9g %.9g %.9g %s\n", valid ? r.org[0] : std::nanf(""), r.org[1], r.org[2],
+                      r.dir[0], r.dir[1], r.dir[2], r.tnear, r.tfar, (r.flags & RTU_RAY_ANY_HIT) ? "any" : "closest");
+        text += line;
+    }
+    const std::string rays_file = rtu::test::write_text(dir.file("rays.txt"), text), stats = dir.file("stats.json");
+    const std::string cmd = std::string(RTU_RTSIM) + " --scene cornell --rays " + rays_file + " --config mobile --fidelity " + fidelity +
+                            " --quiet --stats " + stats + " 2>/dev/null";
+    ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+    const auto j = nlohmann::json::parse(rtu::test::read_text(stats));
+    const uint64_t rtsim_cycles = j["cycles"].get<uint64_t>();
+    EXPECT_EQ(fetches, j["timing"]["rt_unit"]["node_fetches"].get<uint64_t>());
+    if (fidelity == "lt") {
+        EXPECT_EQ(traversal_cycles, rtsim_cycles) << "rtsim --rays, lt";
+    } else {
+        // AT's known defect (docs/status.md): its cycles depend on the kernel's order of
+        // same-time processes, which another platform's processes change (here 899 against
+        // rtsim's 914). Bound, not equality, until that is fixed.
+        EXPECT_NEAR(double(traversal_cycles), double(rtsim_cycles), 0.03 * double(rtsim_cycles)) << "rtsim --rays, at";
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(Fidelities, PeripheralJob, ::testing::Values("functional", "lt", "at"));
+
+namespace {
+
+// A descriptor at `at` in RAM for the job on `in`'s inputs loaded at `bvh_at`, rays [first,
+// first + count) of them, hits to `hit_at`.
+rtu_job_desc descriptor(const Inputs& in, uint64_t bvh_at, uint32_t first, uint32_t count, uint64_t hit_at, uint32_t flags, uint32_t id,
+                        uint64_t next) {
+    rtu_job_desc d{};
+    d.magic = RTU_DESC_MAGIC;
+    d.flags = flags;
+    d.bvh_base = bvh_at;
+    d.bvh_size = in.image.size();
+    d.ray_base = in.ray_at(bvh_at) + uint64_t(first) * sizeof(rtu_ray);
+    d.hit_base = hit_at;
+    d.ray_count = count;
+    d.job_id = id;
+    d.next = next;
+    return d;
+}
+
+}  // namespace
+
+// T4: two descriptors chained, the second with IRQ_ON_DONE: both jobs' hits, their completion
+// records, JOB_DONE and CHAIN_DONE once.
+TEST(Peripheral, DescriptorChainRunsInOrderAndCompletes) {
+    FsResolution res;
+    Bench b(config_for("lt"));
+    const Inputs in;
+    in.load(b.ram, kBvhAt);
+    const std::vector<rtu_hit> want = in.reference();
+    const uint64_t d0 = 0x80100000, d1 = 0x80100080, hits0 = 0x80200000, hits1 = 0x80300000;
+    const rtu_job_desc first = descriptor(in, kBvhAt, 0, 100, hits0, 0, 7, d1);
+    const rtu_job_desc second = descriptor(in, kBvhAt, 100, uint32_t(in.rays.size()) - 100, hits1, RTU_JOB_IRQ_ON_DONE, 8, 0);
+    std::memcpy(b.ram.at(d0), &first, sizeof first);
+    std::memcpy(b.ram.at(d1), &second, sizeof second);
+    uint32_t int_status = 0, status = 0;
+    b.cpu.script = [&] {
+        Cpu& c = b.cpu;
+        c.wr(RTU_INT_ENABLE, RTU_INT_CHAIN_DONE | RTU_INT_ERROR);
+        c.wr64(RTU_DESC_ADDR_LO, d0);
+        c.wr(RTU_CTRL, RTU_CTRL_MODE_CHAIN | RTU_CTRL_START);
+        EXPECT_TRUE(c.wait_irq());
+        int_status = c.rd(RTU_INT_STATUS);
+        status = c.rd(RTU_STATUS);
+    };
+    sc_start();
+    ASSERT_TRUE(b.cpu.finished);
+    // JOB_DONE from the second descriptor only (the first has no IRQ_ON_DONE), CHAIN_DONE once.
+    EXPECT_EQ(int_status, RTU_INT_JOB_DONE | RTU_INT_CHAIN_DONE);
+    EXPECT_EQ(status & 0xFFu, RTU_STATUS_DONE);
+    EXPECT_EQ(RTU_STATUS_DESCS_DONE(status), 2u);
+    EXPECT_EQ(differing_hits(b.ram, hits0, std::vector<rtu_hit>(want.begin(), want.begin() + 100)), 0u);
+    EXPECT_EQ(differing_hits(b.ram, hits1, std::vector<rtu_hit>(want.begin() + 100, want.end())), 0u);
+    rtu_job_desc r0, r1;
+    std::memcpy(&r0, b.ram.at(d0), sizeof r0);
+    std::memcpy(&r1, b.ram.at(d1), sizeof r1);
+    EXPECT_EQ(r0.status, RTU_DESC_STATUS_DONE);
+    EXPECT_EQ(r1.status, RTU_DESC_STATUS_DONE);
+    EXPECT_EQ(r0.rays, 100u);
+    EXPECT_EQ(r1.rays, in.rays.size() - 100);
+    EXPECT_EQ(r1.invalid_rays, 3u);
+    EXPECT_EQ(r0.job_id, 7u);  // software's half is left as it was
+    EXPECT_GT(r0.traversal_cycles, 0u);
+    EXPECT_GT(r0.node_fetches, 0u);
+    EXPECT_LT(r0.start_ps, r1.start_ps);  // in order
+    EXPECT_GE(r1.start_ps, r0.start_ps + uint64_t(double(r0.job_cycles) * 1e6 / 1365.0));
+}
+
+// T5: errors are register codes, never a crash, and the unit takes the next job.
+TEST(Peripheral, BadJobsGiveErrorCodesAndTheNextJobRuns) {
+    FsResolution res;
+    Bench b(config_for("lt"));
+    const Inputs in;
+    in.load(b.ram, kBvhAt);
+    const std::vector<rtu_hit> want = in.reference();
+    const uint64_t garbage = 0x80400000, desc = 0x80100000;
+    std::memset(b.ram.at(garbage), 0x3C, 4096);
+    rtu_job_desc bad = descriptor(in, kBvhAt, 0, 10, in.hit_at(kBvhAt), 0, 1, 0);
+    bad.magic = 0x12345678;
+    std::memcpy(b.ram.at(desc), &bad, sizeof bad);
+    struct Seen {
+        uint32_t status, code;
+        uint64_t addr;
+    };
+    std::vector<Seen> seen;
+    uint32_t ignored_status = 0;
+    b.cpu.script = [&] {
+        Cpu& c = b.cpu;
+        c.wr(RTU_INT_ENABLE, RTU_INT_ALL);
+        auto run = [&](uint32_t ctrl) {
+            c.wr(RTU_CTRL, ctrl);
+            EXPECT_TRUE(c.wait_irq());
+            seen.push_back({c.rd(RTU_STATUS), c.rd(RTU_ERR_CODE), c.rd64(RTU_ERR_ADDR_LO)});
+            c.wr(RTU_INT_STATUS, c.rd(RTU_INT_STATUS));
+            wait(SC_ZERO_TIME);
+        };
+        // A descriptor with a wrong magic.
+        c.wr64(RTU_DESC_ADDR_LO, desc);
+        run(RTU_CTRL_MODE_CHAIN | RTU_CTRL_START);
+        // Not a BVH image.
+        program_job(c, in, kBvhAt);
+        c.wr64(RTU_BVH_BASE_LO, garbage);
+        c.wr64(RTU_BVH_SIZE_LO, 4096);
+        run(RTU_CTRL_START);
+        // An unaligned image.
+        program_job(c, in, kBvhAt);
+        c.wr64(RTU_BVH_BASE_LO, kBvhAt + 16);
+        run(RTU_CTRL_START);
+        // A hit buffer the memory refuses (the RAM answers an address error there).
+        program_job(c, in, kBvhAt);
+        b.ram.fault_from = in.hit_at(kBvhAt) + 4096;
+        b.ram.fault_to = b.ram.fault_from + 64;
+        run(RTU_CTRL_START);
+        b.ram.fault_from = ~0ull;
+        b.ram.fault_to = 0;
+        // A good job, with a second START while it runs.
+        std::memset(b.ram.at(in.hit_at(kBvhAt)), 0xA5, in.rays.size() * sizeof(rtu_hit));
+        program_job(c, in, kBvhAt);
+        c.wr(RTU_CTRL, RTU_CTRL_START);
+        c.wr(RTU_CTRL, RTU_CTRL_START);
+        ignored_status = c.rd(RTU_STATUS);
+        EXPECT_TRUE(c.wait_irq());
+        seen.push_back({c.rd(RTU_STATUS), c.rd(RTU_ERR_CODE), c.rd64(RTU_ERR_ADDR_LO)});
+    };
+    sc_start();
+    ASSERT_TRUE(b.cpu.finished);
+    ASSERT_EQ(seen.size(), 5u);
+    EXPECT_EQ(seen[0].code, RTU_ERR_BAD_DESC_MAGIC);
+    EXPECT_EQ(seen[0].addr, desc);
+    rtu_job_desc back;
+    std::memcpy(&back, b.ram.at(desc), sizeof back);
+    EXPECT_EQ(back.status, 0u) << "what is not a descriptor gets no completion record";
+    EXPECT_EQ(seen[1].code, RTU_ERR_BAD_BVH);
+    EXPECT_EQ(seen[1].addr, garbage);
+    EXPECT_EQ(seen[2].code, RTU_ERR_BAD_ALIGN);
+    EXPECT_EQ(seen[3].code, RTU_ERR_MEM_FAULT);
+    EXPECT_EQ(seen[3].addr, in.hit_at(kBvhAt) + 4096);  // the refused transaction's address
+    for (int i = 0; i < 4; ++i) EXPECT_EQ(seen[i].status & 0xFFu, RTU_STATUS_ERROR) << i;
+    EXPECT_TRUE(ignored_status & RTU_STATUS_BUSY);
+    EXPECT_TRUE(ignored_status & RTU_STATUS_START_IGNORED);
+    EXPECT_EQ(seen[4].status & 0xFFu, RTU_STATUS_DONE | RTU_STATUS_START_IGNORED);  // until the next accepted START
+    EXPECT_EQ(seen[4].code, 0u);
+    EXPECT_EQ(differing_hits(b.ram, in.hit_at(kBvhAt), want), 0u);
+}
+
+// ABORT mid-job: ABORTED, and no hit written after it.
+TEST(Peripheral, AbortStopsTheJobWithoutWritingHits) {
+    FsResolution res;
+    Bench b(config_for("at"));
+    const Inputs in;
+    in.load(b.ram, kBvhAt);
+    uint32_t status = 0, int_status = 0;
+    uint64_t writes_at_end = 0;
+    b.cpu.script = [&] {
+        Cpu& c = b.cpu;
+        c.wr(RTU_INT_ENABLE, RTU_INT_ALL);
+        program_job(c, in, kBvhAt);
+        c.wr(RTU_CTRL, RTU_CTRL_START);
+        // Once the image and the rays are read, the rays are being traced (for about 900 cycles).
+        while (b.ram.bytes_read < in.image.size() + in.rays.size() * sizeof(rtu_ray)) wait(20, SC_NS);
+        EXPECT_TRUE(c.rd(RTU_STATUS) & RTU_STATUS_BUSY);
+        c.wr(RTU_CTRL, RTU_CTRL_ABORT);
+        EXPECT_TRUE(c.wait_irq());
+        status = c.rd(RTU_STATUS);
+        int_status = c.rd(RTU_INT_STATUS);
+        writes_at_end = b.ram.writes;
+    };
+    sc_start();
+    ASSERT_TRUE(b.cpu.finished);
+    EXPECT_EQ(status & 0xFFu, RTU_STATUS_ABORTED);
+    EXPECT_EQ(int_status, RTU_INT_ABORTED);
+    EXPECT_EQ(writes_at_end, 0u);
+    EXPECT_EQ(b.ram.writes, 0u);
+    const std::vector<uint8_t> untouched(in.rays.size() * sizeof(rtu_hit), 0xA5);
+    EXPECT_EQ(std::memcmp(b.ram.at(in.hit_at(kBvhAt)), untouched.data(), untouched.size()), 0);
+}
+
+// T10, T13: two peripherals in one simulation share one RAM and run jobs at once; neither
+// touches process-wide state, and sc_start() returns when they are idle.
+TEST(Peripheral, TwoInOneSimulationAndIdleReturns) {
+    FsResolution res;
+    Ram ram("ram");
+    Cpu cpu_a("cpu_a"), cpu_b("cpu_b");
+    RtUnitPeripheral a("rtu_a", config_for("lt")), b("rtu_b", config_for("at"));
+    sc_signal<bool> irq_a("irq_a"), irq_b("irq_b");
+    cpu_a.bus.bind(a.regs);
+    cpu_b.bus.bind(b.regs);
+    // One RAM target, two initiators: a tiny two-port router.
+    struct Join : sc_module {
+        tlm_utils::simple_target_socket_tagged<Join, 32> in0{"in0"}, in1{"in1"};
+        tlm_utils::simple_initiator_socket<Join, 32> out{"out"};
+        explicit Join(sc_module_name n) : sc_module(n) {
+            in0.register_b_transport(this, &Join::fwd, 0);
+            in1.register_b_transport(this, &Join::fwd, 1);
+        }
+        void fwd(int, tlm::tlm_generic_payload& t, sc_time& d) { out->b_transport(t, d); }
+    } join("join");
+    a.mem.bind(join.in0);
+    b.mem.bind(join.in1);
+    join.out.bind(ram.in);
+    a.irq.bind(irq_a);
+    cpu_a.irq.bind(irq_a);
+    b.irq.bind(irq_b);
+    cpu_b.irq.bind(irq_b);
+    const Inputs in;
+    const uint64_t other = 0x81800000;  // the second unit's copy of the inputs
+    in.load(ram, kBvhAt);
+    in.load(ram, other);
+    const std::vector<rtu_hit> want = in.reference();
+    auto script = [&](Cpu& c, uint64_t at) {
+        return [&c, &in, at] {
+            c.wr(RTU_INT_ENABLE, RTU_INT_JOB_DONE);
+            program_job(c, in, at);
+            c.wr(RTU_CTRL, RTU_CTRL_START);
+            EXPECT_TRUE(c.wait_irq());
+        };
+    };
+    cpu_a.script = script(cpu_a, kBvhAt);
+    cpu_b.script = script(cpu_b, other);
+    sc_start();  // returns: nothing of the peripherals is pending once the jobs are done
+    EXPECT_TRUE(cpu_a.finished);
+    EXPECT_TRUE(cpu_b.finished);
+    EXPECT_FALSE(sc_end_of_simulation_invoked()) << "something called sc_stop";
+    EXPECT_FALSE(sc_pending_activity());
+    EXPECT_EQ(tlm::tlm_global_quantum::instance().get(), SC_ZERO_TIME);
+    EXPECT_EQ(differing_hits(ram, in.hit_at(kBvhAt), want), 0u);
+    EXPECT_EQ(differing_hits(ram, in.hit_at(other), want), 0u);
+}
+
+TEST(Peripheral, BadConfigurationIsRefusedByName) {
+    FsResolution res;
+    PeripheralConfig c;
+    EXPECT_THROW(c.set("fidelity"), std::invalid_argument);
+    EXPECT_THROW(c.set("reg_latency_ns=-1"), std::invalid_argument);
+    auto build = [](const std::string& kv) {
+        PeripheralConfig p;
+        p.set(kv);
+        try {
+            RtUnitPeripheral u(("u_" + std::to_string(std::hash<std::string>()(kv) % 1000)).c_str(), p);
+        } catch (const std::invalid_argument& e) {
+            return std::string(e.what());
+        }
+        return std::string();
+    };
+    EXPECT_NE(build("fidelity=slow").find("functional"), std::string::npos);
+    EXPECT_NE(build("fidelity=interval").find("interval"), std::string::npos);
+    EXPECT_NE(build("traversal=treelet").find("dfs, bfs"), std::string::npos);
+    EXPECT_NE(build("l1.size_kb=nonsense").find("l1.size_kb"), std::string::npos);
+    EXPECT_NE(build("no.such.key=1").find("no.such.key"), std::string::npos);
+}
+
+// An image whose root is its own only child: every ray would loop forever. The functional pass
+// bounds node visits per ray (each block once in an image without instances) and refuses it.
+TEST(Peripheral, ImageWithACycleIsAnErrorNotAHang) {
+    FsResolution res;
+    Bench b(config_for("at"));
+    Inputs in;
+    std::vector<uint8_t> bytes(in.image.data(), in.image.data() + in.image.size());
+    const uint64_t root = in.image.header().root;
+    const NodeType internal = NodeType::Internal;
+    const Aabb box = in.image.header().root_box;
+    encode_internal(box, 1, &internal, &box, root, bytes.data() + root);
+    in.image = BvhImage(bytes);
+    in.load(b.ram, kBvhAt);
+    uint32_t status = 0, code = 0;
+    b.cpu.script = [&] {
+        Cpu& c = b.cpu;
+        c.wr(RTU_INT_ENABLE, RTU_INT_ALL);
+        program_job(c, in, kBvhAt);
+        c.wr(RTU_CTRL, RTU_CTRL_START);
+        EXPECT_TRUE(c.wait_irq());
+        status = c.rd(RTU_STATUS);
+        code = c.rd(RTU_ERR_CODE);
+    };
+    sc_start();
+    ASSERT_TRUE(b.cpu.finished);
+    EXPECT_EQ(status & 0xFFu, RTU_STATUS_ERROR);
+    EXPECT_EQ(code, RTU_ERR_BAD_BVH);
+    EXPECT_EQ(b.ram.writes, 0u);
+    EXPECT_THROW(in.reference(), std::length_error);
+}
