@@ -40,6 +40,7 @@ namespace {
 struct Args {
     std::string scene = "wknd", assets, workload = "pt", rays, hits, traversal = "dfs", fidelity = "functional";
     std::string stats, image, config = "mobile", vcd, trace_warp, prefetcher;
+    std::string dump_bvh, dump_rays, dump_hits;
     std::vector<std::string> sets;
     int width = 128, height = 128, spp = 2, bounces = 16;
     uint64_t seed = 1;
@@ -201,7 +202,8 @@ RunSpec spec_of(const Args& a) {
         throw InputError("--threads " + std::to_string(a.threads) + ": the sampling pre-pass takes 1 to 4096 threads");
     // Outputs are checked before anything runs: a bad path should not wait for the simulation.
     for (const auto& [option, path] : {std::pair<const char*, std::string>{"--stats", a.stats}, {"--image", a.image},
-                                       {"--hits", a.hits}, {"--vcd", a.vcd}})
+                                       {"--hits", a.hits}, {"--vcd", a.vcd}, {"--dump-bvh", a.dump_bvh},
+                                       {"--dump-rays", a.dump_rays}, {"--dump-hits", a.dump_hits}})
         if (!path.empty()) check_writable_folder(option, path);
     if (!(a.sample > 0.0 && a.sample <= 1.0))
         throw InputError("--sample " + std::to_string(a.sample) + ": the share of the frame to simulate must be in (0, 1]");
@@ -235,6 +237,9 @@ RunSpec spec_of(const Args& a) {
     if (!a.trace_warp.empty()) std::tie(spec.trace_sm, spec.trace_warp) = parse_trace_warp(a.trace_warp, spec.hw);
     spec.verify = a.verify;
     spec.keep_rays = !a.hits.empty();
+    spec.dump_bvh = a.dump_bvh;
+    spec.dump_rays = a.dump_rays;
+    spec.dump_hits = a.dump_hits;
     spec.progress = !a.quiet;
     spec.check_error = a.check_error;
     if (a.check_error) spec.run_check = [&a](double rate) { return run_error_check(a, rate); };
@@ -291,6 +296,7 @@ int run(const Args& a) {
     }
     // Write every output only after the whole run succeeded.
     if (!a.hits.empty()) write_file_atomic(a.hits, hits_csv(r.rays));
+    for (const auto& [path, bytes] : r.files) write_file_atomic(path, bytes);
     if (!a.image.empty()) write_png_atomic(a.image, r.width, r.height, r.image);
     if (!a.stats.empty()) write_file_atomic(a.stats, r.stats.dump(2) + "\n");
     if (!a.quiet) print_summary(a, r);
@@ -323,6 +329,7 @@ int sc_main(int argc, char** argv) {
         "             [--prefetcher none|ttp|park|treelet|perfect-up|perfect-down]\n"
         "             [--sample RATE [--sample-seed S] [--sample-unchecked] [--threads N]] [--check-error N]\n"
         "             [--stats FILE.json] [--image FILE.png] [--vcd FILE] [--trace-warp SM:WARP] [--verify] [--quiet]\n"
+        "             [--dump-bvh FILE] [--dump-rays FILE] [--dump-hits FILE]\n"
         "       rtsim --stats-schema | --help\n"
         "exit status: 0 ok, 1 a check failed (--verify mismatches), 2 bad input, 3 internal error\n";
     if (argc <= 1) {
@@ -368,6 +375,9 @@ int sc_main(int argc, char** argv) {
         ("stats", po::value(&a.stats), "write statistics JSON")
         ("image", po::value(&a.image), "write the rendered frame as PNG")
         ("verify", po::bool_switch(&a.verify), "compare every ray with Embree (robust mode); exit 1 on mismatches")
+        ("dump-bvh", po::value(&a.dump_bvh), "write the BVH image's bytes (an SoC peripheral's input; docs/peripheral.md)")
+        ("dump-rays", po::value(&a.dump_rays), "write the workload's first rays (or the ray file's) as 48-byte ray records (rtunit/rtu_regs.h)")
+        ("dump-hits", po::value(&a.dump_hits), "write the golden 48-byte hit records of the --dump-rays rays")
         ("flatten", po::bool_switch(&a.flatten), "scenes whose meshes are all placed as they are: one single-level BVH instead of TLAS + BLAS")
         ("quiet,q", po::bool_switch(&a.quiet), "no progress or summary");
     try {

@@ -1,5 +1,7 @@
 #include "simulation.h"
 
+#include <rtunit/job.h>
+
 #include <algorithm>
 #include <chrono>
 #include <memory>
@@ -21,6 +23,27 @@
 
 namespace rtu {
 namespace {
+
+// The rays a peripheral job would trace, as its 48-byte records: a ray file's rays (an invalid
+// line as a NaN origin, never traced), or a workload's first rays (camera rays: later bounces
+// depend on shading); `user` is the ray's index.
+std::vector<rtu_ray> ray_records(const std::vector<RayFileEntry>& entries) {
+    std::vector<rtu_ray> out;
+    for (const RayFileEntry& e : entries) {
+        const float o[3] = {e.ray.org.x, e.ray.org.y, e.ray.org.z}, d[3] = {e.ray.dir.x, e.ray.dir.y, e.ray.dir.z};
+        out.push_back(make_ray_record(o, d, e.ray.tnear, e.ray.tfar, e.ray.query == Query::Any, uint32_t(out.size())));
+    }
+    return out;
+}
+
+std::vector<rtu_ray> ray_records(Workload& w) {
+    std::vector<WorkRay> first;
+    w.begin(first);
+    if (first.size() > UINT32_MAX) throw InputError("--dump-rays: more than 2^32 rays");
+    std::vector<RayFileEntry> entries(first.size());
+    for (size_t i = 0; i < first.size(); ++i) entries[i].ray = first[i].ray;
+    return ray_records(entries);
+}
 
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
@@ -238,6 +261,19 @@ RunResult run_simulation(const RunSpec& spec, std::ostream* log) {
     std::unique_ptr<EmbreeReference> reference;
     if (spec.verify) reference = std::make_unique<EmbreeReference>(scene);
     RunResult out;
+    if (!spec.dump_bvh.empty()) out.files.emplace_back(spec.dump_bvh, std::string(reinterpret_cast<const char*>(image.data()), image.size()));
+    if (!spec.dump_rays.empty() || !spec.dump_hits.empty()) {
+        const std::vector<rtu_ray> records =
+            kind == WorkloadKind::RayFile ? ray_records(ray_entries) : ray_records(*make_scene_workload(kind, scene, spec.params));
+        const auto bytes = [](const auto& v) { return std::string(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(v[0])); };
+        if (!spec.dump_rays.empty()) out.files.emplace_back(spec.dump_rays, bytes(records));
+        if (!spec.dump_hits.empty()) {
+            if (spec.order == TraversalOrder::Treelet) throw InputError("--dump-hits: the peripheral traverses dfs or bfs, not treelet");
+            out.files.emplace_back(spec.dump_hits, bytes(reference_hits(image.data(), image.size(), reinterpret_cast<const uint8_t*>(records.data()),
+                                                                        uint32_t(records.size()), sizeof(rtu_ray),
+                                                                        spec.order == TraversalOrder::BFS ? RecordTraversal::Bfs : RecordTraversal::Dfs)));
+        }
+    }
     RunRecord rec;
     rec.scene = scene.name;
     rec.workload = kind == WorkloadKind::RayFile ? "rays" : spec.workload;

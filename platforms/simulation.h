@@ -41,6 +41,9 @@ struct RunSpec {
     int trace_sm = -1, trace_warp = -1;
     bool verify = false;       // every ray against Embree (robust mode)
     bool keep_rays = false;    // return every ray with its hit (for a hits file)
+    // The SoC peripheral's inputs (docs/peripheral.md): the BVH image's bytes, the workload's
+    // first rays as 48-byte ray records, and their golden 48-byte hit records (RunResult::files).
+    std::string dump_bvh, dump_rays, dump_hits;
     bool progress = false;     // progress on stderr
     // --check-error N (LT, interval): N clusters drawn besides the first wave simulated in the
     // run's fidelity and in AT; run_check simulates a sample of the frame at `rate` (1: the
@@ -58,6 +61,7 @@ struct RunResult {
     // must not be written.
     std::string stuck;
     std::vector<std::string> invariant_failures;
+    std::vector<std::pair<std::string, std::string>> files;  // path and bytes, written once the run succeeded
     uint64_t mismatches = 0;       // --verify: rays outside the documented classes
     uint64_t first_mismatch = 0;
 };

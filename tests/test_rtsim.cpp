@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <functional>
 #include <iterator>
@@ -13,6 +14,8 @@
 #include <sstream>
 
 #include <nlohmann/json.hpp>
+
+#include <rtunit/rtu_regs.h>
 
 #include "model/config.h"
 #include "model/dram.h"
@@ -169,6 +172,59 @@ TEST(Rtsim, AFrameOfOnlyInvalidRaysWarns) {
     const Result fine = rtsim(dir, "--scene cornell --workload primary --width 8 --height 8 --quiet");
     EXPECT_EQ(fine.status, 0) << fine.err;
     EXPECT_EQ(fine.err.find("invalid"), std::string::npos) << fine.err;
+}
+
+// The SoC peripheral's inputs from a scene: the BVH image's bytes, 48-byte ray records and the
+// golden hit records (rtunit/rtu_regs.h), checked against the hits file of the same run (the
+// functional run loop, not the records' encoder).
+TEST(Rtsim, DumpsAreThePeripheralsInputsAndHits) {
+    TempDir dir;
+    const std::string rays = write_text(dir.file("rays.txt"),
+                                        "278 278 800 0 0 -1 0 inf\n"      // back wall
+                                        "278 278 800 0.1 0.2 -1 0 inf\n"  // somewhere else
+                                        "278 278 800 0 0 -1 0 1000\n"     // tfar before the wall: miss
+                                        "278 278 800 0 0 -1 0 inf any\n"  // any-hit
+                                        "nan 278 800 0 0 -1 0 inf\n");    // invalid
+    const std::string hits = dir.file("hits.csv"), stats = dir.file("stats.json"), bvh = dir.file("c.rtubvh"),
+                      rec = dir.file("c.rays"), golden = dir.file("c.hits");
+    const Result r = rtsim(dir, "--scene cornell --rays " + rays + " --hits " + hits + " --stats " + stats + " --dump-bvh " + bvh +
+                                    " --dump-rays " + rec + " --dump-hits " + golden);
+    ASSERT_EQ(r.status, 0) << r.err;
+    const auto j = nlohmann::json::parse(read_text(stats));
+    const std::string image = read_text(bvh), ray_bytes = read_text(rec), hit_bytes = read_text(golden);
+    EXPECT_EQ(image.size(), j["bvh"]["image_bytes"].get<size_t>());
+    EXPECT_EQ(image.substr(0, 8), "RTUBVH01");
+    ASSERT_EQ(ray_bytes.size(), 5 * sizeof(rtu_ray));
+    ASSERT_EQ(hit_bytes.size(), 5 * sizeof(rtu_hit));
+    std::vector<rtu_ray> rs(5);
+    std::vector<rtu_hit> hs(5);
+    std::memcpy(rs.data(), ray_bytes.data(), ray_bytes.size());
+    std::memcpy(hs.data(), hit_bytes.data(), hit_bytes.size());
+    EXPECT_EQ(rs[1].dir[1], 0.2f);
+    EXPECT_EQ(rs[3].flags, RTU_RAY_ANY_HIT);
+    EXPECT_TRUE(std::isnan(rs[4].org[0]));
+    const auto h = lines(read_text(hits));
+    ASSERT_EQ(h.size(), 6u);
+    for (size_t i = 0; i < 5; ++i) {
+        EXPECT_EQ(rs[i].user, i);
+        EXPECT_EQ(hs[i].user, i);
+        std::istringstream in(h[i + 1]);
+        std::string f[5];
+        for (auto& x : f) std::getline(in, x, ',');
+        EXPECT_EQ(hs[i].status & RTU_HIT_HIT, f[1] == "1" ? RTU_HIT_HIT : 0u) << h[i + 1];
+        if (f[1] != "1") continue;
+        EXPECT_EQ(hs[i].t, std::strtof(f[2].c_str(), nullptr)) << h[i + 1];  // %.9g gives the float back exactly
+        EXPECT_EQ(hs[i].geom, std::stoul(f[3])) << h[i + 1];
+        EXPECT_EQ(hs[i].prim, std::stoul(f[4])) << h[i + 1];
+        EXPECT_GT(hs[i].nodes_visited, 0u);
+    }
+    EXPECT_EQ(hs[0].t, 1355.0f);
+    EXPECT_EQ(hs[2].status, 0u);
+    EXPECT_EQ(hs[4].status, RTU_HIT_INVALID_RAY);
+    // The records' hits are the peripheral's traversal's: treelet traversal has no such hits.
+    const Result t = rtsim(dir, "--scene cornell --rays " + rays + " --traversal treelet --dump-hits " + dir.file("t.hits"));
+    EXPECT_EQ(t.status, 2) << t.err;
+    EXPECT_FALSE(exists(dir.file("t.hits")));
 }
 
 TEST(Rtsim, NoArgumentsPrintsAUsageThatNamesEveryOption) {
