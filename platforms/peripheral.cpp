@@ -120,9 +120,9 @@ TraversalOrder parse_order(const std::string& t) {
 }
 
 Fidelity parse_peripheral_fidelity(const std::string& f) {
-    const Fidelity fid = parse_fidelity(f);
-    if (fid == Fidelity::Interval) throw std::invalid_argument("peripheral fidelity 'interval': not built yet; allowed are functional, lt, at");
-    return fid;
+    for (Fidelity fid : {Fidelity::Functional, Fidelity::LT, Fidelity::AT})
+        if (f == fidelity_name(fid)) return fid;
+    throw std::invalid_argument("peripheral fidelity '" + f + "': allowed are functional, lt, at (interval: not built yet)");
 }
 
 uint32_t fidelity_code(Fidelity f) {

@@ -1,0 +1,179 @@
+// The parts of a minimal SoC virtual platform around the RT-unit peripheral: a RAM, a router
+// and a scripted bus master standing in for the CPU. The example platform (platforms/soc_vp.cpp)
+// and the peripheral's tests are built from them. Plain TLM-2.0 base protocol, b_transport and
+// transport_dbg; nothing here knows the RT unit beyond its register header.
+#pragma once
+#include <algorithm>
+#include <cstdint>
+#include <cstring>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <systemc>
+#include <tlm>
+#include <tlm_utils/multi_passthrough_initiator_socket.h>
+#include <tlm_utils/multi_passthrough_target_socket.h>
+#include <tlm_utils/simple_initiator_socket.h>
+#include <tlm_utils/simple_target_socket.h>
+
+namespace rtu::vp {
+
+// Memory at [base, base + size): b_transport annotated with a latency plus the bytes over a
+// bandwidth, transport_dbg in zero time. Addresses in [fault_from, fault_to) answer
+// TLM_ADDRESS_ERROR_RESPONSE (to test an initiator's error path). Counts what it served.
+class Ram : public sc_core::sc_module {
+public:
+    tlm_utils::simple_target_socket<Ram, 32> in{"in"};
+    uint64_t fault_from = ~0ull, fault_to = 0;
+    uint64_t writes = 0, bytes_read = 0;
+    sc_core::sc_time last_write_done;  // when the latest write's annotated delay ends
+
+    Ram(sc_core::sc_module_name n, uint64_t base, uint64_t size, sc_core::sc_time latency = sc_core::sc_time(50, sc_core::SC_NS),
+        double bytes_per_ns = 16.0)
+        : sc_module(n), base_(base), bytes_(size, 0), latency_(latency), bytes_per_ns_(bytes_per_ns) {
+        in.register_b_transport(this, &Ram::b_transport);
+        in.register_transport_dbg(this, &Ram::transport_dbg);
+    }
+    uint64_t base() const { return base_; }
+    uint8_t* at(uint64_t addr) { return bytes_.data() + (addr - base_); }
+    bool inside(uint64_t a, uint64_t n) const { return a >= base_ && n <= bytes_.size() && a - base_ <= bytes_.size() - n; }
+
+private:
+    void b_transport(tlm::tlm_generic_payload& t, sc_core::sc_time& d) {
+        const uint64_t a = t.get_address(), n = t.get_data_length();
+        if (!inside(a, n) || (a < fault_to && a + n > fault_from) || t.get_byte_enable_ptr())
+            return t.set_response_status(tlm::TLM_ADDRESS_ERROR_RESPONSE);
+        if (t.is_read()) std::memcpy(t.get_data_ptr(), at(a), n);
+        else std::memcpy(at(a), t.get_data_ptr(), n);
+        d += latency_ + sc_core::sc_time(double(n) / bytes_per_ns_, sc_core::SC_NS);
+        if (t.is_write()) {
+            ++writes;
+            last_write_done = sc_core::sc_time_stamp() + d;
+        } else {
+            bytes_read += n;
+        }
+        t.set_response_status(tlm::TLM_OK_RESPONSE);
+    }
+    unsigned transport_dbg(tlm::tlm_generic_payload& t) {
+        const uint64_t a = t.get_address(), n = t.get_data_length();
+        if (!inside(a, n)) return 0;
+        if (t.is_read()) std::memcpy(t.get_data_ptr(), at(a), n);
+        else std::memcpy(at(a), t.get_data_ptr(), n);
+        return unsigned(n);
+    }
+    uint64_t base_;
+    std::vector<uint8_t> bytes_;
+    sc_core::sc_time latency_;
+    double bytes_per_ns_;
+};
+
+// A router: any number of initiators on `in`, targets bound to `out` in the order of map();
+// forwards b_transport and transport_dbg to the target whose range holds the address, with the
+// address unchanged (absolute addressing); elsewhere an address error.
+class Router : public sc_core::sc_module {
+public:
+    tlm_utils::multi_passthrough_target_socket<Router, 32> in{"in"};
+    tlm_utils::multi_passthrough_initiator_socket<Router, 32> out{"out"};
+
+    explicit Router(sc_core::sc_module_name n) : sc_module(n) {
+        in.register_b_transport(this, &Router::b_transport);
+        in.register_transport_dbg(this, &Router::transport_dbg);
+    }
+    // The next target bound to `out` answers [base, base + size).
+    void map(uint64_t base, uint64_t size) { ranges_.push_back({base, size}); }
+
+private:
+    int route(uint64_t a) const {
+        for (size_t i = 0; i < ranges_.size(); ++i)
+            if (a >= ranges_[i].first && a - ranges_[i].first < ranges_[i].second) return int(i);
+        return -1;
+    }
+    void b_transport(int, tlm::tlm_generic_payload& t, sc_core::sc_time& d) {
+        const int r = route(t.get_address());
+        if (r < 0) return t.set_response_status(tlm::TLM_ADDRESS_ERROR_RESPONSE);
+        out[r]->b_transport(t, d);
+    }
+    unsigned transport_dbg(int, tlm::tlm_generic_payload& t) {
+        const int r = route(t.get_address());
+        return r < 0 ? 0 : out[r]->transport_dbg(t);
+    }
+    std::vector<std::pair<uint64_t, uint64_t>> ranges_;
+};
+
+// The CPU stand-in: a script on an SC_THREAD issuing 32-bit register accesses by b_transport
+// (each access's annotated delay waited out) or transport_dbg, and waiting for an interrupt.
+class Cpu : public sc_core::sc_module {
+public:
+    tlm_utils::simple_initiator_socket<Cpu, 32> bus{"bus"};
+    sc_core::sc_in<bool> irq{"irq"};
+    std::function<void()> script;
+    bool finished = false;
+
+    SC_HAS_PROCESS(Cpu);
+    explicit Cpu(sc_core::sc_module_name n) : sc_module(n) { SC_THREAD(run); }
+
+    // One access of `len` bytes at `addr` (`be`: a byte-enable mask, or null).
+    tlm::tlm_response_status access(tlm::tlm_command cmd, uint64_t addr, void* data, unsigned len, bool debug = false,
+                                    unsigned char* be = nullptr) {
+        tlm::tlm_generic_payload t;
+        t.set_command(cmd);
+        t.set_address(addr);
+        t.set_data_ptr(static_cast<unsigned char*>(data));
+        t.set_data_length(len);
+        t.set_streaming_width(len);
+        t.set_byte_enable_ptr(be);
+        if (be) t.set_byte_enable_length(len);
+        t.set_response_status(tlm::TLM_INCOMPLETE_RESPONSE);
+        if (debug) {  // transport_dbg answers with a count: all of it or an error
+            const unsigned n = bus->transport_dbg(t);
+            if (n == len) return tlm::TLM_OK_RESPONSE;
+            return t.is_response_error() ? t.get_response_status() : tlm::TLM_ADDRESS_ERROR_RESPONSE;
+        }
+        sc_core::sc_time d = sc_core::SC_ZERO_TIME;
+        bus->b_transport(t, d);
+        wait(d);
+        return t.get_response_status();
+    }
+    // 32- and 64-bit (LO then HI) reads and writes of the register at `reg_base + off`; `ok`
+    // turns false on an error response.
+    uint64_t reg_base = 0;
+    uint32_t rd(uint32_t off) {
+        uint32_t v = 0;
+        ok = access(tlm::TLM_READ_COMMAND, reg_base + off, &v, 4) == tlm::TLM_OK_RESPONSE && ok;
+        return v;
+    }
+    uint64_t rd64(uint32_t lo) {
+        const uint64_t l = rd(lo);
+        return l | uint64_t(rd(lo + 4)) << 32;
+    }
+    void wr(uint32_t off, uint32_t v) { ok = access(tlm::TLM_WRITE_COMMAND, reg_base + off, &v, 4) == tlm::TLM_OK_RESPONSE && ok; }
+    void wr64(uint32_t lo, uint64_t v) {
+        wr(lo, uint32_t(v));
+        wr(lo + 4, uint32_t(v >> 32));
+    }
+    // Bytes in or out of memory in zero time (as a platform's loader does).
+    void load(uint64_t addr, const void* data, size_t n) { debug_bytes(tlm::TLM_WRITE_COMMAND, addr, const_cast<void*>(data), n); }
+    void fetch(uint64_t addr, void* data, size_t n) { debug_bytes(tlm::TLM_READ_COMMAND, addr, data, n); }
+    // Waits for the interrupt line to be high, at most `limit`; returns whether it is.
+    bool wait_irq(sc_core::sc_time limit = sc_core::sc_time(1, sc_core::SC_SEC)) {
+        if (!irq.read()) wait(limit, irq.posedge_event());
+        return irq.read();
+    }
+    bool ok = true;  // every register access so far answered OK
+
+private:
+    void run() {
+        if (script) script();
+        finished = true;
+    }
+    void debug_bytes(tlm::tlm_command cmd, uint64_t addr, void* data, size_t n) {
+        for (size_t done = 0; done < n;) {
+            const unsigned len = unsigned(std::min<size_t>(n - done, 1u << 20));
+            ok = access(cmd, addr + done, static_cast<uint8_t*>(data) + done, len, true) == tlm::TLM_OK_RESPONSE && ok;
+            done += len;
+        }
+    }
+};
+
+}  // namespace rtu::vp
