@@ -12,7 +12,9 @@
 //
 // usage: rtu-soc-vp [--fidelity functional|lt|at] [--data PREFIX]
 //   --data PREFIX  PREFIX.rtubvh, PREFIX.rays and PREFIX.hits, as rtsim --dump-bvh, --dump-rays and
-//                  --dump-hits write them; without it the built-in cornell scene, 16x16 camera rays.
+//                  --dump-hits write them (default: cornell's, 16x16 camera rays, made at build
+//                  time or installed with the package). The platform adds an any-hit copy of
+//                  every fifth ray and an invalid ray, which only the functional reference covers.
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -31,9 +33,10 @@
 #include <rtunit/rtu_regs.h>
 
 #include "soc_vp.h"
-#include "workloads/bvh_builder.h"
-#include "workloads/rays.h"
-#include "workloads/scenes.h"
+
+#ifndef RTU_SOC_VP_DATA
+#error "RTU_SOC_VP_DATA: the default inputs' path prefix (the build defines it)"
+#endif
 
 namespace {
 
@@ -47,7 +50,7 @@ constexpr uint64_t kDesc = 0x80010000, kHits2 = 0x83000000, kBadDesc = 0x8002000
 struct Data {
     std::vector<uint8_t> bvh;
     std::vector<rtu_ray> rays;
-    std::vector<rtu_hit> golden;  // empty: none given
+    std::vector<rtu_hit> golden;  // of the rays as loaded (before add_edge_rays)
 };
 
 std::vector<uint8_t> read_bytes(const std::string& path) {
@@ -65,24 +68,19 @@ std::vector<T> read_records(const std::string& path) {
     return v;
 }
 
-Data built_in() {
-    Data d;
-    const Scene scene = load_scene("cornell", "");
-    const BvhImage image = build_bvh_image(scene);
-    d.bvh.assign(image.data(), image.data() + image.size());
-    WorkloadParams p;
-    p.width = p.height = 16;
-    p.spp = 1;
-    std::vector<WorkRay> first;
-    make_scene_workload(WorkloadKind::Primary, scene, p)->begin(first);
-    for (const WorkRay& w : first) {
-        const float o[3] = {w.ray.org.x, w.ray.org.y, w.ray.org.z}, dir[3] = {w.ray.dir.x, w.ray.dir.y, w.ray.dir.z};
-        d.rays.push_back(make_ray_record(o, dir, w.ray.tnear, w.ray.tfar, d.rays.size() % 5 == 4, uint32_t(d.rays.size())));
+// The any-hit and invalid rays appended to the loaded ones.
+void add_edge_rays(Data& d) {
+    const size_t n = d.rays.size();
+    for (size_t i = 4; i < n; i += 5) {
+        rtu_ray r = d.rays[i];
+        r.flags = RTU_RAY_ANY_HIT;
+        r.user = uint32_t(d.rays.size());
+        d.rays.push_back(r);
     }
     rtu_ray bad = d.rays[0];
-    bad.org[1] = std::nanf("");  // an invalid ray: answered as a miss with INVALID_RAY
+    bad.org[1] = std::nanf("");  // answered as a miss with INVALID_RAY
+    bad.user = uint32_t(d.rays.size());
     d.rays.push_back(bad);
-    return d;
 }
 
 struct Checks {
@@ -102,7 +100,7 @@ size_t differing(const uint8_t* got, const std::vector<rtu_hit>& want) {
 }  // namespace
 
 int sc_main(int argc, char** argv) {
-    std::string fidelity = "lt", data;
+    std::string fidelity = "lt", data = RTU_SOC_VP_DATA;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
         if ((a == "--fidelity" || a == "--data") && i + 1 < argc) (a == "--fidelity" ? fidelity : data) = argv[++i];
@@ -115,8 +113,9 @@ int sc_main(int argc, char** argv) {
     sc_set_time_resolution(1, SC_FS);
     Data d;
     try {
-        d = data.empty() ? built_in() : Data{read_bytes(data + ".rtubvh"), read_records<rtu_ray>(data + ".rays"), read_records<rtu_hit>(data + ".hits")};
-        if (!d.golden.empty() && d.golden.size() != d.rays.size()) throw std::runtime_error(data + ".hits: not one record per ray");
+        d = Data{read_bytes(data + ".rtubvh"), read_records<rtu_ray>(data + ".rays"), read_records<rtu_hit>(data + ".hits")};
+        if (d.golden.size() != d.rays.size() || d.rays.empty()) throw std::runtime_error(data + ".hits: not one record per ray of " + data + ".rays");
+        add_edge_rays(d);
     } catch (const std::exception& e) {
         std::cerr << "error: " << e.what() << "\n";
         return 2;
@@ -187,7 +186,7 @@ int sc_main(int argc, char** argv) {
         std::vector<uint8_t> got(n * sizeof(rtu_hit));
         cpu.fetch(hits_at, got.data(), got.size());
         check(differing(got.data(), want) == 0, std::to_string(n) + " hit records equal the functional reference");
-        if (!d.golden.empty()) check(differing(got.data(), d.golden) == 0, "hit records equal the golden hits file");
+        check(differing(got.data(), d.golden) == 0, "the first " + std::to_string(d.golden.size()) + " hit records equal the golden hits file");
         check(cpu.rd64(RTU_PERF_RAYS) == n, "PERF_RAYS counts every ray");
         // 6. Two descriptors chained; the second asks for JOB_DONE.
         rtu_job_desc d0{}, d1{};

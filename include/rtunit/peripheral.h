@@ -24,9 +24,11 @@
 #include <tlm_utils/simple_initiator_socket.h>
 #include <tlm_utils/simple_target_socket.h>
 
+#include "export.h"
+
 namespace rtu {
 
-struct PeripheralConfig {
+struct RTUNIT_API PeripheralConfig {
     std::string config = "mobile";  // a preset (mobile, desktop, paper) or a JSON file, as rtsim --config
     std::vector<std::string> sets;  // key=value overrides of the configuration, as rtsim --set
     std::string fidelity = "lt";    // functional, lt or at
@@ -38,7 +40,7 @@ struct PeripheralConfig {
     void set(const std::string& key_value);
 };
 
-class RtUnitPeripheral : public sc_core::sc_module {
+class RTUNIT_API RtUnitPeripheral : public sc_core::sc_module {
 public:
     tlm_utils::simple_target_socket<RtUnitPeripheral, 32> regs;
     tlm_utils::simple_initiator_socket<RtUnitPeripheral, 32> mem;

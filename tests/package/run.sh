@@ -1,0 +1,79 @@
+#!/usr/bin/env bash
+# The installed package as a platform builder meets it (docs/peripheral.md, "Install"):
+# installs the build into a temporary prefix, checks the files and what the library exports,
+# builds the installed example platform out of tree with only CMAKE_PREFIX_PATH (as C++17, C++20
+# and C++14, and with Embree, absl and assimp hidden from find_package), and through pkg-config,
+# runs each and expects "N passed, 0 failed"; checks that a newer version than installed is
+# refused. Prints "N passed, M failed"; exit 1 on a failure.
+# Usage: tests/package/run.sh BUILD_DIR
+set -uo pipefail
+build=$(cd "$1" && pwd)
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+passed=0 failed=0
+check() {  # check NAME COMMAND...: passes when the command succeeds
+  local name=$1; shift
+  if "$@" > "$tmp/out.txt" 2>&1; then passed=$((passed + 1)); echo "pass: $name"
+  else failed=$((failed + 1)); echo "FAIL: $name"; tail -20 "$tmp/out.txt" | sed 's/^/    /'; fi
+}
+prefix=$tmp/prefix
+check "cmake --install" cmake --install "$build" --prefix "$prefix"
+
+# P1: the files, no build-tree paths, SystemC the only public dependency, the exports.
+files_present() {
+  for f in lib/librtunit.so lib/librtunit.so.0 include/rtunit/peripheral.h include/rtunit/job.h include/rtunit/rtu_regs.h \
+           include/rtunit/export.h lib/cmake/rtunit/rtunitConfig.cmake lib/cmake/rtunit/rtunitConfigVersion.cmake \
+           lib/cmake/rtunit/rtunitTargets.cmake lib/pkgconfig/rtunit.pc share/rtunit/examples/soc_vp/CMakeLists.txt \
+           share/rtunit/examples/soc_vp/soc_vp.cpp share/rtunit/examples/soc_vp/soc_vp.h share/rtunit/data/cornell.rtubvh \
+           share/rtunit/data/cornell.rays share/rtunit/data/cornell.hits; do
+    [ -e "$prefix/$f" ] || { echo "missing: $f"; return 1; }
+  done
+}
+check "installed files" files_present
+no_build_paths() { ! grep -rlE "$build|$(cd "$build/.." && pwd)/(model|tlm|platforms|workloads)" "$prefix/lib/cmake" "$prefix/lib/pkgconfig"; }
+check "no build-tree paths in the package files" no_build_paths
+only_systemc() { grep -q 'INTERFACE_LINK_LIBRARIES "rtunit::systemc"' "$prefix/lib/cmake/rtunit/rtunitTargets.cmake"; }
+check "SystemC is the only public dependency" only_systemc
+soname() { readelf -d "$prefix/lib/librtunit.so" | grep -q 'SONAME.*librtunit.so.0'; }
+check "SONAME librtunit.so.0" soname
+exports() {
+  local syms; syms=$(nm -D --defined-only "$prefix/lib/librtunit.so" | c++filt)
+  echo "$syms" | grep -q 'rtu::RtUnitPeripheral::RtUnitPeripheral' && echo "$syms" | grep -q 'rtu::reference_hits' &&
+    ! echo "$syms" | grep -qE 'absl::|glm::|nlohmann|rtu::RtComplex|rtu::BvhImage'
+}
+check "exports the API and nothing of absl, glm or the model" exports
+headers_alone() {
+  for h in peripheral.h job.h rtu_regs.h export.h; do
+    echo "#include <rtunit/$h>" | g++ -std=c++17 -DSC_CPLUSPLUS=201703L -I"$prefix/include" -x c++ -fsyntax-only - || return 1
+    ! grep -qE '#include <(glm|absl|nlohmann)' "$prefix/include/rtunit/$h" || return 1
+  done
+}
+check "each public header compiles alone, without glm, absl or nlohmann" headers_alone
+
+# P2: the installed example, out of tree, with only CMAKE_PREFIX_PATH.
+cp -r "$prefix/share/rtunit/examples/soc_vp" "$tmp/vp"
+consumer() {  # consumer STD [EXTRA CMAKE ARGS]
+  local std=$1; shift
+  local b="$tmp/vp-build-$std"
+  cmake -S "$tmp/vp" -B "$b" -DCMAKE_PREFIX_PATH="$prefix" -DCMAKE_CXX_STANDARD="$std" -DCMAKE_BUILD_TYPE=Release "$@" > "$b.log" 2>&1 &&
+    cmake --build "$b" -j2 >> "$b.log" 2>&1 && "$b/soc_vp" | tee -a "$b.log" | grep -q ' passed, 0 failed' || { tail -20 "$b.log"; return 1; }
+}
+check "out-of-tree example, C++17" consumer 17
+check "out-of-tree example, C++20 (SC_CPLUSPLUS from the package)" consumer 20 \
+  -DCMAKE_DISABLE_FIND_PACKAGE_embree=ON -DCMAKE_DISABLE_FIND_PACKAGE_absl=ON -DCMAKE_DISABLE_FIND_PACKAGE_assimp=ON
+check "out-of-tree example, C++14 (raised to 17 by the package)" consumer 14
+# P3: pkg-config, as a Makefile-built platform would.
+pkgconf() {
+  g++ -std=c++17 -O1 -o "$tmp/vp-pc" "$tmp/vp/soc_vp.cpp" -DRTU_SOC_VP_DATA="\"$prefix/share/rtunit/data/cornell\"" \
+      $(PKG_CONFIG_PATH="$prefix/lib/pkgconfig" pkg-config --cflags --libs rtunit) &&
+    LD_LIBRARY_PATH="$prefix/lib" "$tmp/vp-pc" --fidelity at --data "$prefix/share/rtunit/data/wknd" | grep -q ' passed, 0 failed'
+}
+check "pkg-config consumer (AT, wknd's data)" pkgconf
+# P5: a newer version than the one installed is refused at configure time.
+newer() {
+  mkdir -p "$tmp/newer" && printf 'cmake_minimum_required(VERSION 3.20)\nproject(n CXX)\nfind_package(rtunit 0.2 REQUIRED)\n' > "$tmp/newer/CMakeLists.txt" &&
+    ! cmake -S "$tmp/newer" -B "$tmp/newer/b" -DCMAKE_PREFIX_PATH="$prefix" > "$tmp/newer.log" 2>&1 && grep -q '0.1.0' "$tmp/newer.log"
+}
+check "find_package(rtunit 0.2) is refused by 0.1" newer
+echo "$passed passed, $failed failed"
+[ "$failed" -eq 0 ]
