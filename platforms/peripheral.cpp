@@ -168,6 +168,7 @@ RtUnitPeripheral::RtUnitPeripheral(sc_module_name name, const PeripheralConfig& 
     Impl& m = *impl_;
     if (fidelity != Fidelity::Functional) {
         m.gpu.reset(new RtComplex("rt_complex", m.hw, m.image, order, m.feeder, fidelity));
+        m.gpu->use_own_quantum_only();  // the private path: cycles independent of the platform's quantum
         m.feeder.set_clock(m.gpu->core_clock());
     }
     regs.register_b_transport(this, &RtUnitPeripheral::b_transport);

@@ -120,6 +120,25 @@ struct Inputs {
     }
 };
 
+// rtsim's statistics on the same rays and configuration (a ray file: %.9g prints a float
+// exactly; an invalid ray as a NaN origin).
+nlohmann::json rtsim_stats(const Inputs& in, const std::string& fidelity) {
+    rtu::test::TempDir dir;
+    std::string text;
+    for (const rtu_ray& r : in.rays) {
+        const bool valid = (r.flags & ~RTU_RAY_ANY_HIT) == 0;
+        char line[400];
+        std::snprintf(line, sizeof line, "%.9g %.9g %.9g %.9g %.9g %.9g %.9g %.9g %s\n", valid ? r.org[0] : std::nanf(""), r.org[1], r.org[2],
+                      r.dir[0], r.dir[1], r.dir[2], r.tnear, r.tfar, (r.flags & RTU_RAY_ANY_HIT) ? "any" : "closest");
+        text += line;
+    }
+    const std::string rays_file = rtu::test::write_text(dir.file("rays.txt"), text), stats = dir.file("stats.json");
+    const std::string cmd = std::string(RTU_RTSIM) + " --scene cornell --rays " + rays_file + " --config mobile --fidelity " + fidelity +
+                            " --quiet --stats " + stats + " 2>/dev/null";
+    EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
+    return nlohmann::json::parse(rtu::test::read_text(stats));
+}
+
 void program_job(Cpu& cpu, const Inputs& in, uint64_t bvh_at, uint32_t job_id = 0) {
     cpu.wr64(RTU_BVH_BASE_LO, bvh_at);
     cpu.wr64(RTU_BVH_SIZE_LO, in.image.size());
@@ -311,22 +330,7 @@ TEST_P(PeripheralJob, HitsEqualTheReferenceAndCyclesEqualRtsim) {
     EXPECT_GT(fetches, 0u);
     EXPECT_GT(traversal_cycles, 0u);
     EXPECT_LT(traversal_cycles, job_cycles);
-    // rtsim on the same rays (a ray file: %.9g prints a float exactly; invalid rays as NaN).
-    rtu::test::TempDir dir;
-    std::string text;
-    for (size_t i = 0; i < in.rays.size(); ++i) {
-        const rtu_ray& r = in.rays[i];
-        const bool valid = (r.flags & ~RTU_RAY_ANY_HIT) == 0;
-        char line[400];
-        std::snprintf(line, sizeof line, "%.9g %.9g %.9g %.9g %.9g %.9g %.9g %.9g %s\n", valid ? r.org[0] : std::nanf(""), r.org[1], r.org[2],
-                      r.dir[0], r.dir[1], r.dir[2], r.tnear, r.tfar, (r.flags & RTU_RAY_ANY_HIT) ? "any" : "closest");
-        text += line;
-    }
-    const std::string rays_file = rtu::test::write_text(dir.file("rays.txt"), text), stats = dir.file("stats.json");
-    const std::string cmd = std::string(RTU_RTSIM) + " --scene cornell --rays " + rays_file + " --config mobile --fidelity " + fidelity +
-                            " --quiet --stats " + stats + " 2>/dev/null";
-    ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
-    const auto j = nlohmann::json::parse(rtu::test::read_text(stats));
+    const nlohmann::json j = rtsim_stats(in, fidelity);
     const uint64_t rtsim_cycles = j["cycles"].get<uint64_t>();
     EXPECT_EQ(fetches, j["timing"]["rt_unit"]["node_fetches"].get<uint64_t>());
     if (fidelity == "lt") {
@@ -621,3 +625,33 @@ TEST(Peripheral, ImageWithACycleIsAnErrorNotAHang) {
     EXPECT_EQ(code, RTU_ERR_BAD_BVH);
     EXPECT_EQ(b.ram.writes, 0u);
 }
+
+// T6: an LT platform's global quantum (1 ns to 10 ms) changes neither the hits nor the cycles on
+// the private path, and the interrupt never comes before the job's last write.
+class PeripheralQuantum : public ::testing::TestWithParam<double> {};
+
+TEST_P(PeripheralQuantum, GlobalQuantumChangesNothing) {
+    FsResolution res;
+    tlm::tlm_global_quantum::instance().set(sc_time(GetParam(), SC_NS));
+    Bench b(config_for("lt"));
+    const Inputs in;
+    in.load(b.ram, kBvhAt);
+    uint64_t cycles = 0;
+    sc_time t_irq;
+    b.cpu.script = [&] {
+        Cpu& c = b.cpu;
+        c.wr(RTU_INT_ENABLE, RTU_INT_JOB_DONE);
+        program_job(c, in, kBvhAt);
+        c.wr(RTU_CTRL, RTU_CTRL_START);
+        EXPECT_TRUE(c.wait_irq());
+        t_irq = sc_time_stamp();
+        cycles = c.rd64(RTU_PERF_TRAVERSAL_CYCLES);
+    };
+    sc_start();
+    ASSERT_TRUE(b.cpu.finished);
+    EXPECT_EQ(differing_hits(b.ram, in.hit_at(kBvhAt), in.reference()), 0u);
+    EXPECT_EQ(t_irq, b.ram.last_write_done);
+    EXPECT_EQ(cycles, rtsim_stats(in, "lt")["cycles"].get<uint64_t>()) << "global quantum " << GetParam() << " ns";
+}
+
+INSTANTIATE_TEST_SUITE_P(Quanta, PeripheralQuantum, ::testing::Values(1.0, 1e3, 1e7));

@@ -62,7 +62,7 @@ void RtComplex::lt_schedule() {
         // epoch (from time 0 in rtsim, as tlm_global_quantum places sync points).
         sc_time q = quantum_;
         const sc_time& global = tlm::tlm_global_quantum::instance().get();
-        if (global != SC_ZERO_TIME && global < q) q = global;
+        if (follow_global_quantum_ && global != SC_ZERO_TIME && global < q) q = global;
         const uint64_t end = std::max(first + 1, q == SC_ZERO_TIME ? first + 1 : core_.cycle_at_or_after(t - sc_time::from_value((t - core_.epoch()).value() % q.value()) + q));
         // The units take turns at going first (window by window), as no RT unit of a GPU has
         // precedence: with SM 0 always first, its fetches always took the L2 first, and on sprng

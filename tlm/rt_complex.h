@@ -53,6 +53,10 @@ public:
     // rtsim's frame from time 0); later jobs find the DRAM as the last left it and the caches
     // invalidated. Call only while every RT unit is idle.
     void start_job();
+    // LT: windows of sim.quantum whatever the platform's global quantum. For a complex whose
+    // memory is its own (the SoC peripheral's private path): nothing outside it sees its work
+    // before the job's end, so its cycles need not depend on how often the platform synchronises.
+    void use_own_quantum_only() { follow_global_quantum_ = false; }
     // Functional warming (sampled runs): the sector at `addr` into SM `sm`'s L1, and into its L2
     // slice when the L1 did not hold it (tags and LRU only).
     void warm(uint32_t sm, uint64_t addr);
@@ -64,6 +68,7 @@ private:
     bool started_ = false;   // start_job has set the epoch
     sc_core::sc_event work_;  // LT: a job started
     uint64_t window_ = 0;     // LT: windows run so far (of the current job): who goes first
+    bool follow_global_quantum_ = true;
     sc_core::sc_time quantum_;  // LT: sim.quantum core cycles
     PayloadPool pool_;
     std::vector<std::unique_ptr<RtUnit>> rt_;
