@@ -81,7 +81,15 @@ std::vector<rtu_hit> reference_hits(const uint8_t* bvh, size_t bvh_size, const u
     for (uint32_t i = 0; i < count; ++i) {
         rtu_ray r;
         std::memcpy(&r, rays + size_t(i) * ray_stride, sizeof r);
-        hits[i] = trace_record(image, r, o);
+        try {
+            hits[i] = trace_record(image, r, o);
+        } catch (const std::out_of_range&) {
+            throw;
+        } catch (const std::length_error&) {
+            throw;
+        } catch (const std::runtime_error& e) {  // a node no encoder makes (decode_internal)
+            throw std::invalid_argument(std::string("not a BVH image: ") + e.what());
+        }
     }
     return hits;
 }

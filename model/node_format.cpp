@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstring>
 #include <stdexcept>
+#include <string>
 
 namespace rtu {
 namespace {
@@ -135,10 +136,14 @@ InternalNode decode_internal(const uint8_t* bytes) {
     for (int a = 0; a < 3; ++a) origin[a] = get<float>(bytes + 4 * a);
     std::memcpy(exps, bytes + 12, 3);
     n.count = bytes[15];
+    // An image from untrusted memory (the SoC peripheral's) may hold anything: a node no encoder
+    // makes is refused here, before traversal indexes its children by it.
+    if (n.count > kMaxChildren) throw std::runtime_error("internal node with " + std::to_string(n.count) + " children (at most 6)");
     uint64_t addr = uint64_t(get<uint32_t>(bytes + 16)) * kBlockBytes;
     const float scale[3] = {quantum(exps[0]), quantum(exps[1]), quantum(exps[2])};
-    for (int i = 0; i < n.count && i < kMaxChildren; ++i) {
+    for (int i = 0; i < n.count; ++i) {
         n.type[i] = NodeType(bytes[20 + i]);
+        if (bytes[20 + i] > uint8_t(NodeType::Instance)) throw std::runtime_error("internal node's child of type " + std::to_string(bytes[20 + i]));
         n.addr[i] = addr;
         addr += node_bytes(n.type[i]);
         const uint8_t* q = bytes + 26 + 6 * i;

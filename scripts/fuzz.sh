@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Fuzzes rtsim's input readers with libFuzzer (fuzz/: meshes, ray files, camera files, the
-# configuration), built with clang, AddressSanitizer and UBSan in build-fuzz/. Each harness starts
+# configuration; and the peripheral's BVH images and ray records from untrusted memory), built with clang, AddressSanitizer and UBSan in build-fuzz/. Each harness starts
 # from its seed corpus (fuzz/corpus/NAME), with its dictionary (fuzz/dict/NAME.dict) where there
 # is one, for SECONDS seconds; what it learns is kept in out/fuzz/corpus/NAME for the next run.
 # A finding (crash, sanitizer report, an exception other than bad input, a timeout of 10 s, or
@@ -11,7 +11,7 @@ cd "$(dirname "$0")/.."
 seconds=${1:-60}
 shift || true
 harnesses=("$@")
-[ ${#harnesses[@]} -gt 0 ] || harnesses=(mesh rays camera config)
+[ ${#harnesses[@]} -gt 0 ] || harnesses=(mesh rays camera config image)
 scripts/setup.sh --fuzz
 CC=clang CXX=clang++ cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DBUILD_TESTING=OFF -DRTU_FUZZ=ON \
   -DRTU_SANITIZE=address,undefined,fuzzer-no-link >/dev/null

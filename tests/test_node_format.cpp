@@ -1,6 +1,8 @@
 // Node codec: round trip and conservativeness of the quantized child boxes.
 #include <gtest/gtest.h>
 
+#include <cstring>
+
 #include <cmath>
 #include <random>
 
@@ -134,6 +136,27 @@ TEST(NodeFormat, LeavesAndHeaderRoundTripExactly) {
     EXPECT_EQ(h2.root_box.hi, h.root_box.hi);
     b[0] = 'X';
     EXPECT_THROW(decode_header(b), std::runtime_error);
+}
+
+// Bytes from untrusted memory (the SoC peripheral's images): an internal node no encoder makes
+// (more than 6 children, a child type past Instance) is refused, not traversed. Found by
+// fuzz_image: a child count of 7 made traversal index the 6-entry child arrays past their end.
+TEST(NodeFormat, InternalNodesNoEncoderMakesAreRefused) {
+    Aabb box;
+    box.lo = glm::vec3(0.0f);
+    box.hi = glm::vec3(1.0f);
+    const Aabb boxes[2] = {box, box};
+    const NodeType types[2] = {NodeType::Triangle, NodeType::Instance};
+    uint8_t bytes[kBlockBytes];
+    encode_internal(box, 2, types, boxes, 64, bytes);
+    EXPECT_EQ(decode_internal(bytes).count, 2);
+    uint8_t bad[kBlockBytes];
+    std::memcpy(bad, bytes, kBlockBytes);
+    bad[15] = 7;  // the child count
+    EXPECT_THROW(decode_internal(bad), std::runtime_error);
+    std::memcpy(bad, bytes, kBlockBytes);
+    bad[21] = uint8_t(NodeType::Instance) + 1;  // the second child's type
+    EXPECT_THROW(decode_internal(bad), std::runtime_error);
 }
 
 TEST(NodeFormat, SingularInstanceTransformIsRejected) {

@@ -21,8 +21,8 @@ enum class RecordTraversal : uint8_t { Dfs = 0, Bfs = 1 };
 // BVH image of `bvh_size` bytes at `bvh`: bit for bit what the peripheral writes, whatever its
 // fidelity. Ray i's hit is element i. A ray the ray-file contract calls invalid, or with a
 // reserved flag bit set, is answered as an invalid-ray miss. Throws std::invalid_argument for an
-// image that is not a BVH image, and std::out_of_range / std::length_error for one whose nodes
-// point outside it or into a cycle.
+// image that is not a BVH image (its header, or a node no encoder makes), and std::out_of_range /
+// std::length_error for one whose nodes point outside it or into a cycle.
 RTUNIT_API std::vector<rtu_hit> reference_hits(const uint8_t* bvh, size_t bvh_size, const uint8_t* rays, uint32_t count,
                                                uint32_t ray_stride = sizeof(rtu_ray), RecordTraversal order = RecordTraversal::Dfs);
 
