@@ -9,7 +9,9 @@
 #include <stdexcept>
 #include <utility>
 
+#include "interval_run.h"
 #include "job_feeder.h"
+#include "model/interval_gpu.h"
 #include "model/config.h"
 #include "model/job_records.h"
 #include "model/prefetcher.h"
@@ -80,26 +82,41 @@ constexpr std::pair<uint32_t, uint64_t JobResult::*> kCounted[] = {
     {RTU_PERF_PREFETCHES_USEFUL, &JobResult::prefetches_useful},
 };
 
-// The RT complex's counters summed, to take differences across a job.
-JobResult complex_totals(const RtComplex& gpu) {
+// The counters of a timing model's RT units, L1s, L2 slices and DRAM channels, summed.
+JobResult totals(const std::vector<RtUnitStats>& rt, const std::vector<CacheCounts>& l1, const std::vector<CacheCounts>& l2,
+                 const std::vector<DramStats>& dram) {
     JobResult r;
-    for (const auto& u : gpu.rt_units()) {
-        r.node_fetches += u->core().stats().node_fetches;
-        r.prefetches_sent += u->core().stats().prefetch_queue.sent;
+    for (const RtUnitStats& u : rt) {
+        r.node_fetches += u.node_fetches;
+        r.prefetches_sent += u.prefetch_queue.sent;
     }
-    auto caches = [](const std::vector<std::unique_ptr<Cache>>& cs, uint64_t& acc, uint64_t& miss, uint64_t* useful) {
-        for (const auto& c : cs) {
-            const CacheCounts& k = c->tags().counts();
+    auto caches = [](const std::vector<CacheCounts>& cs, uint64_t& acc, uint64_t& miss, uint64_t* useful) {
+        for (const CacheCounts& k : cs) {
             acc += k.demand.accesses + k.prefetch.accesses;
             miss += k.demand.sector_misses + k.demand.line_misses + k.prefetch.sector_misses + k.prefetch.line_misses;
             if (useful) *useful += k.prefetched.useful;
         }
     };
-    caches(gpu.l1(), r.l1_accesses, r.l1_misses, &r.prefetches_useful);
-    caches(gpu.l2(), r.l2_accesses, r.l2_misses, nullptr);
-    for (const DramStats& d : gpu.dram().stats()) r.dram_reads += d.reads;
+    caches(l1, r.l1_accesses, r.l1_misses, &r.prefetches_useful);
+    caches(l2, r.l2_accesses, r.l2_misses, nullptr);
+    for (const DramStats& d : dram) r.dram_reads += d.reads;
     return r;
 }
+
+// The RT complex's counters so far (they add up over jobs: a job's are a difference).
+JobResult complex_totals(const RtComplex& gpu) {
+    std::vector<RtUnitStats> rt;
+    std::vector<CacheCounts> l1, l2;
+    for (const auto& u : gpu.rt_units()) rt.push_back(u->core().stats());
+    for (const auto& c : gpu.l1()) l1.push_back(c->tags().counts());
+    for (const auto& c : gpu.l2()) l2.push_back(c->tags().counts());
+    return totals(rt, l1, l2, gpu.dram().stats());
+}
+
+// The counters a job adds to the performance registers (the timing model's are set apart).
+constexpr uint64_t JobResult::*kModelCounters[] = {&JobResult::node_fetches, &JobResult::l1_accesses, &JobResult::l1_misses,
+                                                   &JobResult::l2_accesses, &JobResult::l2_misses, &JobResult::dram_reads,
+                                                   &JobResult::prefetches_sent, &JobResult::prefetches_useful};
 
 HwConfig resolve_config(const PeripheralConfig& pc, TraversalOrder order) {
     try {
@@ -120,9 +137,9 @@ TraversalOrder parse_order(const std::string& t) {
 }
 
 Fidelity parse_peripheral_fidelity(const std::string& f) {
-    for (Fidelity fid : {Fidelity::Functional, Fidelity::LT, Fidelity::AT})
+    for (Fidelity fid : {Fidelity::Functional, Fidelity::Interval, Fidelity::LT, Fidelity::AT})
         if (f == fidelity_name(fid)) return fid;
-    throw std::invalid_argument("peripheral fidelity '" + f + "': allowed are functional, lt, at (interval: not built yet)");
+    throw std::invalid_argument("peripheral fidelity '" + f + "': allowed are functional, interval, lt, at");
 }
 
 uint32_t fidelity_code(Fidelity f) {
@@ -147,7 +164,7 @@ struct RtUnitPeripheral::Impl {
     JobFeeder feeder;
     std::unique_ptr<RtComplex> gpu;  // LT, AT
     ClockDomain core;                // functional: the clock the counters count in
-    sc_event start, irq_update;
+    sc_event start, irq_update, abort;
     bool chain = false;  // the accepted START's mode
     bool abort_requested = false;
     uint64_t desc_addr = 0;
@@ -166,7 +183,8 @@ RtUnitPeripheral::RtUnitPeripheral(sc_module_name name, const PeripheralConfig& 
     const Fidelity fidelity = parse_peripheral_fidelity(cfg.fidelity);
     impl_.reset(new Impl(cfg, order, resolve_config(cfg, order), fidelity));
     Impl& m = *impl_;
-    if (fidelity != Fidelity::Functional) {
+    if (fidelity == Fidelity::Interval) IntervalGpu(m.hw, m.image, order);  // throws for what the fidelity does not model
+    if (fidelity == Fidelity::LT || fidelity == Fidelity::AT) {
         m.gpu.reset(new RtComplex("rt_complex", m.hw, m.image, order, m.feeder, fidelity));
         m.gpu->use_own_quantum_only();  // the private path: cycles independent of the platform's quantum
         m.feeder.set_clock(m.gpu->core_clock());
@@ -226,6 +244,7 @@ void RtUnitPeripheral::b_transport(tlm::tlm_generic_payload& t, sc_time& delay) 
     if (c.abort && s.busy) {  // the job engine ends the job, then sets ABORTED
         m.abort_requested = true;
         m.feeder.abort();
+        m.abort.notify(delay);
     }
     if (c.irq_changed) m.irq_update.notify(delay);
 }
@@ -332,11 +351,27 @@ JobResult JobRun::run(const Job& j) {
         r.invalid += (h.status & RTU_HIT_INVALID_RAY) != 0;
         r.nodes_visited += h.nodes_visited;
     }
+    // The timing model: the rays as rtsim reads a ray file, through the same driver.
+    std::vector<RayFileEntry> entries(m_.fidelity == Fidelity::Functional ? 0 : j.ray_count);
+    for (size_t i = 0; i < entries.size(); ++i) entries[i].ray = ray_of_record(rays[i], entries[i].valid);
+    const std::unique_ptr<Workload> workload = make_ray_file_workload(entries);
+    std::vector<TracedRay> traced;
+    if (m_.fidelity == Fidelity::Interval) {
+        // The whole job at once, without the kernel (a fresh interval GPU: cold caches and DRAM),
+        // then the job's simulated time waited out; ABORT ends the wait and the job.
+        TimingOptions to;
+        to.order = m_.order;
+        to.keep_rays = true;
+        TimingResult t = run_interval(m_.hw, m_.image, *workload, to);
+        if (!t.invariant_failures.empty()) throw std::logic_error("interval fidelity: " + t.invariant_failures.front());
+        r.traversal_cycles = t.cycles;
+        const JobResult model = totals(t.counts.rt, t.counts.l1, t.counts.l2, t.counts.dram);
+        for (uint64_t JobResult::*f : kModelCounters) r.*f = model.*f;
+        wait(m_.core.period() * double(t.cycles), m_.abort);
+        if (m_.abort_requested) return r;
+        traced = std::move(t.rays);
+    }
     if (m_.gpu) {
-        // The timing model: the rays as rtsim reads a ray file, through the same driver.
-        std::vector<RayFileEntry> entries(j.ray_count);
-        for (uint32_t i = 0; i < j.ray_count; ++i) entries[i].ray = ray_of_record(rays[i], entries[i].valid);
-        const std::unique_ptr<Workload> workload = make_ray_file_workload(entries);
         auto driver = std::make_unique<WorkloadDriver>(*workload, m_.hw.sms, m_.hw.warp_size, m_.hw.shade_latency, m_.hw.resident_warps);
         driver->keep_rays(true);
         const JobResult before = complex_totals(*m_.gpu);
@@ -346,19 +381,17 @@ JobResult JobRun::run(const Job& j) {
         wait(m_.feeder.done);
         const WorkloadDriver& d = *m_.feeder.driver();
         r.traversal_cycles = d.rays_retired() ? d.last_progress() - first : 0;
+        traced = d.results();
         const JobResult after = complex_totals(*m_.gpu);
-        for (uint64_t JobResult::*f : {&JobResult::node_fetches, &JobResult::l1_accesses, &JobResult::l1_misses, &JobResult::l2_accesses,
-                                       &JobResult::l2_misses, &JobResult::dram_reads, &JobResult::prefetches_sent, &JobResult::prefetches_useful})
-            r.*f = after.*f - before.*f;
+        for (uint64_t JobResult::*f : kModelCounters) r.*f = after.*f - before.*f;
         if (m_.feeder.aborted()) return r;
-        // The timing model traverses with the same code as the functional one: its answers must
-        // be the same, bit for bit.
-        const std::vector<TracedRay> traced = d.results();
-        for (const TracedRay& t : traced) {
-            const rtu_hit h = hit_record(t.hit, t.nodes_visited, !t.valid, rays[t.path].user);
-            if (std::memcmp(&h, &hits[t.path], sizeof h) != 0)
-                throw std::logic_error("ray " + std::to_string(t.path) + ": the timing model's hit differs from the functional model's");
-        }
+    }
+    // The timing models traverse with the same code as the functional one: their answers must
+    // be the same, bit for bit.
+    for (const TracedRay& t : traced) {
+        const rtu_hit h = hit_record(t.hit, t.nodes_visited, !t.valid, rays[t.path].user);
+        if (std::memcmp(&h, &hits[t.path], sizeof h) != 0)
+            throw std::logic_error("ray " + std::to_string(t.path) + ": the timing model's hit differs from the functional model's");
     }
     if (m_.abort_requested) return r;
     if (j.hit_stride == sizeof(rtu_hit)) {

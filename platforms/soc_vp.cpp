@@ -10,7 +10,7 @@
 // hit record bit for bit against the functional reference (and against golden hits when given),
 // checks an error path, and prints "N passed, M failed" (exit status 1 if any failed).
 //
-// usage: rtu-soc-vp [--fidelity functional|lt|at] [--data PREFIX]
+// usage: rtu-soc-vp [--fidelity functional|interval|lt|at] [--data PREFIX]
 //   --data PREFIX  PREFIX.rtubvh, PREFIX.rays and PREFIX.hits, as rtsim --dump-bvh, --dump-rays and
 //                  --dump-hits write them (default: cornell's, 16x16 camera rays, made at build
 //                  time or installed with the package). The platform adds an any-hit copy of
@@ -105,7 +105,7 @@ int sc_main(int argc, char** argv) {
         const std::string a = argv[i];
         if ((a == "--fidelity" || a == "--data") && i + 1 < argc) (a == "--fidelity" ? fidelity : data) = argv[++i];
         else {
-            std::cerr << "usage: rtu-soc-vp [--fidelity functional|lt|at] [--data PREFIX]\n";
+            std::cerr << "usage: rtu-soc-vp [--fidelity functional|interval|lt|at] [--data PREFIX]\n";
             return 2;
         }
     }

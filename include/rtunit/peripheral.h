@@ -10,7 +10,7 @@
 //
 // Software writes a job (BVH image, rays, hit buffer) into the JOB registers or a chain of
 // descriptors, then CTRL.START. The unit reads the image and the rays, traces them with the
-// configured fidelity, writes one hit record per ray and raises JOB_DONE. Functional, LT and AT
+// configured fidelity, writes one hit record per ray and raises JOB_DONE. Functional, interval, LT and AT
 // fidelities; the memory path is private (the RT complex's own caches and DRAM, so its cycles do
 // not depend on the SoC). No process-wide side effects: no global quantum, no report actions, no
 // sc_stop; any number of instances per simulation.
@@ -31,7 +31,7 @@ namespace rtu {
 struct RTUNIT_API PeripheralConfig {
     std::string config = "mobile";  // a preset (mobile, desktop, paper) or a JSON file, as rtsim --config
     std::vector<std::string> sets;  // key=value overrides of the configuration, as rtsim --set
-    std::string fidelity = "lt";    // functional, lt or at
+    std::string fidelity = "lt";    // functional, interval, lt or at
     std::string traversal = "dfs";  // dfs or bfs
     sc_core::sc_time reg_latency = sc_core::sc_time(10, sc_core::SC_NS);  // added to every register access
     // By name, for platforms that configure modules from strings (QBox, VCML, Lua):
