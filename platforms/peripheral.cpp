@@ -30,6 +30,10 @@ void PeripheralConfig::set(const std::string& kv) {
     if (k == "fidelity") fidelity = v;
     else if (k == "traversal") traversal = v;
     else if (k == "config") config = v;
+    else if (k == "use_dmi") {
+        if (v != "0" && v != "1" && v != "true" && v != "false") throw std::invalid_argument("peripheral option use_dmi='" + v + "': 0, 1, true or false");
+        use_dmi = v == "1" || v == "true";
+    }
     else if (k == "reg_latency_ns") {
         size_t used = 0;
         double ns = -1;
@@ -167,6 +171,7 @@ struct RtUnitPeripheral::Impl {
     sc_event start, irq_update, abort;
     bool chain = false;  // the accepted START's mode
     bool abort_requested = false;
+    std::vector<tlm::tlm_dmi> dmi;  // regions granted on `mem`
     uint64_t desc_addr = 0;
     Job latched;
 
@@ -189,6 +194,7 @@ RtUnitPeripheral::RtUnitPeripheral(sc_module_name name, const PeripheralConfig& 
         m.gpu->use_own_quantum_only();  // the private path: cycles independent of the platform's quantum
         m.feeder.set_clock(m.gpu->core_clock());
     }
+    mem.register_invalidate_direct_mem_ptr(this, &RtUnitPeripheral::invalidate_direct_mem_ptr);
     regs.register_b_transport(this, &RtUnitPeripheral::b_transport);
     regs.register_transport_dbg(this, &RtUnitPeripheral::transport_dbg);
     SC_THREAD(run_jobs);
@@ -249,6 +255,12 @@ void RtUnitPeripheral::b_transport(tlm::tlm_generic_payload& t, sc_time& delay) 
     if (c.irq_changed) m.irq_update.notify(delay);
 }
 
+void RtUnitPeripheral::invalidate_direct_mem_ptr(sc_dt::uint64 start, sc_dt::uint64 end) {
+    auto& d = impl_->dmi;
+    d.erase(std::remove_if(d.begin(), d.end(), [&](const tlm::tlm_dmi& r) { return r.get_start_address() <= end && start <= r.get_end_address(); }),
+            d.end());
+}
+
 unsigned int RtUnitPeripheral::transport_dbg(tlm::tlm_generic_payload& t) {
     impl_->regs.access(t, uint32_t(t.get_address() & (RTU_APERTURE_BYTES - 1)), true);
     return t.is_response_ok() ? t.get_data_length() : 0;
@@ -257,37 +269,76 @@ unsigned int RtUnitPeripheral::transport_dbg(tlm::tlm_generic_payload& t) {
 namespace {
 
 // The job engine's use of the memory socket: blocking transport from the job thread, each
-// access's annotated delay waited out before the next (the thread is the unit's only initiator).
+// access's annotated delay waited out before the next (the thread is the unit's only initiator),
+// at most 4 KiB per access. With DMI allowed, a region the target grants (after a transaction
+// that says DMI is allowed) is used for the chunks it covers: a copy and the region's latency
+// instead of a transaction. Regions are dropped on invalidate_direct_mem_ptr.
 class Dma {
 public:
-    Dma(tlm_utils::simple_initiator_socket<RtUnitPeripheral, 32>& s, RtuRegisters& regs) : socket_(s), regs_(regs) {}
+    Dma(tlm_utils::simple_initiator_socket<RtUnitPeripheral, 32>& s, RtuRegisters& regs, std::vector<tlm::tlm_dmi>* dmi)
+        : socket_(s), regs_(regs), dmi_(dmi) {}
     void read(uint64_t addr, uint8_t* out, uint64_t bytes) { transfer(tlm::TLM_READ_COMMAND, addr, out, bytes); }
     void write(uint64_t addr, const uint8_t* in, uint64_t bytes) { transfer(tlm::TLM_WRITE_COMMAND, addr, const_cast<uint8_t*>(in), bytes); }
+    // [addr, addr + bytes) in place, where one granted DMI region covers it for reading (asked for
+    // if none is known yet), its latency waited once per 4 KiB as the reads would take; else null.
+    const uint8_t* direct_read(uint64_t addr, uint64_t bytes) {
+        if (!dmi_) return nullptr;
+        if (!region(tlm::TLM_READ_COMMAND, addr, bytes)) request(addr);
+        const tlm::tlm_dmi* r = region(tlm::TLM_READ_COMMAND, addr, bytes);
+        if (!r) return nullptr;
+        for (uint64_t done = 0; done < bytes; done += kChunk) wait(r->get_read_latency());
+        regs_.count(RTU_PERF_MEM_BYTES_RD, bytes);
+        return r->get_dmi_ptr() + (addr - r->get_start_address());
+    }
 
 private:
-    static constexpr uint64_t kChunk = 4096;  // at most 4 KiB per transaction
+    static constexpr uint64_t kChunk = 4096;
+    const tlm::tlm_dmi* region(tlm::tlm_command cmd, uint64_t addr, uint64_t n) const {
+        if (!dmi_) return nullptr;
+        for (const tlm::tlm_dmi& r : *dmi_)
+            if (addr >= r.get_start_address() && n > 0 && addr + n - 1 <= r.get_end_address() && addr + n - 1 >= addr &&
+                (cmd == tlm::TLM_READ_COMMAND ? r.is_read_allowed() : r.is_write_allowed()))
+                return &r;
+        return nullptr;
+    }
+    void request(uint64_t addr) {
+        tlm::tlm_generic_payload t;
+        t.set_command(tlm::TLM_READ_COMMAND);
+        t.set_address(addr);
+        tlm::tlm_dmi d;
+        if (socket_->get_direct_mem_ptr(t, d) && d.get_dmi_ptr()) dmi_->push_back(d);
+    }
     void transfer(tlm::tlm_command cmd, uint64_t addr, uint8_t* data, uint64_t bytes) {
         for (uint64_t done = 0; done < bytes;) {
             const uint32_t n = uint32_t(std::min(kChunk, bytes - done));
-            tlm::tlm_generic_payload t;
-            t.set_command(cmd);
-            t.set_address(addr + done);
-            t.set_data_ptr(data + done);
-            t.set_data_length(n);
-            t.set_streaming_width(n);
-            t.set_byte_enable_ptr(nullptr);
-            t.set_dmi_allowed(false);
-            t.set_response_status(tlm::TLM_INCOMPLETE_RESPONSE);
-            sc_time d = SC_ZERO_TIME;
-            socket_->b_transport(t, d);
-            if (!t.is_response_ok()) throw JobError{RTU_ERR_MEM_FAULT, addr + done};
-            wait(d);
+            if (const tlm::tlm_dmi* r = region(cmd, addr + done, n)) {
+                uint8_t* mem = r->get_dmi_ptr() + (addr + done - r->get_start_address());
+                if (cmd == tlm::TLM_READ_COMMAND) std::memcpy(data + done, mem, n);
+                else std::memcpy(mem, data + done, n);
+                wait(cmd == tlm::TLM_READ_COMMAND ? r->get_read_latency() : r->get_write_latency());
+            } else {
+                tlm::tlm_generic_payload t;
+                t.set_command(cmd);
+                t.set_address(addr + done);
+                t.set_data_ptr(data + done);
+                t.set_data_length(n);
+                t.set_streaming_width(n);
+                t.set_byte_enable_ptr(nullptr);
+                t.set_dmi_allowed(false);
+                t.set_response_status(tlm::TLM_INCOMPLETE_RESPONSE);
+                sc_time d = SC_ZERO_TIME;
+                socket_->b_transport(t, d);
+                if (!t.is_response_ok()) throw JobError{RTU_ERR_MEM_FAULT, addr + done};
+                wait(d);
+                if (dmi_ && t.is_dmi_allowed()) request(addr + done);
+            }
             regs_.count(cmd == tlm::TLM_READ_COMMAND ? RTU_PERF_MEM_BYTES_RD : RTU_PERF_MEM_BYTES_WR, n);
             done += n;
         }
     }
     tlm_utils::simple_initiator_socket<RtUnitPeripheral, 32>& socket_;
     RtuRegisters& regs_;
+    std::vector<tlm::tlm_dmi>* dmi_;  // granted regions; null: DMI not used
 };
 
 // One job: the image and the rays read, checked and traced, the hits written.
@@ -321,10 +372,16 @@ void check_job(const Job& j) {
 JobResult JobRun::run(const Job& j) {
     check_job(j);
     JobResult r;
-    std::vector<uint8_t> bytes(j.bvh_size);
-    dma_.read(j.bvh_base, bytes.data(), bytes.size());
+    // The image in place where DMI grants it (software must not change it during the job, the
+    // contract of a GPU's acceleration structure), else a copy.
     try {
-        m_.image = BvhImage(std::move(bytes));
+        if (const uint8_t* in_place = dma_.direct_read(j.bvh_base, j.bvh_size)) {
+            m_.image = BvhImage::view(in_place, j.bvh_size);
+        } else {
+            std::vector<uint8_t> bytes(j.bvh_size);
+            dma_.read(j.bvh_base, bytes.data(), bytes.size());
+            m_.image = BvhImage(std::move(bytes));
+        }
     } catch (const std::runtime_error&) {
         throw JobError{RTU_ERR_BAD_BVH, j.bvh_base};
     }
@@ -404,7 +461,7 @@ JobResult JobRun::run(const Job& j) {
 
 void RtUnitPeripheral::run_jobs() {
     Impl& m = *impl_;
-    Dma dma(mem, m.regs);
+    Dma dma(mem, m.regs, m.pc.use_dmi ? &m.dmi : nullptr);
     JobRun job_run(m, dma);
     for (;;) {
         wait(m.start);

@@ -20,13 +20,15 @@
 namespace rtu::vp {
 
 // Memory at [base, base + size): b_transport annotated with a latency plus the bytes over a
-// bandwidth, transport_dbg in zero time. Addresses in [fault_from, fault_to) answer
-// TLM_ADDRESS_ERROR_RESPONSE (to test an initiator's error path). Counts what it served.
+// bandwidth, transport_dbg in zero time, DMI (read and write, the same latency per access) when
+// `dmi` is on. Addresses in a fault range answer TLM_ADDRESS_ERROR_RESPONSE and are never granted
+// (to test an initiator's error path). Counts what it served, and what broke the base protocol's
+// rules for blocking transport (`violations`).
 class Ram : public sc_core::sc_module {
 public:
     tlm_utils::simple_target_socket<Ram, 32> in{"in"};
-    uint64_t fault_from = ~0ull, fault_to = 0;
-    uint64_t writes = 0, bytes_read = 0;
+    bool dmi = true;
+    uint64_t writes = 0, bytes_read = 0, transactions = 0, dmi_grants = 0, violations = 0;
     sc_core::sc_time last_write_done;  // when the latest write's annotated delay ends
 
     Ram(sc_core::sc_module_name n, uint64_t base, uint64_t size, sc_core::sc_time latency = sc_core::sc_time(50, sc_core::SC_NS),
@@ -34,16 +36,29 @@ public:
         : sc_module(n), base_(base), bytes_(size, 0), latency_(latency), bytes_per_ns_(bytes_per_ns) {
         in.register_b_transport(this, &Ram::b_transport);
         in.register_transport_dbg(this, &Ram::transport_dbg);
+        in.register_get_direct_mem_ptr(this, &Ram::get_direct_mem_ptr);
     }
     uint64_t base() const { return base_; }
     uint8_t* at(uint64_t addr) { return bytes_.data() + (addr - base_); }
     bool inside(uint64_t a, uint64_t n) const { return a >= base_ && n <= bytes_.size() && a - base_ <= bytes_.size() - n; }
+    // [from, to) answers errors from now on (empty: none); granted DMI regions are withdrawn.
+    void set_fault(uint64_t from, uint64_t to) {
+        fault_from_ = from;
+        fault_to_ = to;
+        invalidate_dmi();
+    }
+    void invalidate_dmi() { in->invalidate_direct_mem_ptr(0, ~sc_dt::uint64(0)); }
 
 private:
+    bool faulty(uint64_t a, uint64_t n) const { return a < fault_to_ && a + n > fault_from_; }
     void b_transport(tlm::tlm_generic_payload& t, sc_core::sc_time& d) {
         const uint64_t a = t.get_address(), n = t.get_data_length();
-        if (!inside(a, n) || (a < fault_to && a + n > fault_from) || t.get_byte_enable_ptr())
-            return t.set_response_status(tlm::TLM_ADDRESS_ERROR_RESPONSE);
+        ++transactions;
+        // What an initiator must give a blocking transport (IEEE 1666-2011, 14.17-14.19).
+        if (n == 0 || t.get_streaming_width() != n || t.get_response_status() != tlm::TLM_INCOMPLETE_RESPONSE ||
+            t.get_command() == tlm::TLM_IGNORE_COMMAND || !t.get_data_ptr())
+            ++violations;
+        if (!inside(a, n) || faulty(a, n) || t.get_byte_enable_ptr()) return t.set_response_status(tlm::TLM_ADDRESS_ERROR_RESPONSE);
         if (t.is_read()) std::memcpy(t.get_data_ptr(), at(a), n);
         else std::memcpy(at(a), t.get_data_ptr(), n);
         d += latency_ + sc_core::sc_time(double(n) / bytes_per_ns_, sc_core::SC_NS);
@@ -53,7 +68,26 @@ private:
         } else {
             bytes_read += n;
         }
+        t.set_dmi_allowed(dmi);
         t.set_response_status(tlm::TLM_OK_RESPONSE);
+    }
+    // The whole memory, or the part of it on the address's side of the fault range.
+    bool get_direct_mem_ptr(tlm::tlm_generic_payload& t, tlm::tlm_dmi& d) {
+        const uint64_t a = t.get_address();
+        uint64_t lo = base_, hi = base_ + bytes_.size() - 1;
+        if (!dmi || !inside(a, 1) || faulty(a, 1)) return false;
+        if (fault_to_ > fault_from_) {
+            if (a < fault_from_) hi = std::min(hi, fault_from_ - 1);
+            else lo = std::max(lo, fault_to_);
+        }
+        d.set_dmi_ptr(at(lo));
+        d.set_start_address(lo);
+        d.set_end_address(hi);
+        d.allow_read_write();
+        d.set_read_latency(latency_);
+        d.set_write_latency(latency_);
+        ++dmi_grants;
+        return true;
     }
     unsigned transport_dbg(tlm::tlm_generic_payload& t) {
         const uint64_t a = t.get_address(), n = t.get_data_length();
@@ -62,15 +96,16 @@ private:
         else std::memcpy(at(a), t.get_data_ptr(), n);
         return unsigned(n);
     }
-    uint64_t base_;
+    uint64_t base_, fault_from_ = ~0ull, fault_to_ = 0;
     std::vector<uint8_t> bytes_;
     sc_core::sc_time latency_;
     double bytes_per_ns_;
 };
 
 // A router: any number of initiators on `in`, targets bound to `out` in the order of map();
-// forwards b_transport and transport_dbg to the target whose range holds the address, with the
-// address unchanged (absolute addressing); elsewhere an address error.
+// forwards b_transport, transport_dbg and DMI requests to the target whose range holds the
+// address, with the address unchanged (absolute addressing; a grant is clipped to the range), and
+// a target's DMI invalidation to every initiator; elsewhere an address error.
 class Router : public sc_core::sc_module {
 public:
     tlm_utils::multi_passthrough_target_socket<Router, 32> in{"in"};
@@ -79,6 +114,8 @@ public:
     explicit Router(sc_core::sc_module_name n) : sc_module(n) {
         in.register_b_transport(this, &Router::b_transport);
         in.register_transport_dbg(this, &Router::transport_dbg);
+        in.register_get_direct_mem_ptr(this, &Router::get_direct_mem_ptr);
+        out.register_invalidate_direct_mem_ptr(this, &Router::invalidate_direct_mem_ptr);
     }
     // The next target bound to `out` answers [base, base + size).
     void map(uint64_t base, uint64_t size) { ranges_.push_back({base, size}); }
@@ -97,6 +134,20 @@ private:
     unsigned transport_dbg(int, tlm::tlm_generic_payload& t) {
         const int r = route(t.get_address());
         return r < 0 ? 0 : out[r]->transport_dbg(t);
+    }
+    bool get_direct_mem_ptr(int, tlm::tlm_generic_payload& t, tlm::tlm_dmi& d) {
+        const int r = route(t.get_address());
+        if (r < 0 || !out[r]->get_direct_mem_ptr(t, d)) return false;
+        const auto [base, size] = ranges_[size_t(r)];
+        if (d.get_start_address() < base) {
+            d.set_dmi_ptr(d.get_dmi_ptr() + (base - d.get_start_address()));
+            d.set_start_address(base);
+        }
+        d.set_end_address(std::min<uint64_t>(d.get_end_address(), base + size - 1));
+        return true;
+    }
+    void invalidate_direct_mem_ptr(int, sc_dt::uint64 start, sc_dt::uint64 end) {
+        for (unsigned i = 0; i < in.size(); ++i) in[i]->invalidate_direct_mem_ptr(start, end);
     }
     std::vector<std::pair<uint64_t, uint64_t>> ranges_;
 };

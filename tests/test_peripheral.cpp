@@ -56,14 +56,19 @@ struct Bench {
     Cpu cpu{"cpu"};
     RtUnitPeripheral rtu;
     sc_signal<bool> line{"rtu_irq"};
-    explicit Bench(const PeripheralConfig& cfg) : rtu("rtu", cfg) {
+    // The RAM grants no DMI unless asked: the tests of timing and traffic watch its transactions.
+    explicit Bench(const PeripheralConfig& cfg, bool dmi = false) : rtu("rtu", cfg) {
+        ram.dmi = dmi;
         cpu.bus.bind(rtu.regs);
         cpu.reg_base = kRegBase;
         rtu.mem.bind(ram.in);
         rtu.irq.bind(line);
         cpu.irq.bind(line);
     }
-    ~Bench() { EXPECT_TRUE(cpu.ok) << "a register access answered an error"; }
+    ~Bench() {
+        EXPECT_TRUE(cpu.ok) << "a register access answered an error";
+        EXPECT_EQ(ram.violations, 0u) << "the peripheral broke a rule of blocking transport on mem";
+    }
 };
 
 struct FsResolution {
@@ -454,11 +459,9 @@ TEST(Peripheral, BadJobsGiveErrorCodesAndTheNextJobRuns) {
         run(RTU_CTRL_START);
         // A hit buffer the memory refuses (the RAM answers an address error there).
         program_job(c, in, kBvhAt);
-        b.ram.fault_from = in.hit_at(kBvhAt) + 4096;
-        b.ram.fault_to = b.ram.fault_from + 64;
+        b.ram.set_fault(in.hit_at(kBvhAt) + 4096, in.hit_at(kBvhAt) + 4096 + 64);
         run(RTU_CTRL_START);
-        b.ram.fault_from = ~0ull;
-        b.ram.fault_to = 0;
+        b.ram.set_fault(~0ull, 0);
         // A good job, with a second START while it runs.
         std::memset(b.ram.at(in.hit_at(kBvhAt)), 0xA5, in.rays.size() * sizeof(rtu_hit));
         program_job(c, in, kBvhAt);
@@ -521,31 +524,39 @@ TEST(Peripheral, AbortStopsTheJobWithoutWritingHits) {
     EXPECT_EQ(std::memcmp(b.ram.at(in.hit_at(kBvhAt)), untouched.data(), untouched.size()), 0);
 }
 
+// Two CPUs and two units on one router (registers at two apertures) and one RAM (granting DMI).
+struct TwoUnits {
+    Ram ram{"ram", kRamBase, kRamBytes};
+    Cpu cpu_a{"cpu_a"}, cpu_b{"cpu_b"};
+    RtUnitPeripheral a, b;
+    sc_signal<bool> irq_a{"irq_a"}, irq_b{"irq_b"};
+    vp::Router bus{"bus"};
+    TwoUnits(const PeripheralConfig& ca, const PeripheralConfig& cb) : a("rtu_a", ca), b("rtu_b", cb) {
+        for (auto* c : {&cpu_a, &cpu_b}) c->bus.bind(bus.in);
+        a.mem.bind(bus.in);
+        b.mem.bind(bus.in);
+        bus.map(kRegBase, RTU_APERTURE_BYTES);
+        bus.out.bind(a.regs);
+        bus.map(kRegBase + RTU_APERTURE_BYTES, RTU_APERTURE_BYTES);
+        bus.out.bind(b.regs);
+        bus.map(kRamBase, kRamBytes);
+        bus.out.bind(ram.in);
+        cpu_a.reg_base = kRegBase;
+        cpu_b.reg_base = kRegBase + RTU_APERTURE_BYTES;
+        a.irq.bind(irq_a);
+        cpu_a.irq.bind(irq_a);
+        b.irq.bind(irq_b);
+        cpu_b.irq.bind(irq_b);
+    }
+};
+
 // T10, T13: two peripherals in one simulation share one RAM and run jobs at once; neither
 // touches process-wide state, and sc_start() returns when they are idle.
 TEST(Peripheral, TwoInOneSimulationAndIdleReturns) {
     FsResolution res;
-    Ram ram("ram", kRamBase, kRamBytes);
-    Cpu cpu_a("cpu_a"), cpu_b("cpu_b");
-    RtUnitPeripheral a("rtu_a", config_for("lt")), b("rtu_b", config_for("at"));
-    sc_signal<bool> irq_a("irq_a"), irq_b("irq_b");
-    // Both CPUs and both units on one router: registers at two apertures, one RAM.
-    vp::Router bus("bus");
-    for (auto* c : {&cpu_a, &cpu_b}) c->bus.bind(bus.in);
-    a.mem.bind(bus.in);
-    b.mem.bind(bus.in);
-    bus.map(kRegBase, RTU_APERTURE_BYTES);
-    bus.out.bind(a.regs);
-    bus.map(kRegBase + RTU_APERTURE_BYTES, RTU_APERTURE_BYTES);
-    bus.out.bind(b.regs);
-    bus.map(kRamBase, kRamBytes);
-    bus.out.bind(ram.in);
-    cpu_a.reg_base = kRegBase;
-    cpu_b.reg_base = kRegBase + RTU_APERTURE_BYTES;
-    a.irq.bind(irq_a);
-    cpu_a.irq.bind(irq_a);
-    b.irq.bind(irq_b);
-    cpu_b.irq.bind(irq_b);
+    TwoUnits t(config_for("lt"), config_for("at"));
+    Ram& ram = t.ram;
+    Cpu &cpu_a = t.cpu_a, &cpu_b = t.cpu_b;
     const Inputs in;
     const uint64_t other = 0x81800000;  // the second unit's copy of the inputs
     in.load(ram, kBvhAt);
@@ -658,3 +669,47 @@ TEST_P(PeripheralQuantum, GlobalQuantumChangesNothing) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Quanta, PeripheralQuantum, ::testing::Values(1.0, 1e3, 1e7));
+
+// T9: DMI changes host speed only. Two units on one RAM run the same job at once, one with DMI
+// (and the RAM's grants withdrawn mid-job, so it asks again), one with blocking transport only:
+// the same hits, the same traversal cycles.
+TEST(Peripheral, DmiOnAndOffGiveTheSameResults) {
+    FsResolution res;
+    PeripheralConfig without = config_for("lt");
+    without.set("use_dmi=0");
+    TwoUnits t(config_for("lt"), without);
+    Ram& ram = t.ram;
+    Cpu &cpu_a = t.cpu_a, &cpu_b = t.cpu_b;
+    const Inputs in;
+    const uint64_t other = 0x81800000;
+    in.load(ram, kBvhAt);
+    in.load(ram, other);
+    uint64_t cycles_a = 0, cycles_b = 0, grants_before_invalidation = 0;
+    cpu_a.script = [&] {
+        cpu_a.wr(RTU_INT_ENABLE, RTU_INT_JOB_DONE);
+        program_job(cpu_a, in, kBvhAt);
+        cpu_a.wr(RTU_CTRL, RTU_CTRL_START);
+        wait(200, SC_NS);  // the image is in use by now
+        grants_before_invalidation = ram.dmi_grants;
+        ram.invalidate_dmi();
+        EXPECT_TRUE(cpu_a.wait_irq());
+        cycles_a = cpu_a.rd64(RTU_PERF_TRAVERSAL_CYCLES);
+    };
+    cpu_b.script = [&] {
+        cpu_b.wr(RTU_INT_ENABLE, RTU_INT_JOB_DONE);
+        program_job(cpu_b, in, other);
+        cpu_b.wr(RTU_CTRL, RTU_CTRL_START);
+        EXPECT_TRUE(cpu_b.wait_irq());
+        cycles_b = cpu_b.rd64(RTU_PERF_TRAVERSAL_CYCLES);
+    };
+    sc_start();
+    ASSERT_TRUE(cpu_a.finished && cpu_b.finished);
+    const std::vector<rtu_hit> want = in.reference();
+    EXPECT_EQ(differing_hits(ram, in.hit_at(kBvhAt), want), 0u);
+    EXPECT_EQ(differing_hits(ram, in.hit_at(other), want), 0u);
+    EXPECT_GT(cycles_a, 0u);
+    EXPECT_EQ(cycles_a, cycles_b);
+    EXPECT_GE(grants_before_invalidation, 1u);
+    EXPECT_GT(ram.dmi_grants, grants_before_invalidation) << "the hits were written through a region asked for again";
+    EXPECT_EQ(ram.violations, 0u);
+}

@@ -5,7 +5,8 @@
 //   regs  target socket, 32-bit registers in a 4 KiB aperture (rtunit/rtu_regs.h); b_transport
 //         and transport_dbg, LT; errors as TLM response statuses
 //   mem   initiator socket: reads the BVH image, the ray records and the job descriptors, writes
-//         the hit and completion records, at the addresses software programmed (b_transport)
+//         the hit and completion records, at the addresses software programmed (b_transport, and
+//         DMI where granted)
 //   irq   level interrupt, OR(INT_STATUS & INT_ENABLE), written by one process; may stay unbound
 //
 // Software writes a job (BVH image, rays, hit buffer) into the JOB registers or a chain of
@@ -34,8 +35,11 @@ struct RTUNIT_API PeripheralConfig {
     std::string fidelity = "lt";    // functional, interval, lt or at
     std::string traversal = "dfs";  // dfs or bfs
     sc_core::sc_time reg_latency = sc_core::sc_time(10, sc_core::SC_NS);  // added to every register access
+    // Direct memory access on `mem` where the target grants it: ray and hit records copied, the BVH
+    // image used in place. Host speed only: hits and traversal cycles are the same without.
+    bool use_dmi = true;
     // By name, for platforms that configure modules from strings (QBox, VCML, Lua):
-    // fidelity=, traversal=, config=, reg_latency_ns=; any other key=value is a configuration key
+    // fidelity=, traversal=, config=, reg_latency_ns=, use_dmi=; any other key=value is a configuration key
     // (l1.size_kb=64, prefetch.kind=ttp, ...). Checked when the peripheral is built.
     void set(const std::string& key_value);
 };
@@ -56,6 +60,7 @@ public:
 private:
     void b_transport(tlm::tlm_generic_payload& t, sc_core::sc_time& delay);
     unsigned int transport_dbg(tlm::tlm_generic_payload& t);
+    void invalidate_direct_mem_ptr(sc_dt::uint64 start, sc_dt::uint64 end);
     void run_jobs();   // SC_THREAD: one job or chain per START
     void drive_irq();  // SC_METHOD: the interrupt line's only writer
     void end_of_elaboration() override;
