@@ -117,7 +117,8 @@ JobResult complex_totals(const RtComplex& gpu) {
     return totals(rt, l1, l2, gpu.dram().stats());
 }
 
-// The counters a job adds to the performance registers (the timing model's are set apart).
+// The timing model's part of a job's counters: differences of the RT complex's, or the interval
+// run's own.
 constexpr uint64_t JobResult::*kModelCounters[] = {&JobResult::node_fetches, &JobResult::l1_accesses, &JobResult::l1_misses,
                                                    &JobResult::l2_accesses, &JobResult::l2_misses, &JobResult::dram_reads,
                                                    &JobResult::prefetches_sent, &JobResult::prefetches_useful};
@@ -363,8 +364,11 @@ void check_job(const Job& j) {
     if (j.hit_base % 16) throw JobError{RTU_ERR_BAD_ALIGN, j.hit_base};
     for (uint32_t s : {j.ray_stride, j.hit_stride})
         if (s < 48 || s % 16) throw JobError{RTU_ERR_BAD_ALIGN, s == j.ray_stride ? j.ray_base : j.hit_base};
-    // The image is snapshotted into host memory: a size no BVH image has is refused, not allocated.
-    if (j.bvh_size < kBlockBytes || j.bvh_size > (uint64_t(4) << 30)) throw JobError{RTU_ERR_BAD_BVH, j.bvh_base};
+    // The image, the rays and the hits are held in host memory: sizes beyond the limits are
+    // refused, not allocated (a ray count of 2^32 - 1 would ask for 200 GB).
+    if (j.bvh_size < kBlockBytes) throw JobError{RTU_ERR_BAD_BVH, j.bvh_base};
+    if (j.bvh_size > RTU_MAX_BVH_BYTES) throw JobError{RTU_ERR_TOO_LARGE, j.bvh_base};
+    if (j.ray_count > RTU_MAX_RAYS) throw JobError{RTU_ERR_TOO_LARGE, j.ray_base};
 }
 
 }  // namespace
@@ -408,6 +412,7 @@ JobResult JobRun::run(const Job& j) {
         r.invalid += (h.status & RTU_HIT_INVALID_RAY) != 0;
         r.nodes_visited += h.nodes_visited;
     }
+    if (m_.abort_requested) return r;  // ABORT while the inputs were read
     // The timing model: the rays as rtsim reads a ray file, through the same driver.
     std::vector<RayFileEntry> entries(m_.fidelity == Fidelity::Functional ? 0 : j.ray_count);
     for (size_t i = 0; i < entries.size(); ++i) entries[i].ray = ray_of_record(rays[i], entries[i].valid);

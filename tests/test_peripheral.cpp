@@ -462,6 +462,10 @@ TEST(Peripheral, BadJobsGiveErrorCodesAndTheNextJobRuns) {
         b.ram.set_fault(in.hit_at(kBvhAt) + 4096, in.hit_at(kBvhAt) + 4096 + 64);
         run(RTU_CTRL_START);
         b.ram.set_fault(~0ull, 0);
+        // More rays than a job may have (RTU_MAX_RAYS): refused, nothing allocated.
+        program_job(c, in, kBvhAt);
+        c.wr(RTU_RAY_COUNT, 0xFFFFFFFFu);
+        run(RTU_CTRL_START);
         // A good job, with a second START while it runs.
         std::memset(b.ram.at(in.hit_at(kBvhAt)), 0xA5, in.rays.size() * sizeof(rtu_hit));
         program_job(c, in, kBvhAt);
@@ -473,7 +477,7 @@ TEST(Peripheral, BadJobsGiveErrorCodesAndTheNextJobRuns) {
     };
     sc_start();
     ASSERT_TRUE(b.cpu.finished);
-    ASSERT_EQ(seen.size(), 5u);
+    ASSERT_EQ(seen.size(), 6u);
     EXPECT_EQ(seen[0].code, RTU_ERR_BAD_DESC_MAGIC);
     EXPECT_EQ(seen[0].addr, desc);
     rtu_job_desc back;
@@ -484,11 +488,13 @@ TEST(Peripheral, BadJobsGiveErrorCodesAndTheNextJobRuns) {
     EXPECT_EQ(seen[2].code, RTU_ERR_BAD_ALIGN);
     EXPECT_EQ(seen[3].code, RTU_ERR_MEM_FAULT);
     EXPECT_EQ(seen[3].addr, in.hit_at(kBvhAt) + 4096);  // the refused transaction's address
-    for (int i = 0; i < 4; ++i) EXPECT_EQ(seen[i].status & 0xFFu, RTU_STATUS_ERROR) << i;
+    EXPECT_EQ(seen[4].code, RTU_ERR_TOO_LARGE);
+    EXPECT_EQ(seen[4].addr, in.ray_at(kBvhAt));
+    for (int i = 0; i < 5; ++i) EXPECT_EQ(seen[i].status & 0xFFu, RTU_STATUS_ERROR) << i;
     EXPECT_TRUE(ignored_status & RTU_STATUS_BUSY);
     EXPECT_TRUE(ignored_status & RTU_STATUS_START_IGNORED);
-    EXPECT_EQ(seen[4].status & 0xFFu, RTU_STATUS_DONE | RTU_STATUS_START_IGNORED);  // until the next accepted START
-    EXPECT_EQ(seen[4].code, 0u);
+    EXPECT_EQ(seen[5].status & 0xFFu, RTU_STATUS_DONE | RTU_STATUS_START_IGNORED);  // until the next accepted START
+    EXPECT_EQ(seen[5].code, 0u);
     EXPECT_EQ(differing_hits(b.ram, in.hit_at(kBvhAt), want), 0u);
 }
 

@@ -97,6 +97,11 @@
 #define RTU_ERR_BVH_OUT_OF_RANGE 6u /* traversal read past BVH_SIZE */
 #define RTU_ERR_CHAIN_LOOP 7u       /* more than MAX_CHAIN descriptors */
 #define RTU_ERR_BAD_FLAGS 8u        /* reserved flag bits set in JOB_FLAGS or a descriptor */
+#define RTU_ERR_TOO_LARGE 9u        /* more than RTU_MAX_RAYS rays, or an image over RTU_MAX_BVH_BYTES */
+
+/* What one job may ask for: the unit holds a job's rays, hits and image in its host memory. */
+#define RTU_MAX_RAYS (1u << 22)
+#define RTU_MAX_BVH_BYTES (4ull << 30)
 
 /* PERF_CTRL */
 #define RTU_PERF_ENABLE (1u << 0)
