@@ -436,6 +436,9 @@ JobResult JobRun::run(const Job& j) {
     if (m_.gpu) {
         auto driver = std::make_unique<WorkloadDriver>(*workload, m_.hw.sms, m_.hw.warp_size, m_.hw.shade_latency, m_.hw.resident_warps);
         driver->keep_rays(true);
+        // The last job's prefetches may still be on their way after its last ray retired: this
+        // job starts when they are in.
+        while (!m_.gpu->idle()) wait(m_.gpu->core_clock().period() * 16.0);
         const JobResult before = complex_totals(*m_.gpu);
         m_.feeder.start(std::move(driver));
         m_.gpu->start_job();

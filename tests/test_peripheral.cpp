@@ -719,3 +719,36 @@ TEST(Peripheral, DmiOnAndOffGiveTheSameResults) {
     EXPECT_GT(ram.dmi_grants, grants_before_invalidation) << "the hits were written through a region asked for again";
     EXPECT_EQ(ram.violations, 0u);
 }
+
+// Jobs back to back with the TTP prefetcher in AT, through DMI (the next job starts within
+// nanoseconds of the last hit): prefetches of one job may still be on their way when the next
+// starts; the next job must wait for them, not fail.
+TEST(Peripheral, BackToBackJobsWithPrefetchesInFlight) {
+    FsResolution res;
+    PeripheralConfig cfg = config_for("at");
+    cfg.set("config=paper");
+    cfg.set("prefetch.kind=ttp");
+    Bench b(cfg, true);
+    const Inputs in;
+    in.load(b.ram, kBvhAt);
+    const std::vector<rtu_hit> want = in.reference();
+    const uint64_t d0 = 0x80100000, hits0 = 0x80200000;
+    for (uint64_t i = 0; i < 3; ++i) {
+        const rtu_job_desc d = descriptor(in, kBvhAt, 0, uint32_t(in.rays.size()), hits0 + i * 0x10000, 0, uint32_t(i), i < 2 ? d0 + (i + 1) * 128 : 0);
+        std::memcpy(b.ram.at(d0 + i * 128), &d, sizeof d);
+    }
+    uint32_t status = 0;
+    b.cpu.script = [&] {
+        Cpu& c = b.cpu;
+        c.wr(RTU_INT_ENABLE, RTU_INT_ALL);
+        c.wr64(RTU_DESC_ADDR_LO, d0);
+        c.wr(RTU_CTRL, RTU_CTRL_MODE_CHAIN | RTU_CTRL_START);
+        EXPECT_TRUE(c.wait_irq());
+        status = c.rd(RTU_STATUS);
+    };
+    sc_start();
+    ASSERT_TRUE(b.cpu.finished);
+    EXPECT_EQ(status & 0xFFu, RTU_STATUS_DONE);
+    EXPECT_EQ(RTU_STATUS_DESCS_DONE(status), 3u);
+    for (uint64_t i = 0; i < 3; ++i) EXPECT_EQ(differing_hits(b.ram, hits0 + i * 0x10000, want), 0u) << "job " << i;
+}

@@ -73,9 +73,14 @@ void RtComplex::lt_schedule() {
     }
 }
 
-void RtComplex::start_job() {
+bool RtComplex::idle() const {
     for (const auto& u : rt_)
-        if (!u->core().idle()) throw std::logic_error(std::string(name()) + ": a job started while the RT units were busy");
+        if (!u->core().idle()) return false;
+    return true;
+}
+
+void RtComplex::start_job() {
+    if (!idle()) throw std::logic_error(std::string(name()) + ": a job started while the RT units were busy");
     const bool new_epoch = !started_;
     if (!started_) {
         // The clocks start here: the first job runs as rtsim's frame runs from time 0.

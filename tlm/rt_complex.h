@@ -53,6 +53,9 @@ public:
     // rtsim's frame from time 0); later jobs find the DRAM as the last left it and the caches
     // invalidated. Call only while every RT unit is idle.
     void start_job();
+    // Every RT unit idle: no trace resident, no request or response on its way (a prefetch's
+    // included). start_job needs it.
+    bool idle() const;
     // LT: windows of sim.quantum whatever the platform's global quantum. For a complex whose
     // memory is its own (the SoC peripheral's private path): nothing outside it sees its work
     // before the job's end, so its cycles need not depend on how often the platform synchronises.
