@@ -19,6 +19,19 @@
 
 namespace rtu::vp {
 
+// A plain access's payload: `len` bytes at `addr`, streaming width `len`, `be` a byte-enable
+// mask of `len` bytes or null, the response status not yet set.
+inline void set_access(tlm::tlm_generic_payload& t, tlm::tlm_command cmd, uint64_t addr, void* data, unsigned len, unsigned char* be = nullptr) {
+    t.set_command(cmd);
+    t.set_address(addr);
+    t.set_data_ptr(static_cast<unsigned char*>(data));
+    t.set_data_length(len);
+    t.set_streaming_width(len);
+    t.set_byte_enable_ptr(be);
+    if (be) t.set_byte_enable_length(len);
+    t.set_response_status(tlm::TLM_INCOMPLETE_RESPONSE);
+}
+
 // Memory at [base, base + size): b_transport annotated with a latency plus the bytes over a
 // bandwidth, transport_dbg in zero time, DMI (read and write, the same latency per access) when
 // `dmi` is on. Addresses in a fault range answer TLM_ADDRESS_ERROR_RESPONSE and are never granted
@@ -168,14 +181,7 @@ public:
     tlm::tlm_response_status access(tlm::tlm_command cmd, uint64_t addr, void* data, unsigned len, bool debug = false,
                                     unsigned char* be = nullptr) {
         tlm::tlm_generic_payload t;
-        t.set_command(cmd);
-        t.set_address(addr);
-        t.set_data_ptr(static_cast<unsigned char*>(data));
-        t.set_data_length(len);
-        t.set_streaming_width(len);
-        t.set_byte_enable_ptr(be);
-        if (be) t.set_byte_enable_length(len);
-        t.set_response_status(tlm::TLM_INCOMPLETE_RESPONSE);
+        set_access(t, cmd, addr, data, len, be);
         if (debug) {  // transport_dbg answers with a count: all of it or an error
             const unsigned n = bus->transport_dbg(t);
             if (n == len) return tlm::TLM_OK_RESPONSE;

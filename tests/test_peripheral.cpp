@@ -36,18 +36,6 @@ namespace {
 constexpr uint64_t kRegBase = 0x10000000, kRamBase = 0x80000000, kRamBytes = 32 << 20;
 constexpr uint64_t kBvhAt = 0x81234040;  // 64 B aligned, deliberately no power of two
 
-// A register access's payload (`be`: a byte-enable mask of `len` bytes, or null).
-void set_access(tlm::tlm_generic_payload& t, tlm::tlm_command cmd, uint32_t off, void* data, unsigned len, unsigned char* be) {
-    t.set_command(cmd);
-    t.set_address(kRegBase + off);
-    t.set_data_ptr(static_cast<unsigned char*>(data));
-    t.set_data_length(len);
-    t.set_streaming_width(len);
-    t.set_byte_enable_ptr(be);
-    if (be) t.set_byte_enable_length(len);
-    t.set_response_status(tlm::TLM_INCOMPLETE_RESPONSE);
-}
-
 using vp::Cpu;
 using vp::Ram;
 
@@ -167,7 +155,7 @@ TEST(PeripheralRegisters, ResetValuesAndAccessRules) {
     RtuRegisters regs(0x1234, 0x5678);
     auto access = [&](tlm::tlm_command cmd, uint32_t off, void* data, unsigned len, bool debug = false, unsigned char* be = nullptr) {
         tlm::tlm_generic_payload t;
-        set_access(t, cmd, off, data, len, be);
+        vp::set_access(t, cmd, kRegBase + off, data, len, be);
         regs.access(t, off, debug);
         return t.get_response_status();
     };
@@ -234,7 +222,7 @@ TEST(PeripheralRegisters, ResetValuesAndAccessRules) {
     // Commands are reported, and only by real writes.
     tlm::tlm_generic_payload t;
     v = RTU_CTRL_START | RTU_CTRL_MODE_CHAIN;
-    set_access(t, tlm::TLM_WRITE_COMMAND, RTU_CTRL, &v, 4, nullptr);
+    vp::set_access(t, tlm::TLM_WRITE_COMMAND, kRegBase + RTU_CTRL, &v, 4);
     EXPECT_TRUE(regs.access(t, RTU_CTRL, false).start);
     EXPECT_EQ(rd(RTU_CTRL), RTU_CTRL_MODE_CHAIN);  // START clears itself
     EXPECT_FALSE(regs.access(t, RTU_CTRL, true).start);
