@@ -1,6 +1,8 @@
 #include "sector_cache.h"
 
+#include <algorithm>
 #include <stdexcept>
+#include <utility>
 
 namespace rtu {
 
@@ -14,6 +16,18 @@ SectorCache::SectorCache(const CacheConfig& c)
     ways_.resize(lines);
     set_.resize(sets_);
     where_.reserve(lines * 2);
+}
+
+uint64_t SectorCache::memory_bytes(const CacheConfig& c, uint64_t lines_used) {
+    const uint64_t lines = c.size_bytes / c.line;
+    const uint64_t sets = c.assoc ? lines / c.assoc : 1;
+    // where_.reserve(2 x lines): absl's flat_hash_map keeps its load at most 7/8 and its capacity
+    // a power of two minus one; a slot is the key and the value (16 B) plus one control byte.
+    uint64_t slots = 1;
+    while (slots * 7 < 2 * lines * 8) slots *= 2;
+    const uint64_t slot_bytes = sizeof(std::pair<uint64_t, uint32_t>);
+    const uint64_t used = std::min(lines, lines_used);
+    return lines * sizeof(Way) + sets * sizeof(Set) + slots + (lines ? used * slot_bytes * slots / lines : 0);
 }
 
 void SectorCache::link_front(Set& s, uint32_t i) {

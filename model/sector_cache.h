@@ -115,6 +115,11 @@ public:
     const CacheCounts& counts() const { return counts_; }
     const CacheAccessCounts& stats(ReqKind k) const { return counts_.of(k); }
     uint64_t lines() const { return ways_.size(); }
+    // Host memory a cache of `c` holds once `lines_used` of its lines have been filled (a memory
+    // estimate before elaboration, model/memory_estimate.h): its ways and sets, and its line map's
+    // slots, of which the constructor touches the control bytes and each filled line about
+    // slots / lines whole slots (they are spread over the table by the hash).
+    static uint64_t memory_bytes(const CacheConfig& c, uint64_t lines_used);
 
 private:
     struct Way {

@@ -46,9 +46,13 @@ FunctionalResult run_functional(const Scene& scene, const BvhImage& image, Workl
     std::vector<uint32_t> next_seq;
     auto last_report = Clock::now();
     const auto start = Clock::now();
-    while (!wave.empty()) {
+    while (!wave.empty() && !res.interrupted) {
         next.clear();
         for (const WorkRay& w : wave) {
+            if (opt.stop.requested()) {  // a clean point: between two rays
+                res.interrupted = true;
+                break;
+            }
             const uint64_t index = res.rays.size();
             const bool valid = is_valid_ray(w.ray);
             const TraceResult tr = trace_ray(image, w.ray, opt.order, opt.treelets);
@@ -81,7 +85,7 @@ FunctionalResult run_functional(const Scene& scene, const BvhImage& image, Workl
         wave.swap(next);
     }
     if (opt.progress && seconds_since(start) > 2.0) std::cerr << "\n";
-    if (opt.measure_speed) {
+    if (opt.measure_speed && !res.interrupted) {
         // Both traversals over the same recorded rays in tight loops, one after the other.
         uint64_t sink = 0;
         auto t0 = Clock::now();

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "model/bvh_image.h"
+#include "model/stop_request.h"
 #include "model/traversal.h"
 #include "workloads/embree_reference.h"
 #include "workloads/rays.h"
@@ -19,6 +20,7 @@ struct FunctionalOptions {
     const Treelets* treelets = nullptr;  // required for TraversalOrder::Treelet
     bool progress = false;        // rays done and rate on stderr every few seconds
     bool measure_speed = false;   // afterwards, re-trace all rays with ours (and Embree's, if given) for rays/s
+    StopRequest stop;             // requested: the run ends between two rays (FunctionalResult::interrupted)
 };
 
 struct FunctionalResult {
@@ -33,6 +35,7 @@ struct FunctionalResult {
     std::vector<uint64_t> mismatch_rays;  // indices of rays in class Mismatch (first 100)
     double trace_seconds = 0.0, embree_seconds = 0.0;  // measure_speed passes only
     uint64_t speed_checksum = 0;
+    bool interrupted = false;     // stopped by FunctionalOptions::stop: the rays traced so far
 };
 
 // Checks one ray's hit against Embree: its class (Embree gets the same exactly-rescaled ray).

@@ -18,11 +18,16 @@ namespace {
 class Monitor : public sc_module {
 public:
     SC_HAS_PROCESS(Monitor);
-    Monitor(sc_module_name n, WorkloadDriver& driver, const ClockDomain& clock, uint64_t watchdog, bool show_progress, uint64_t period)
-        : sc_module(n), progress(show_progress), driver_(driver), clock_(clock), watchdog_(watchdog), period_(period) {
+    Monitor(sc_module_name n, WorkloadDriver& driver, const ClockDomain& clock, uint64_t watchdog, bool show_progress, uint64_t period,
+            StopRequest stop)
+        : sc_module(n), progress(show_progress), driver_(driver), clock_(clock), watchdog_(watchdog), period_(period), stop_(stop) {
         SC_METHOD(check);
     }
     bool stuck = false;
+    // Stopped by the stop request at `stopped_at` (a core cycle): the run's clean point, since the
+    // monitor's wake-ups do not depend on the request (reading it adds no event).
+    bool interrupted = false;
+    uint64_t stopped_at = 0;
     std::string report;
     std::function<std::string()> describe_stuck;
     TimingProgress progress;
@@ -31,6 +36,12 @@ private:
     void check() {
         const uint64_t c = clock_.cycle_at_or_before(sc_time_stamp());
         if (driver_.finished()) return;
+        if (stop_.requested()) {
+            interrupted = true;
+            stopped_at = c;
+            sc_stop();
+            return;
+        }
         if (c > driver_.last_progress() + watchdog_) {
             stuck = true;
             report = "no ray retired for " + std::to_string(c - driver_.last_progress()) + " cycles (sim.watchdog = " +
@@ -47,6 +58,7 @@ private:
     const ClockDomain& clock_;
     uint64_t watchdog_;
     uint64_t period_;
+    StopRequest stop_;
 };
 
 }  // namespace
@@ -183,7 +195,7 @@ GpuPlatform::GpuPlatform(const HwConfig& cfg, const BvhImage& image, Workload& w
     }
     // The monitor's period does not depend on tracing (see sample_windows).
     const uint64_t period = std::max<uint64_t>(1, std::min<uint64_t>(cfg.watchdog / 4, 100000));
-    m.monitor.reset(new Monitor("monitor", m.driver, m.core, cfg.watchdog, opt.progress, period));
+    m.monitor.reset(new Monitor("monitor", m.driver, m.core, cfg.watchdog, opt.progress, period, opt.stop));
     m.monitor->describe_stuck = [this]() {
         std::string s;
         for (const auto& u : impl_->gpu.rt_units()) {
@@ -207,11 +219,13 @@ TimingResult GpuPlatform::run() {
     m.monitor->progress.finish();
     // The frame ends when its last ray retires (the monitor may wake once more after that).
     r.cycles_simulated = r.cycles = m.driver.last_progress();
+    r.interrupted = m.monitor->interrupted;
+    if (r.interrupted) r.cycles_simulated = r.cycles = std::max(r.cycles, m.monitor->stopped_at);
     const WorkloadDriver::Estimate est = m.driver.estimate();
-    if (m.driver.sampled()) r.cycles = uint64_t(std::llround(est.cycles_estimate(double(r.cycles_simulated))));
+    if (m.driver.sampled() && !r.interrupted) r.cycles = uint64_t(std::llround(est.cycles_estimate(double(r.cycles_simulated))));
     r.stuck = m.monitor->stuck;
     r.stuck_report = m.monitor->report;
-    if (!r.stuck && !m.driver.finished()) {
+    if (!r.stuck && !r.interrupted && !m.driver.finished()) {
         r.stuck = true;
         r.stuck_report = "simulation ran out of events with rays outstanding; oldest trace: " + m.driver.oldest_in_flight();
     }
@@ -234,10 +248,10 @@ TimingResult GpuPlatform::run() {
     for (const auto& c : m.gpu.checkers()) {
         r.protocol_transactions += c->transactions();
         r.protocol_violations.insert(r.protocol_violations.end(), c->violations().begin(), c->violations().end());
-        if (!r.stuck && c->open()) r.protocol_violations.push_back(std::string(c->name()) + ": " + std::to_string(c->open()) + " transactions left open");
+        if (!r.stuck && !r.interrupted && c->open()) r.protocol_violations.push_back(std::string(c->name()) + ": " + std::to_string(c->open()) + " transactions left open");
     }
-    // Invariants.
-    if (!r.stuck) {
+    // Invariants (of a whole frame: an interrupted run has rays in flight).
+    if (!r.stuck && !r.interrupted) {
         if (m.gpu.pool().outstanding() != 0) r.invariant_failures.push_back(std::to_string(m.gpu.pool().outstanding()) + " requests never got their response");
         if (m.driver.rays_retired() != m.driver.rays_issued()) r.invariant_failures.push_back("not every ray retired");
         for (const std::string& f : counter_invariants(r.counts, r.summary)) r.invariant_failures.push_back(f);

@@ -28,7 +28,12 @@ TimingResult run_interval(const HwConfig& cfg, const BvhImage& image, Workload& 
     std::vector<IntervalGpu::Finished> finished;
     uint64_t end = 0;
     TimingProgress progress(opt.progress);
-    for (;;) {
+    bool interrupted = false;
+    for (uint64_t step = 1;; ++step) {
+        if ((step & 4095) == 0 && opt.stop.requested()) {  // a clean point: between two events
+            interrupted = true;
+            break;
+        }
         const uint64_t slot_at = free_slots.empty() ? ~0ull : free_slots.top().first, fetch_at = gpu.next_event();
         if (slot_at == ~0ull && fetch_at == ~0ull) break;
         finished.clear();
@@ -63,7 +68,7 @@ TimingResult run_interval(const HwConfig& cfg, const BvhImage& image, Workload& 
     TimingResult r;
     r.cycles = r.cycles_simulated = end;  // the frame ends when its last ray retires
     const WorkloadDriver::Estimate est = driver.estimate();
-    if (driver.sampled()) r.cycles = uint64_t(std::llround(est.cycles_estimate(double(end))));
+    if (driver.sampled() && !interrupted) r.cycles = uint64_t(std::llround(est.cycles_estimate(double(end))));
     r.rays = driver.results();
     r.summary = driver.summary();
     r.counts.rt = gpu.rt_stats();
@@ -75,6 +80,8 @@ TimingResult run_interval(const HwConfig& cfg, const BvhImage& image, Workload& 
     r.counts.memory_cycles = double(gpu.memory_cycle(end));
     r.sampled = driver.sampled();
     r.estimate = est;
+    r.interrupted = interrupted;
+    if (interrupted) return r;  // rays are in flight: the invariants of a whole frame do not hold
     if (!driver.finished() || driver.rays_retired() != driver.rays_issued()) r.invariant_failures.push_back("not every ray retired");
     for (const std::string& f : counter_invariants(r.counts, r.summary)) r.invariant_failures.push_back(f);
     return r;

@@ -2,6 +2,7 @@
 // It parses its command line into a RunSpec, runs it (platforms/simulation.h) and writes the
 // statistics, hits, frame and summary.
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cinttypes>
 #include <cstdio>
@@ -15,6 +16,8 @@
 #include <iostream>
 #include <optional>
 #include <thread>
+
+#include <csignal>
 
 #include <fcntl.h>
 #include <spawn.h>
@@ -36,6 +39,26 @@ namespace po = boost::program_options;
 using namespace rtu;
 
 namespace {
+
+// SIGINT and SIGTERM request a stop (model/stop_request.h): the run ends at its next clean point
+// and writes its statistics so far. The handler is reset by its first signal, so a second one
+// ends rtsim at once.
+std::atomic<int> stop_signal{0};
+extern "C" void on_stop_signal(int sig) { stop_signal.store(sig, std::memory_order_relaxed); }
+
+void install_stop_handlers() {
+    struct sigaction sa {};
+    sa.sa_handler = on_stop_signal;
+    sigemptyset(&sa.sa_mask);
+    sa.sa_flags = SA_RESETHAND | SA_RESTART;
+    sigaction(SIGINT, &sa, nullptr);
+    sigaction(SIGTERM, &sa, nullptr);
+}
+
+const char* signal_name(int sig) { return sig == SIGINT ? "SIGINT" : sig == SIGTERM ? "SIGTERM" : "a signal"; }
+
+// The shell's convention: 128 + the signal's number (130 for SIGINT, 143 for SIGTERM).
+int interrupted_status(int sig) { return 128 + sig; }
 
 struct Args {
     std::string scene = "wknd", assets, workload = "pt", rays, hits, traversal = "dfs", fidelity = "functional";
@@ -242,6 +265,7 @@ RunSpec spec_of(const Args& a) {
     spec.dump_hits = a.dump_hits;
     spec.progress = !a.quiet;
     spec.check_error = a.check_error;
+    spec.stop.flag = &stop_signal;
     if (a.check_error) spec.run_check = [&a](double rate) { return run_error_check(a, rate); };
     return spec;
 }
@@ -290,6 +314,18 @@ void print_summary(const Args& a, const RunResult& r) {
 int run(const Args& a) {
     const RunSpec spec = spec_of(a);
     const RunResult r = run_simulation(spec, a.quiet ? nullptr : &std::cout);
+    if (r.interrupted) {
+        // Only the statistics: the frame, the hits and the dumps are not whole.
+        const int sig = stop_signal.load();
+        if (!a.stats.empty()) write_file_atomic(a.stats, r.stats.dump(2) + "\n");
+        std::cerr << "rtsim: interrupted by " << signal_name(sig) << " after " << r.stats["rays"] << " rays"
+                  << (r.stats.contains("cycles") ? " and " + r.stats["cycles"].dump() + " simulated cycles" : std::string()) << "; "
+                  << (a.stats.empty() ? std::string("no --stats file asked for")
+                                      : "statistics so far written to " + a.stats + " (\"interrupted\": true)")
+                  << (a.vcd.empty() ? "" : ", waveforms so far in " + spec.vcd + ".vcd")
+                  << "; the frame, hits and dumps are not written\n";
+        return interrupted_status(sig);
+    }
     if (!r.stuck.empty()) {
         std::cerr << "error: " << r.stuck << "\n";
         return 1;
@@ -331,7 +367,8 @@ int sc_main(int argc, char** argv) {
         "             [--stats FILE.json] [--image FILE.png] [--vcd FILE] [--trace-warp SM:WARP] [--verify] [--quiet]\n"
         "             [--dump-bvh FILE] [--dump-rays FILE] [--dump-hits FILE]\n"
         "       rtsim --stats-schema | --help\n"
-        "exit status: 0 ok, 1 a check failed (--verify mismatches), 2 bad input, 3 internal error\n";
+        "exit status: 0 ok, 1 a check failed (--verify mismatches), 2 bad input, 3 internal error,\n"
+        "             130 / 143 stopped by SIGINT / SIGTERM (statistics so far written, \"interrupted\": true)\n";
     if (argc <= 1) {
         std::cerr << usage << "example: rtsim --scene wknd --fidelity at --prefetcher ttp --stats out.json\n"
                   << "rtsim --help describes every option\n";
@@ -399,9 +436,20 @@ int sc_main(int argc, char** argv) {
         std::cerr << "rtsim: " << e.what() << " (see rtsim --help)\n";
         return 2;
     }
+    install_stop_handlers();
+    // A stop that ends the run before anything was simulated (or makes a child process fail)
+    // leaves nothing to write: said as such, whatever the error it caused.
+    const auto interrupted = [&a] {
+        const int sig = stop_signal.load();
+        std::cerr << (a.quiet ? "" : "\n") << "rtsim: interrupted by " << signal_name(sig) << " before the simulation started; nothing written\n";
+        return interrupted_status(sig);
+    };
     try {
         return run(a);
+    } catch (const Interrupted&) {
+        return interrupted();
     } catch (const InputError& e) {
+        if (stop_signal.load()) return interrupted();
         std::cerr << "rtsim: " << e.what() << "\n";
         return 2;
     } catch (const std::bad_alloc&) {
@@ -411,6 +459,7 @@ int sc_main(int argc, char** argv) {
                   << " spp; try a smaller frame, fewer samples per pixel, or --sample\n";
         return 2;
     } catch (const std::exception& e) {
+        if (stop_signal.load()) return interrupted();
         std::cerr << "rtsim: internal error: " << e.what() << "\n";
         return 3;
     }

@@ -11,6 +11,8 @@
 #include <sys/resource.h>
 
 #include "functional_run.h"
+#include "host_memory.h"
+#include "model/memory_estimate.h"
 #include "model/stats.h"
 #include "timing_stats.h"
 #include "gpu_platform.h"
@@ -76,7 +78,7 @@ struct RunRecord {
     BvhStats bvh;
     bool two_level = false;
     double load_s = 0, build_s = 0, run_s = 0;
-    double scene_mb = 0, image_mb = 0, decoded_mb = 0, peak_mb = 0;
+    double scene_mb = 0, image_mb = 0, decoded_mb = 0, peak_mb = 0, estimate_mb = 0;
     const TimingResult* timing = nullptr;  // timing runs
     ErrorEstimate error;                   // timing runs
     const HwConfig* hw = nullptr;
@@ -87,6 +89,7 @@ struct RunRecord {
     bool has_speed = false;  // functional --verify: our traversal and Embree's on the same rays
     uint64_t speed_rays = 0;
     double ours_s = 0, embree_s = 0;
+    bool interrupted = false;  // stopped by RunSpec::stop before the end
 };
 
 void write_error_estimate(StatsOut& out, const ErrorEstimate& e) {
@@ -116,6 +119,9 @@ void write_stats(StatsOut& out, const RunRecord& r) {
     out.value("workload", r.workload, "", "primary, pt, ao, sh, or rays (a ray file)");
     out.value("fidelity", fidelity_name(r.fidelity), "", "functional, at, lt or interval");
     out.value("traversal", traversal_name(r.order), "", "dfs, bfs or treelet");
+    out.value("interrupted", r.interrupted, "",
+              "stopped by SIGINT or SIGTERM before the end: every figure is of what was simulated so far, and cycles are the "
+              "cycles simulated, not the frame's (docs/robustness.md)");
     if (r.has_params) {
         StatsOut p = out.child("params", "the scene workload's parameters");
         p.value("width", r.params.width, "pixels", "frame width");
@@ -155,6 +161,9 @@ void write_stats(StatsOut& out, const RunRecord& r) {
         m.value("bvh_image", r.image_mb, "MiB", "the BVH image");
         m.value("decoded_nodes", r.decoded_mb, "MiB", "internal nodes decoded up front for traversal (within the peak)");
         m.value("peak_resident", r.peak_mb, "MiB", "the process's peak resident memory");
+        m.value("model_estimate", r.estimate_mb, "MiB",
+                "timing runs: what the model (caches, RT units, threads in flight, the frame's paths) was estimated to need "
+                "before it was elaborated, checked against the memory available (model/memory_estimate.h); 0: functional");
         m.value("target_1_5x_plus_200", 1.5 * (r.scene_mb + r.image_mb) + 200.0, "MiB", "1.5 x (scene + BVH image) + 200: the resident-memory target");
     }
     if (r.timing) {
@@ -162,7 +171,7 @@ void write_stats(StatsOut& out, const RunRecord& r) {
         out.value("cycles", t.cycles, "core cycles", "the frame's cycles (a sampled run's estimate; simulated cycles under timing.sampling)");
         write_error_estimate(out, r.error);
         StatsOut tm = out.child("timing", "the timing model's statistics");
-        if (t.sampled) write_sampling(tm, t.estimate, r.sample_rate, t.cycles, t.cycles_simulated);
+        if (t.sampled && !t.interrupted) write_sampling(tm, t.estimate, r.sample_rate, t.cycles, t.cycles_simulated);
         write_hierarchy(tm, *r.hw, t.counts, t.summary, t.estimate.scale());
         if (r.fidelity != Fidelity::Interval)
             tm.value("payloads_allocated", t.payloads_allocated, "payloads", "TLM payloads the pool made (AT, LT)");
@@ -233,9 +242,16 @@ RunResult run_simulation(const RunSpec& spec, std::ostream* log) {
     Scene scene = load_scene(spec.scene, spec.assets);
     scene.flatten = spec.flatten;
     const double load_s = seconds_since(t0);
+    // Loading and building are not cut short; a stop requested meanwhile ends the run here, before
+    // anything is simulated or written.
+    const auto stop_here = [&spec] {
+        if (spec.stop.requested()) throw Interrupted{spec.stop.signal()};
+    };
+    stop_here();
     t0 = Clock::now();
     const BvhImage image = build_bvh_image(scene);
     const double build_s = seconds_since(t0);
+    stop_here();
     const BvhStats& bs = image.stats;
     if (log)
         *log << "scene " << scene.name << ": " << scene.meshes.size() << " meshes, " << scene.primitive_count()
@@ -275,6 +291,19 @@ RunResult run_simulation(const RunSpec& spec, std::ostream* log) {
         }
     }
     RunRecord rec;
+    if (timing) {
+        // Refused before elaboration if it cannot fit: a configuration of maximal sizes would
+        // otherwise exhaust the machine.
+        const uint64_t paths = kind == WorkloadKind::RayFile ? ray_entries.size()
+                                                             : uint64_t(spec.params.width) * uint64_t(spec.params.height) * uint64_t(spec.params.spp);
+        const MemoryEstimate need = estimate_memory(spec.hw, spec.fidelity, paths, bs.image_bytes);
+        const HostMemory host = host_memory_available();
+        if (need.total() > host.available)
+            throw InputError("this configuration and frame need about " + format_bytes(need.total()) + " of host memory for the timing model (" +
+                             need.largest() + "), more than the " + format_bytes(host.available) + " left by " + host.limit +
+                             "; make the largest of these smaller (the keys in parentheses), or run on a larger machine");
+        rec.estimate_mb = double(need.total()) / (1024.0 * 1024.0);
+    }
     rec.scene = scene.name;
     rec.workload = kind == WorkloadKind::RayFile ? "rays" : spec.workload;
     rec.fidelity = spec.fidelity;
@@ -301,6 +330,7 @@ RunResult run_simulation(const RunSpec& spec, std::ostream* log) {
         }
         fo.progress = spec.progress;
         fo.measure_speed = spec.verify;
+        fo.stop = spec.stop;
         const FunctionalResult r = run_functional(scene, image, *workload, fo, reference.get());
         rays = traced_from(r);
         verify = r.verify;
@@ -311,6 +341,7 @@ RunResult run_simulation(const RunSpec& spec, std::ostream* log) {
         rec.embree_s = r.embree_seconds;
         rec.nodes_visited = r.nodes_visited;
         rec.max_nodes = r.max_nodes_per_ray;
+        rec.interrupted = r.interrupted;
     } else {
         TimingOptions to;
         to.fidelity = spec.fidelity;
@@ -331,6 +362,7 @@ RunResult run_simulation(const RunSpec& spec, std::ostream* log) {
         to.trace_sm = spec.trace_sm;
         to.trace_warp = spec.trace_warp;
         to.keep_rays = spec.keep_rays || spec.verify;  // else memory for the rays in flight only
+        to.stop = spec.stop;
         if (spec.fidelity == Fidelity::Interval) {
             try {
                 timing_result = run_interval(spec.hw, image, *workload, to);
@@ -348,6 +380,7 @@ RunResult run_simulation(const RunSpec& spec, std::ostream* log) {
         rec.hw = &spec.hw;
         rec.config = &spec.config;
         rec.sample_rate = spec.sample_rate;
+        rec.interrupted = timing_result.interrupted;
         if (reference) {
             for (size_t i = 0; i < rays.size(); ++i) {
                 if (!rays[i].valid) continue;
@@ -366,15 +399,27 @@ RunResult run_simulation(const RunSpec& spec, std::ostream* log) {
     if (timing) {
         // After the run's own time: --check-error's child runs are not this run's speed.
         std::optional<ErrorCheck> check;
-        if (spec.check_error && spec.run_check) {
+        if (spec.check_error && spec.run_check && !rec.interrupted) {
             // N drawn clusters and the first wave: a sample at (N + 1) / clusters, or the whole frame.
             const uint64_t capacity = gpu_warp_capacity(spec.hw);
             const uint64_t clusters = (timing_result.estimate.warps_total + capacity - 1) / capacity;
             const double rate = clusters <= spec.check_error + 1 ? 1.0 : double(spec.check_error + 1) / double(clusters);
-            check = spec.run_check(rate);
-            if (rate == 1.0) check->clusters = clusters;
+            try {
+                check = spec.run_check(rate);
+                if (rate == 1.0) check->clusters = clusters;
+            } catch (...) {
+                // The check's child runs got the same signal: the run itself is whole; it is
+                // written without its check.
+                if (!spec.stop.requested()) throw;
+                rec.interrupted = true;
+            }
         }
-        rec.error = estimate_error(spec, timing_result, check);
+        if (rec.interrupted) {
+            rec.error.kind = "none";
+            rec.error.basis = "interrupted: the cycles simulated before the stop, not the frame's";
+        } else {
+            rec.error = estimate_error(spec, timing_result, check);
+        }
         rec.invalid = timing_result.summary.invalid;
         rec.hits = timing_result.summary.hits;
         rec.rays = timing_result.summary.rays;
@@ -412,6 +457,7 @@ RunResult run_simulation(const RunSpec& spec, std::ostream* log) {
     StatsOut stats(out.stats);
     write_stats(stats, rec);
     if (timing && timing_result.stuck) out.stuck = timing_result.stuck_report;
+    out.interrupted = rec.interrupted;
     out.invariant_failures = timing_result.invariant_failures;
     if (kind != WorkloadKind::RayFile) {
         out.image = workload->image();

@@ -16,6 +16,7 @@
 #include "model/config.h"
 #include "model/fidelity.h"
 #include "model/stats.h"
+#include "model/stop_request.h"
 #include "model/traversal.h"
 #include "workloads/rays.h"
 #include "workloads/workload_driver.h"
@@ -50,6 +51,10 @@ struct RunSpec {
     // whole frame) in both (rtsim runs child processes) and returns the two cycle counts.
     uint64_t check_error = 0;
     std::function<ErrorCheck(double rate)> run_check;
+    // Requested (rtsim: SIGINT, SIGTERM): the run stops at its next clean point and returns what
+    // it simulated so far (RunResult::interrupted); before the simulation starts, Interrupted is
+    // thrown instead (model/stop_request.h).
+    StopRequest stop;
 };
 
 struct RunResult {
@@ -64,6 +69,9 @@ struct RunResult {
     std::vector<std::pair<std::string, std::string>> files;  // path and bytes, written once the run succeeded
     uint64_t mismatches = 0;       // --verify: rays outside the documented classes
     uint64_t first_mismatch = 0;
+    // Stopped by RunSpec::stop: `stats` hold what was simulated so far ("interrupted": true);
+    // the frame, hits and dumps are not whole and must not be written.
+    bool interrupted = false;
 };
 
 // `log` (may be null) receives the scene and BVH lines as the run reaches them. Throws

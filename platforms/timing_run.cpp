@@ -11,6 +11,7 @@ SamplingOptions sampling_options(const HwConfig& c, const BvhImage& img, const T
     s.make_workload = o.sample_workload;
     s.threads = o.sample_threads;
     s.progress = o.progress;
+    s.stop = o.stop;
     // Enough fetches to refill every cache twice over.
     s.warm_window = 2 * (uint64_t(c.l2_slices) * c.l2.size_bytes + uint64_t(c.sms) * c.l1.size_bytes) / c.l1.sector;
     const TraversalOrder order = o.order;

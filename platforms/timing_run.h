@@ -11,6 +11,7 @@
 #include "model/bvh_image.h"
 #include "model/config.h"
 #include "model/fidelity.h"
+#include "model/stop_request.h"
 #include "model/traversal.h"
 #include "timing_stats.h"
 #include "workloads/sampling.h"
@@ -37,6 +38,9 @@ struct TimingOptions {
     // Keep every ray with its hit for TimingResult::rays (hits files, verification); without,
     // memory holds only the rays in flight.
     bool keep_rays = true;
+    // Requested: the run ends at its next clean point with what it simulated so far
+    // (TimingResult::interrupted; AT and LT at the monitor's next wake-up).
+    StopRequest stop;
 };
 
 struct TimingResult {
@@ -53,6 +57,9 @@ struct TimingResult {
     bool sampled = false;
     SampleEstimate estimate;        // sampled runs
     uint64_t payloads_allocated = 0;  // AT and LT: transaction payloads the pool made
+    // Stopped by TimingOptions::stop before the frame ended: the statistics are those of the
+    // cycles simulated so far; no estimate, no invariant checks.
+    bool interrupted = false;
 };
 
 // Shader warps the GPU keeps in flight at once (SMs x warp-buffer slots): a sampled run's cluster.

@@ -167,6 +167,7 @@ PrepassResult run_prepass(const FrameWarps& frame, const SamplingOptions& opt, P
         auto last = t0;
         bool printed = false;
         for (size_t wi = n_warps * t / threads, hi = n_warps * (t + 1) / threads; wi < hi; ++wi) {
+            if (opt.stop.requested()) throw Interrupted{opt.stop.signal()};
             tracer.trace(workload, wi, result.trace_nodes[wi], nullptr);
             const size_t d = ++done;
             if (opt.progress && t == 0 && (d & 63) == 0) {
@@ -201,6 +202,7 @@ std::vector<std::vector<WarmFetch>> warming_fetches(const FrameWarps& frame, con
         std::vector<uint32_t> ignored;
         std::vector<std::vector<WarmFetch>> by_warp;  // the recorded warps, last first
         for (size_t i = t; i < sim.size(); i += threads) {
+            if (opt.stop.requested()) throw Interrupted{opt.stop.signal()};
             const uint64_t from = i ? design.end_warp(i - 1) : 0;
             size_t recorded = 0;
             by_warp.clear();

@@ -12,6 +12,7 @@
 #include <memory>
 #include <vector>
 
+#include "model/stop_request.h"
 #include "model/trace_schedule.h"
 #include "model/traversal.h"
 #include "ray_queue.h"
@@ -46,6 +47,7 @@ struct SamplingOptions {
     // the clusters skipped before it are replayed into the caches (WorkloadDriver::on_warm).
     size_t warm_window = 0;
     bool progress = false;  // report the pre-pass's progress on stderr every 2 s
+    StopRequest stop;       // requested: the pre-pass throws Interrupted between warps
 };
 
 // Drawn strata a sample needs for its interval (collapsed pairs: 5 pairs, Student's t with 5
