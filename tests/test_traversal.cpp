@@ -371,3 +371,43 @@ TEST(BvhBuilder, CoordinatesBeyondTheBuildersRangeAreInputErrors) {
     const BvhImage image = build_bvh_image(triangle_at(1e15f));
     EXPECT_EQ(image.stats.triangle_leaves, 1u);
 }
+
+// Instances: a transform that places a mesh beyond the builder's range, one that is not finite,
+// and singular ones are bad input naming the instance, not an abort in Embree or an internal
+// error (issue 16); a transform within range builds.
+TEST(BvhBuilder, InstanceTransformsBeyondTheBuildersRangeAreInputErrors) {
+    auto placed = [](const Affine& t) {
+        Scene s;
+        Mesh m;
+        m.name = "tri.obj";
+        m.vertices = {{-1.0f, -1.0f, 0.0f}, {1.0f, -1.0f, 0.0f}, {0.0f, 1.0f, 0.0f}};
+        m.triangles = {{0, 1, 2}};
+        m.material = {0};
+        s.meshes.push_back(m);
+        s.materials.push_back(Material{});
+        s.instances.push_back({0, identity_affine()});
+        s.instances.push_back({0, t});  // two instances: a two-level BVH
+        return s;
+    };
+    auto scaled = [](float k, float shift = 0.0f) {
+        Affine a = identity_affine();
+        a[0] = a[5] = a[10] = k;
+        a[3] = shift;
+        return a;
+    };
+    const auto refused = [&](const Affine& t, const std::string& expected) {
+        try {
+            build_bvh_image(placed(t));
+            ADD_FAILURE() << "built: " << expected;
+        } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what();
+        }
+    };
+    refused(scaled(1e20f), "mesh 0 (tri.obj): instance 1 of it, placed by its transform, reaches coordinate");
+    refused(scaled(1.0f, 3e38f), "beyond +-1e15");
+    refused(scaled(1.0f, INFINITY), "instance 1 of it has a transform with an entry that is not a finite number");
+    refused(scaled(0.0f), "singular transform");
+    refused(scaled(1e-39f), "inverse overflows a float");  // a determinant of 1e-117
+    const BvhImage ok = build_bvh_image(placed(scaled(1e14f)));
+    EXPECT_EQ(ok.stats.instance_leaves, 2u);
+}

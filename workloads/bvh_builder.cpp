@@ -184,9 +184,9 @@ namespace {
 constexpr float kMaxCoordinate = 1e15f;
 
 void check_coordinates(const Scene& scene) {
-    auto refuse = [](const Mesh& m, size_t geom, const std::string& what, float v) {
+    auto refuse = [](const Mesh& m, size_t geom, const std::string& what, double v) {
         char value[32];
-        std::snprintf(value, sizeof value, "%g", double(v));
+        std::snprintf(value, sizeof value, "%g", v);
         throw InputError("mesh " + std::to_string(geom) + (m.name.empty() ? std::string() : " (" + m.name + ")") + ": " + what + " " +
                          value + " is beyond +-1e15, the coordinates the BVH builder takes (scale the scene down)");
     };
@@ -201,6 +201,37 @@ void check_coordinates(const Scene& scene) {
                 if (!(std::fabs(sp.center[a]) + std::fabs(sp.radius) <= kMaxCoordinate))
                     refuse(m, g, "sphere " + std::to_string(i) + " extent", std::fabs(sp.center[a]) + std::fabs(sp.radius));
         }
+    }
+    // An instance's transform places its mesh in the TLAS: its world box (transformed_box) must
+    // be within the same range, and the transform invertible with a finite float inverse (the
+    // instance leaf stores both; traversal moves rays into object space with the inverse).
+    for (size_t i = 0; i < scene.instances.size(); ++i) {
+        const Instance& inst = scene.instances[i];
+        const Mesh& m = scene.meshes.at(inst.mesh);
+        if (m.primitives() == 0) continue;
+        const std::string which = "instance " + std::to_string(i) + " of";
+        const auto bad_transform = [&](const std::string& why) {
+            throw InputError("mesh " + std::to_string(inst.mesh) + (m.name.empty() ? std::string() : " (" + m.name + ")") + ": " + which +
+                             " it has " + why + ": it cannot be traversed");
+        };
+        for (float v : inst.object_to_world)
+            if (!std::isfinite(v)) bad_transform("a transform with an entry that is not a finite number");
+        // The box is padded outward by about 2^-20 of its extent: a mesh placed as it is, with
+        // vertices at the limit itself, stays within the limit widened by 2^-18.
+        const Aabb b = transformed_box(m.bounds(), inst.object_to_world);
+        const float limit = kMaxCoordinate * (1.0f + 0x1p-18f);
+        for (int a = 0; a < 3; ++a)
+            if (!(std::fabs(b.lo[a]) <= limit && std::fabs(b.hi[a]) <= limit))
+                refuse(m, inst.mesh, which + " it, placed by its transform, reaches coordinate",
+                       std::fabs(b.lo[a]) > std::fabs(b.hi[a]) ? b.lo[a] : b.hi[a]);
+        Affine inv{};
+        try {
+            inv = invert_affine(inst.object_to_world);
+        } catch (const std::runtime_error&) {
+            bad_transform("a singular transform (determinant 0)");
+        }
+        for (float v : inv)
+            if (!std::isfinite(v)) bad_transform("a transform so nearly singular that its inverse overflows a float");
     }
 }
 
