@@ -3,10 +3,13 @@
 
 #include <fcntl.h>
 #include <signal.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
+#include <zlib.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -1372,5 +1375,106 @@ TEST(Rtsim, MemoryEstimateMatchesTheMemoryTaken) {
             EXPECT_GT(estimated, 30.0);  // MiB: large against the measure's noise (a few MiB)
             EXPECT_NEAR(measured / estimated, 1.0, 0.2) << "estimated +" << estimated << " MiB, measured +" << measured << " MiB";
         }
+    }
+}
+
+// Bounded work for bounded input (issue 16): hostile files of up to 1 MB, each of a class that
+// once took gigabytes or minutes, end in at most 2 GB of resident memory (rtsim and the mesh
+// importer's process) and 30 s, with exit 0 or 2. Measured per run with wait4 (the child's and its
+// own children's peak); sanitizers inflate memory, so they skip it.
+TEST(Rtsim, HostileInputsOfUpTo1MBStayWithin2GBAnd30s) {
+#if defined(__SANITIZE_ADDRESS__)
+    GTEST_SKIP() << "built with AddressSanitizer: resident memory includes its shadow and redzones";
+#endif
+    TempDir dir;
+    const size_t mb = 1 << 20;
+    std::vector<std::pair<std::string, std::vector<std::string>>> cases;  // what, rtsim's arguments
+    const auto scene_case = [&](const std::string& name, const std::string& bytes) {
+        ASSERT_LE(bytes.size(), mb) << name;
+        cases.push_back({name, {"--scene", write_text(dir.file(name), bytes), "--workload", "primary", "--width", "8", "--height", "8"}});
+    };
+    {  // a gzip bomb: one member of 16 MiB of spaces (16 KiB compressed) repeated to 1 MB: 1 GiB inflated
+        const std::string ply = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                                "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+        const std::string member_path = dir.file("member.gz");
+        gzFile g = gzopen(member_path.c_str(), "wb9");
+        const std::string spaces(1 << 20, ' ');
+        for (int i = 0; i < 16; ++i) gzwrite(g, spaces.data(), unsigned(spaces.size()));
+        gzclose(g);
+        const std::string member = read_text(member_path);
+        gzFile h = gzopen(dir.file("head.gz").c_str(), "wb9");
+        gzwrite(h, ply.data(), unsigned(ply.size()));
+        gzclose(h);
+        std::string bomb = read_text(dir.file("head.gz"));
+        while (bomb.size() + member.size() <= mb) bomb += member;
+        scene_case("bomb.ply.gz", bomb);
+    }
+    {  // a PLY whose header claims 2^31 vertices and faces, then 1 MB of numbers
+        std::string ply = "ply\nformat ascii 1.0\nelement vertex 2147483647\nproperty float x\nproperty float y\nproperty float z\n"
+                          "element face 2147483647\nproperty list uchar int vertex_indices\nend_header\n";
+        while (ply.size() < mb - 16) ply += "0 0 0\n";
+        scene_case("claims.ply", ply);
+        std::string bin = "ply\nformat binary_little_endian 1.0\nelement vertex 2147483647\nproperty float x\nproperty float y\nproperty float z\n"
+                          "element face 2147483647\nproperty list uint int vertex_indices\nend_header\n";
+        bin.resize(mb, '\xff');  // face lists of 4 billion entries
+        scene_case("claims-binary.ply", bin);
+    }
+    {  // OBJ: 1 MB of faces with far-away and negative indices; 1 MB of vertices, no face
+        std::string faces, verts;
+        for (int i = 0; faces.size() < mb - 64; ++i) faces += "f " + std::to_string(2000000000 - i) + " -1 -2147483647\n";
+        for (int i = 0; verts.size() < mb - 64; ++i) verts += "v 1e30 -1e30 " + std::to_string(i) + "\n";
+        scene_case("faces.obj", faces);
+        scene_case("verts.obj", verts);
+    }
+    {  // OFF counts of 2^31 with a 1 MB body
+        std::string off = "OFF\n2147483647 2147483647 0\n";
+        while (off.size() < mb - 16) off += "0 0 0\n";
+        scene_case("claims.off", off);
+    }
+    {  // a GLB whose chunk claims 4 GiB, padded to 1 MB
+        const std::string json = R"({"asset":{"version":"2.0"}}   )";
+        std::string glb = "glTF";
+        const auto u32 = [&glb](uint32_t v) { glb.append(reinterpret_cast<const char*>(&v), 4); };
+        u32(2);
+        u32(uint32_t(mb));
+        u32(0xFFFFFF00u);
+        glb += "JSON" + json;
+        glb.resize(mb, ' ');
+        scene_case("bomb.glb", glb);
+    }
+    {  // a configuration nested 500 k levels deep; 1 MB of rays (all to be traced, at AT)
+        cases.push_back({"nested.json", {"--scene", "cornell", "--fidelity", "at", "--config",
+                                         write_text(dir.file("nested.json"), std::string(mb / 2, '[') + std::string(mb / 2, ']'))}});
+        std::string rays;
+        while (rays.size() < mb - 64) rays += "278 278 800 0 0 -1 0 inf\n";
+        cases.push_back({"rays.txt", {"--scene", "cornell", "--fidelity", "at", "--rays", write_text(dir.file("rays.txt"), rays)}});
+    }
+    for (auto& [what, args] : cases) {
+        SCOPED_TRACE(what);
+        args.insert(args.begin(), RTU_RTSIM);
+        args.push_back("-q");
+        std::vector<char*> argv;
+        for (std::string& s : args) argv.push_back(s.data());
+        argv.push_back(nullptr);
+        const auto t0 = std::chrono::steady_clock::now();
+        const pid_t pid = fork();
+        if (pid == 0) {
+            const int null = ::open("/dev/null", O_RDWR);
+            dup2(null, 0);
+            dup2(null, 1);
+            dup2(null, 2);
+            alarm(120);  // a hang ends as a failure, not a stuck suite
+            execv(argv[0], argv.data());
+            _exit(127);
+        }
+        int status = 0;
+        rusage ru{};
+        ASSERT_EQ(wait4(pid, &status, 0, &ru), pid);
+        const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        ASSERT_TRUE(WIFEXITED(status)) << "ended by signal " << WTERMSIG(status);
+        EXPECT_TRUE(WEXITSTATUS(status) == 0 || WEXITSTATUS(status) == 2) << "exit " << WEXITSTATUS(status);
+        EXPECT_LE(ru.ru_maxrss, 2L << 20) << "KiB";
+        EXPECT_LE(seconds, 30.0);
+        std::printf("  %-18s exit %d, %6.1f MiB, %5.2f s\n", what.c_str(), WEXITSTATUS(status), double(ru.ru_maxrss) / 1024.0, seconds);
     }
 }
