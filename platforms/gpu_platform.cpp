@@ -1,5 +1,9 @@
 #include "gpu_platform.h"
 
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+
 #include <systemc>
 
 #include "model/treelet.h"
@@ -208,8 +212,38 @@ GpuPlatform::GpuPlatform(const HwConfig& cfg, const BvhImage& image, Workload& w
     };
 }
 
+namespace {
+
+// SystemC ends a VCD with a bare "#TIME" line: the kernel's time at the end, which is the
+// monitor's next wake-up (up to 100,000 cycles after the frame's last ray: a 32x32 cornell frame
+// of 4 us ended at 73 us), so a viewer's zoom-to-fit showed the frame in its first 5 %. That line
+// carries no value change; without it the trace ends at its last change, where the frame does.
+void trim_vcd_end(const std::string& path) {
+    std::FILE* f = std::fopen(path.c_str(), "rb");
+    if (!f) return;
+    std::fseek(f, 0, SEEK_END);
+    const long size = std::ftell(f);
+    const long tail = std::min<long>(size, 64);
+    std::string end(size_t(tail), '\0');
+    std::fseek(f, size - tail, SEEK_SET);
+    const size_t got = std::fread(end.data(), 1, end.size(), f);
+    std::fclose(f);
+    if (got != end.size()) return;
+    size_t stop = end.find_last_not_of("\n");
+    if (stop == std::string::npos) return;
+    const size_t line = end.rfind('\n', stop);
+    if (line == std::string::npos || end[line + 1] != '#') return;  // the last line is not a bare timestamp
+    std::error_code ec;
+    std::filesystem::resize_file(path, uint64_t(size - tail) + line + 1, ec);
+}
+
+}  // namespace
+
 GpuPlatform::~GpuPlatform() {
-    if (impl_->tf) sc_close_vcd_trace_file(impl_->tf);
+    if (impl_->tf) {
+        sc_close_vcd_trace_file(impl_->tf);
+        trim_vcd_end(impl_->opt.vcd + ".vcd");
+    }
 }
 
 TimingResult GpuPlatform::run() {
