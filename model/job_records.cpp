@@ -7,6 +7,30 @@
 
 namespace rtu {
 
+JobSpec job_of_descriptor(const rtu_job_desc& d) {
+    JobSpec j;
+    j.bvh_base = d.bvh_base, j.bvh_size = d.bvh_size, j.ray_base = d.ray_base, j.hit_base = d.hit_base;
+    j.ray_count = d.ray_count, j.flags = d.flags, j.job_id = d.job_id, j.next = d.next;
+    j.ray_stride = d.ray_stride ? d.ray_stride : uint32_t(sizeof(rtu_ray));
+    j.hit_stride = d.hit_stride ? d.hit_stride : uint32_t(sizeof(rtu_hit));
+    return j;
+}
+
+JobFieldError check_job_fields(const JobSpec& j) {
+    if (j.flags & ~RTU_JOB_IRQ_ON_DONE) return {RTU_ERR_BAD_FLAGS, 0};
+    if (j.bvh_base % 64) return {RTU_ERR_BAD_ALIGN, j.bvh_base};
+    if (j.ray_base % 16) return {RTU_ERR_BAD_ALIGN, j.ray_base};
+    if (j.hit_base % 16) return {RTU_ERR_BAD_ALIGN, j.hit_base};
+    if (j.ray_stride < 48 || j.ray_stride % 16) return {RTU_ERR_BAD_ALIGN, j.ray_base};
+    if (j.hit_stride < 48 || j.hit_stride % 16) return {RTU_ERR_BAD_ALIGN, j.hit_base};
+    // The image, the rays and the hits are held in host memory: sizes beyond the limits are
+    // refused, not allocated (a ray count of 2^32 - 1 would ask for 200 GB).
+    if (j.bvh_size < kBlockBytes) return {RTU_ERR_BAD_BVH, j.bvh_base};
+    if (j.bvh_size > RTU_MAX_BVH_BYTES) return {RTU_ERR_TOO_LARGE, j.bvh_base};
+    if (j.ray_count > RTU_MAX_RAYS) return {RTU_ERR_TOO_LARGE, j.ray_base};
+    return {};
+}
+
 // The records are little-endian, as the host's memory is read byte for byte into them.
 static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "the peripheral's records are little-endian");
 

@@ -23,4 +23,20 @@ uint64_t max_node_visits(const BvhImage& image);
 // One record traced functionally (throws as trace_ray does on a broken image).
 rtu_hit trace_record(const BvhImage& image, const rtu_ray& r, TraversalOrder order);
 
+// A job as software gave it (the registers, or a descriptor).
+struct JobSpec {
+    uint64_t bvh_base = 0, bvh_size = 0, ray_base = 0, hit_base = 0, next = 0;
+    uint32_t ray_count = 0, ray_stride = sizeof(rtu_ray), hit_stride = sizeof(rtu_hit), flags = 0, job_id = 0;
+};
+// A descriptor's job (a stride of 0 means the record's size); its magic is the caller's check.
+JobSpec job_of_descriptor(const rtu_job_desc& d);
+// The first error a job's own fields give, before any memory is read: an RTU_ERR_* code (0:
+// none) and the address it concerns. Sizes beyond RTU_MAX_BVH_BYTES and RTU_MAX_RAYS are refused
+// here, before anything is allocated.
+struct JobFieldError {
+    uint32_t code = 0;
+    uint64_t addr = 0;
+};
+JobFieldError check_job_fields(const JobSpec& j);
+
 }  // namespace rtu

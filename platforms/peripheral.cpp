@@ -48,11 +48,7 @@ void PeripheralConfig::set(const std::string& kv) {
 
 namespace {
 
-// A job as software gave it (registers or descriptor).
-struct Job {
-    uint64_t bvh_base = 0, bvh_size = 0, ray_base = 0, hit_base = 0, next = 0;
-    uint32_t ray_count = 0, ray_stride = sizeof(rtu_ray), hit_stride = sizeof(rtu_hit), flags = 0, job_id = 0;
-};
+using Job = JobSpec;  // as software gave it (model/job_records.h)
 
 // What ends a job early: an error code and the system address it concerns.
 struct JobError {
@@ -358,17 +354,7 @@ private:
 namespace {
 
 void check_job(const Job& j) {
-    if (j.flags & ~RTU_JOB_IRQ_ON_DONE) throw JobError{RTU_ERR_BAD_FLAGS, 0};
-    if (j.bvh_base % 64) throw JobError{RTU_ERR_BAD_ALIGN, j.bvh_base};
-    if (j.ray_base % 16) throw JobError{RTU_ERR_BAD_ALIGN, j.ray_base};
-    if (j.hit_base % 16) throw JobError{RTU_ERR_BAD_ALIGN, j.hit_base};
-    for (uint32_t s : {j.ray_stride, j.hit_stride})
-        if (s < 48 || s % 16) throw JobError{RTU_ERR_BAD_ALIGN, s == j.ray_stride ? j.ray_base : j.hit_base};
-    // The image, the rays and the hits are held in host memory: sizes beyond the limits are
-    // refused, not allocated (a ray count of 2^32 - 1 would ask for 200 GB).
-    if (j.bvh_size < kBlockBytes) throw JobError{RTU_ERR_BAD_BVH, j.bvh_base};
-    if (j.bvh_size > RTU_MAX_BVH_BYTES) throw JobError{RTU_ERR_TOO_LARGE, j.bvh_base};
-    if (j.ray_count > RTU_MAX_RAYS) throw JobError{RTU_ERR_TOO_LARGE, j.ray_base};
+    if (const JobFieldError e = check_job_fields(j); e.code) throw JobError{e.code, e.addr};
 }
 
 }  // namespace
@@ -490,10 +476,7 @@ void RtUnitPeripheral::run_jobs() {
                     rtu_job_desc d;
                     dma.read(desc, reinterpret_cast<uint8_t*>(&d), 64);
                     if (d.magic != RTU_DESC_MAGIC) throw JobError{RTU_ERR_BAD_DESC_MAGIC, desc};
-                    j.bvh_base = d.bvh_base, j.bvh_size = d.bvh_size, j.ray_base = d.ray_base, j.hit_base = d.hit_base;
-                    j.ray_count = d.ray_count, j.flags = d.flags, j.job_id = d.job_id, j.next = d.next;
-                    j.ray_stride = stride_or_default(d.ray_stride, sizeof(rtu_ray));
-                    j.hit_stride = stride_or_default(d.hit_stride, sizeof(rtu_hit));
+                    j = job_of_descriptor(d);
                 }
                 JobError error{0, 0};
                 JobResult r;
