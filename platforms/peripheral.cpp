@@ -168,6 +168,7 @@ struct RtUnitPeripheral::Impl {
     sc_event start, irq_update, abort;
     bool chain = false;  // the accepted START's mode
     bool abort_requested = false;
+    bool in_reset = false;  // rst is high: the job engine resets the registers when the job it runs ends
     std::vector<tlm::tlm_dmi> dmi;  // regions granted on `mem`
     uint64_t desc_addr = 0;
     Job latched;
@@ -180,7 +181,8 @@ struct RtUnitPeripheral::Impl {
           core(h.core_mhz) {}
 };
 
-RtUnitPeripheral::RtUnitPeripheral(sc_module_name name, const PeripheralConfig& cfg) : sc_module(name), regs("regs"), mem("mem"), irq("irq") {
+RtUnitPeripheral::RtUnitPeripheral(sc_module_name name, const PeripheralConfig& cfg)
+    : sc_module(name), regs("regs"), mem("mem"), irq("irq"), rst("rst") {
     const TraversalOrder order = parse_order(cfg.traversal);
     const Fidelity fidelity = parse_peripheral_fidelity(cfg.fidelity);
     impl_.reset(new Impl(cfg, order, resolve_config(cfg, order), fidelity));
@@ -204,6 +206,27 @@ RtUnitPeripheral::~RtUnitPeripheral() = default;
 
 void RtUnitPeripheral::end_of_elaboration() {
     if (irq.size()) irq->write(false);  // reset value (no process runs yet: this is the only other write)
+    if (rst.size()) {  // an unbound port has no event to be sensitive to
+        sc_spawn_options o;
+        o.spawn_method();
+        o.set_sensitivity(&rst->value_changed_event());
+        o.dont_initialize();
+        sc_spawn([this] { on_reset(); }, sc_gen_unique_name("on_reset"), &o);
+    }
+}
+
+void RtUnitPeripheral::on_reset() {
+    Impl& m = *impl_;
+    m.in_reset = rst->read();
+    if (!m.in_reset) return;
+    if (m.regs.state.busy) {  // ended like ABORT; the job engine then resets the registers
+        m.abort_requested = true;
+        m.feeder.abort();
+        m.abort.notify(SC_ZERO_TIME);
+    } else {
+        m.regs.reset();
+    }
+    m.irq_update.notify(SC_ZERO_TIME);
 }
 
 void RtUnitPeripheral::drive_irq() {
@@ -212,13 +235,14 @@ void RtUnitPeripheral::drive_irq() {
 
 void RtUnitPeripheral::b_transport(tlm::tlm_generic_payload& t, sc_time& delay) {
     Impl& m = *impl_;
-    const RtuRegisters::Commands c = m.regs.access(t, uint32_t(t.get_address() & (RTU_APERTURE_BYTES - 1)), false);
+    RtuRegisters::Commands c = m.regs.access(t, uint32_t(t.get_address() & (RTU_APERTURE_BYTES - 1)), false);
     delay += m.pc.reg_latency;  // the register target never waits; its effects come at now + delay
     RtuRegisters::State& s = m.regs.state;
     if (c.soft_reset && !s.busy) {
         m.regs.reset();
         m.irq_update.notify(delay);
     }
+    if (c.start && m.in_reset) c.start = false;  // held in reset
     if (c.start) {
         if (s.busy) {
             s.start_ignored = true;
@@ -487,6 +511,7 @@ void RtUnitPeripheral::run_jobs() {
                     error = e;
                 }
                 const uint64_t job_cycles = m.core.cycle_at_or_after(sc_time_stamp() - job_from);
+                if (m.in_reset) break;  // reset: no memory access after the edge, not even the completion record
                 if (m.chain) {  // the completion half, then its status word last
                     rtu_job_desc c{};
                     c.rays = uint32_t(std::min<uint64_t>(r.rays, UINT32_MAX));
@@ -528,6 +553,11 @@ void RtUnitPeripheral::run_jobs() {
             SC_REPORT_WARNING(name(), ("job failed: error code " + std::to_string(e.code) + " (rtunit/rtu_regs.h RTU_ERR_*) at " + addr).c_str());
         }
         m.regs.count(RTU_PERF_BUSY_CYCLES, m.core.cycle_at_or_after(sc_time_stamp() - busy_from));
+        if (m.in_reset) {  // rst rose during the job: it ends with every register at its reset value
+            m.regs.reset();
+            m.irq_update.notify(SC_ZERO_TIME);
+            continue;
+        }
         // Every write of the job has returned: DONE and the interrupt come now, never earlier.
         s.busy = false;
         s.aborted = m.abort_requested && !s.error;

@@ -740,3 +740,52 @@ TEST(Peripheral, BackToBackJobsWithPrefetchesInFlight) {
     EXPECT_EQ(RTU_STATUS_DESCS_DONE(status), 3u);
     for (uint64_t i = 0; i < 3; ++i) EXPECT_EQ(differing_hits(b.ram, hits0 + i * 0x10000, want), 0u) << "job " << i;
 }
+
+// The optional reset line: raised during a job, the job ends without writing hits, every register
+// returns to its reset value and the interrupt goes low; START is ignored while it is high; once
+// it falls, the next job runs and its hits equal the reference.
+TEST(Peripheral, ResetLineAbortsAndResetsThenTheNextJobRuns) {
+    FsResolution res;
+    Bench b(config_for("lt"));
+    sc_signal<bool> rst{"rtu_rst"};
+    b.rtu.rst.bind(rst);
+    const Inputs in;
+    in.load(b.ram, kBvhAt);
+    uint32_t status_in_reset = ~0u, int_status_in_reset = ~0u, ray_count_in_reset = ~0u, status_start_in_reset = ~0u;
+    uint64_t writes_after_reset = ~0ull;
+    bool irq_in_reset = true, second_done = false;
+    b.cpu.script = [&] {
+        Cpu& c = b.cpu;
+        c.wr(RTU_INT_ENABLE, RTU_INT_ALL);
+        program_job(c, in, kBvhAt);
+        c.wr(RTU_CTRL, RTU_CTRL_START);
+        while (b.ram.bytes_read < in.image.size() + in.rays.size() * sizeof(rtu_ray)) wait(20, SC_NS);
+        EXPECT_TRUE(c.rd(RTU_STATUS) & RTU_STATUS_BUSY);
+        rst.write(true);
+        wait(2, SC_US);  // the job has ended by now (it stops at its next step)
+        status_in_reset = c.rd(RTU_STATUS);
+        int_status_in_reset = c.rd(RTU_INT_STATUS);
+        ray_count_in_reset = c.rd(RTU_RAY_COUNT);
+        irq_in_reset = b.line.read();
+        writes_after_reset = b.ram.writes;
+        c.wr(RTU_CTRL, RTU_CTRL_START);  // held in reset: ignored
+        wait(1, SC_US);
+        status_start_in_reset = c.rd(RTU_STATUS);
+        rst.write(false);
+        wait(10, SC_NS);
+        c.wr(RTU_INT_ENABLE, RTU_INT_ALL);
+        program_job(c, in, kBvhAt);
+        c.wr(RTU_CTRL, RTU_CTRL_START);
+        second_done = c.wait_irq() && (c.rd(RTU_STATUS) & 0xFFu) == RTU_STATUS_DONE;
+    };
+    sc_start();
+    ASSERT_TRUE(b.cpu.finished);
+    EXPECT_EQ(status_in_reset, 0u);      // not BUSY, DONE, ABORTED or ERROR: the reset value
+    EXPECT_EQ(int_status_in_reset, 0u);
+    EXPECT_EQ(ray_count_in_reset, 0u);   // a job register back to its reset value
+    EXPECT_FALSE(irq_in_reset);
+    EXPECT_EQ(writes_after_reset, 0u);   // the first job wrote no hit
+    EXPECT_EQ(status_start_in_reset, 0u);
+    EXPECT_TRUE(second_done);
+    EXPECT_EQ(differing_hits(b.ram, in.hit_at(kBvhAt), in.reference()), 0u);
+}

@@ -49,6 +49,11 @@ public:
     tlm_utils::simple_target_socket<RtUnitPeripheral, 32> regs;
     tlm_utils::simple_initiator_socket<RtUnitPeripheral, 32> mem;
     sc_core::sc_port<sc_core::sc_signal_inout_if<bool>, 1, sc_core::SC_ZERO_OR_MORE_BOUND> irq;
+    // Optional active-high reset (may stay unbound): at its rising edge a running job ends as by
+    // ABORT (no hit or completion record written after it), then every register and counter
+    // returns to its reset value and the interrupt goes low; while it is high START is ignored;
+    // register accesses are answered as usual.
+    sc_core::sc_port<sc_core::sc_signal_in_if<bool>, 1, sc_core::SC_ZERO_OR_MORE_BOUND> rst;
 
     // Throws std::invalid_argument for a bad configuration (naming the key or value).
     RtUnitPeripheral(sc_core::sc_module_name name, const PeripheralConfig& cfg = {});
@@ -63,6 +68,7 @@ private:
     void invalidate_direct_mem_ptr(sc_dt::uint64 start, sc_dt::uint64 end);
     void run_jobs();   // SC_THREAD: one job or chain per START
     void drive_irq();  // SC_METHOD: the interrupt line's only writer
+    void on_reset();   // on every change of rst (spawned when it is bound)
     void end_of_elaboration() override;
 
     std::unique_ptr<Impl> impl_;
