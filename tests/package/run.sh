@@ -4,7 +4,8 @@
 # builds the installed example platform out of tree with only CMAKE_PREFIX_PATH (as C++17, C++20
 # and C++14, and with Embree, absl and assimp hidden from find_package), and through pkg-config,
 # runs each and expects "N passed, 0 failed"; checks that a newer version than installed is
-# refused. Prints "N passed, M failed"; exit 1 on a failure.
+# refused; configures the source tree as another project's subproject. Prints "N passed, M failed";
+# exit 1 on a failure.
 # Usage: tests/package/run.sh BUILD_DIR
 set -uo pipefail
 build=$(cd "$1" && pwd)
@@ -75,5 +76,16 @@ newer() {
     ! cmake -S "$tmp/newer" -B "$tmp/newer/b" -DCMAKE_PREFIX_PATH="$prefix" > "$tmp/newer.log" 2>&1 && grep -q '0.1.0' "$tmp/newer.log"
 }
 check "find_package(rtunit 0.2) is refused by 0.1" newer
+# P6: the source tree as a subproject of a platform's own CMake project (add_subdirectory): its
+# paths are the project's, not the top level's; configured, and the model library (which reads
+# generated headers) built.
+source=$(cd "$(dirname "$0")/../.." && pwd)
+super() {
+  mkdir -p "$tmp/super" &&
+    printf 'cmake_minimum_required(VERSION 3.20)\nproject(platform CXX)\nadd_subdirectory(%s rtunit)\n' "$source" > "$tmp/super/CMakeLists.txt" &&
+    cmake -S "$tmp/super" -B "$tmp/super/b" -DBUILD_TESTING=OFF > "$tmp/super.log" 2>&1 &&
+    cmake --build "$tmp/super/b" -j2 --target rtu_model >> "$tmp/super.log" 2>&1 || { tail -20 "$tmp/super.log"; return 1; }
+}
+check "as a subproject (add_subdirectory): configures, and the model library builds" super
 echo "$passed passed, $failed failed"
 [ "$failed" -eq 0 ]
