@@ -142,6 +142,17 @@ void program_job(Cpu& cpu, const Inputs& in, uint64_t bvh_at, uint32_t job_id = 
 }
 
 // Every hit record bit for bit; returns the number that differ.
+// From the CPU's script: starts a register-mode job with every interrupt enabled and returns once
+// the image and the rays are read, so the rays are being traced (for about 900 cycles).
+void start_and_wait_for_tracing(Bench& b, const Inputs& in) {
+    Cpu& c = b.cpu;
+    c.wr(RTU_INT_ENABLE, RTU_INT_ALL);
+    program_job(c, in, kBvhAt);
+    c.wr(RTU_CTRL, RTU_CTRL_START);
+    while (b.ram.bytes_read < in.image.size() + in.rays.size() * sizeof(rtu_ray)) wait(20, SC_NS);
+    EXPECT_TRUE(c.rd(RTU_STATUS) & RTU_STATUS_BUSY);
+}
+
 size_t differing_hits(Ram& ram, uint64_t at, const std::vector<rtu_hit>& want) {
     size_t bad = 0;
     for (size_t i = 0; i < want.size(); ++i) bad += std::memcmp(ram.at(at + i * sizeof(rtu_hit)), &want[i], sizeof(rtu_hit)) != 0;
@@ -496,12 +507,7 @@ TEST(Peripheral, AbortStopsTheJobWithoutWritingHits) {
     uint64_t writes_at_end = 0;
     b.cpu.script = [&] {
         Cpu& c = b.cpu;
-        c.wr(RTU_INT_ENABLE, RTU_INT_ALL);
-        program_job(c, in, kBvhAt);
-        c.wr(RTU_CTRL, RTU_CTRL_START);
-        // Once the image and the rays are read, the rays are being traced (for about 900 cycles).
-        while (b.ram.bytes_read < in.image.size() + in.rays.size() * sizeof(rtu_ray)) wait(20, SC_NS);
-        EXPECT_TRUE(c.rd(RTU_STATUS) & RTU_STATUS_BUSY);
+        start_and_wait_for_tracing(b, in);
         c.wr(RTU_CTRL, RTU_CTRL_ABORT);
         EXPECT_TRUE(c.wait_irq());
         status = c.rd(RTU_STATUS);
@@ -756,11 +762,7 @@ TEST(Peripheral, ResetLineAbortsAndResetsThenTheNextJobRuns) {
     bool irq_in_reset = true, second_done = false;
     b.cpu.script = [&] {
         Cpu& c = b.cpu;
-        c.wr(RTU_INT_ENABLE, RTU_INT_ALL);
-        program_job(c, in, kBvhAt);
-        c.wr(RTU_CTRL, RTU_CTRL_START);
-        while (b.ram.bytes_read < in.image.size() + in.rays.size() * sizeof(rtu_ray)) wait(20, SC_NS);
-        EXPECT_TRUE(c.rd(RTU_STATUS) & RTU_STATUS_BUSY);
+        start_and_wait_for_tracing(b, in);
         rst.write(true);
         wait(2, SC_US);  // the job has ended by now (it stops at its next step)
         status_in_reset = c.rd(RTU_STATUS);
