@@ -23,6 +23,7 @@ THREAD_STATUS = ["waiting_to_be_scheduled", "waiting_on_memory", "in_math", "don
 # (column, statistic); every timing run has these.
 TIMING = [
     ("cycles", "cycles"),
+    ("error_bound", "error_estimate.value"),  # the run's own stated error (null: none stated)
     ("node_fetches", "timing.rt_unit.node_fetches"),
     ("l1_miss_rate", "timing.l1.demand.miss_rate"), ("l2_miss_rate", "timing.l2.demand.miss_rate"),
     ("l1_mpkf", "timing.l1.rt_misses_per_kilo_node_fetch"), ("l2_mpkf", "timing.l2.rt_misses_per_kilo_node_fetch"),
