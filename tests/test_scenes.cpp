@@ -1,6 +1,8 @@
 // Scenes: built-in procedural scenes, mesh readers (numbering, fans, errors), folders, BVH image.
 #include <gtest/gtest.h>
 
+#include <chrono>
+
 #include <algorithm>
 #include <set>
 
@@ -288,6 +290,23 @@ TEST(MeshFiles, ImporterBombStaysInItsLimits) {
     getrusage(RUSAGE_CHILDREN, &children);
     EXPECT_LT(self_after.ru_maxrss - self_before.ru_maxrss, 256L << 10) << "KiB taken in this process";
     EXPECT_LT(children.ru_maxrss, 2560L << 10) << "KiB taken by the importer's process";
+}
+
+// Found by fuzz/fuzz_mesh: 88 bytes named .gltf holding a broken binary PLY kept Assimp's PLY
+// reader busy until the importer's CPU limit, then 30 s: longer than any input under 1 MB may
+// take. The limit is now 5 s + 1 s/MB: bad input within that.
+TEST(MeshFiles, ImporterThatSpinsStopsWithinItsCpuLimit) {
+    TempDir dir;
+    const unsigned char bytes[] = {'p', 'l', 'y', '\n', 'f', 'o', 'r', 'm', 'a', 't', ' ', 'b', 'i', 'n', 'a', 'r', 'y', '_', 'l', 'i', 't', 't', 'l',
+                                   'O', 'F', 'F', 'e', '_', 'e', 'n', 'd', 'i', ' ', 0, 0, 0, 0x80, 0x3f, 0, 0, 0, 0, 3, 0, 0, 0, 0, 1, 0, 0,
+                                   0, 2, 0, 0, 0, 'm', 'a', 't', ' ', 'b', 'i', 'n', 'a', 'r', 'y', '_', 'l', 'i', 't', 't', 'l', 'e', '_',
+                                   'e', 'n', 'd', 'i', 'a', 'n', ' ', '1', '.', '0', '\n', 'e', 'l', 'e'};
+    const std::string path = write_text(dir.file("spin.gltf"), std::string(reinterpret_cast<const char*>(bytes), sizeof bytes));
+    const auto t0 = std::chrono::steady_clock::now();
+    const std::string err = load_error(path);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    EXPECT_NE(err.find("spin.gltf: "), std::string::npos) << err;
+    EXPECT_LT(seconds, 15.0) << err;  // 5 s of CPU, or 15 s of wall time, at most
 }
 
 // Found by fuzz/fuzz_mesh: an OFF body in a .glb file reaches Assimp's OFF reader (it sniffs the

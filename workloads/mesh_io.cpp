@@ -527,7 +527,9 @@ void load_assimp(Scene& scene, Mesh& mesh, const std::string& path) {
 // Assimp trusts the sizes a file declares: a 50-byte GLB whose JSON chunk claims 4 GB made it
 // allocate 4.2 GB and run for over a minute, and its asserts abort the process. So it runs in a
 // forked child with limits on its address space (what the process had at the fork plus 2 GiB plus
-// 16 bytes per byte of the file) and CPU time (30 s plus 1 s per MB); the child sends the mesh
+// 16 bytes per byte of the file) and CPU time (5 s plus 1 s per MB: an 88-byte ".gltf" holding a
+// broken PLY kept Assimp's PLY reader busy until the old limit of 30 s, so a 1 MB input could take
+// over 30 s; Assimp reads a real 1 MB glTF in well under a second); the child sends the mesh
 // back through a pipe, and any failure there (an exception, running out of memory, an abort, a
 // crash, the CPU limit, twice that in wall time) is an InputError naming the file. Under
 // AddressSanitizer, whose shadow memory takes terabytes of address space, the address-space limit
@@ -645,10 +647,10 @@ void load_assimp_isolated(Scene& scene, Mesh& mesh, const std::string& path) {
         const rlimit as_limit{as, as};
         setrlimit(RLIMIT_AS, &as_limit);
 #endif
-        const rlim_t cpu = rlim_t(30 + (ec ? 0 : file_bytes >> 20));
+        const rlim_t cpu = rlim_t(5 + (ec ? 0 : file_bytes >> 20));
         const rlimit cpu_limit{cpu, cpu + 1};
         setrlimit(RLIMIT_CPU, &cpu_limit);
-        alarm(unsigned(2 * cpu + 10));  // and in wall time, should it block (on a FIFO it names, say)
+        alarm(unsigned(2 * cpu + 5));  // and in wall time, should it block (on a FIFO it names, say)
         const std::string out = import_in_child(path);
         for (size_t done = 0; done < out.size();) {
             const ssize_t n = write(fd[1], out.data() + done, out.size() - done);
