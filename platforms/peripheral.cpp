@@ -168,7 +168,8 @@ struct RtUnitPeripheral::Impl {
     sc_event start, irq_update, abort;
     bool chain = false;  // the accepted START's mode
     bool abort_requested = false;
-    bool in_reset = false;  // rst is high: the job engine resets the registers when the job it runs ends
+    bool in_reset = false;       // rst is high: START is ignored
+    bool reset_pending = false;  // rst rose during a job: the job engine resets the registers when it ends (a short pulse too)
     std::vector<tlm::tlm_dmi> dmi;  // regions granted on `mem`
     uint64_t desc_addr = 0;
     Job latched;
@@ -220,6 +221,7 @@ void RtUnitPeripheral::on_reset() {
     m.in_reset = rst->read();
     if (!m.in_reset) return;
     if (m.regs.state.busy) {  // ended like ABORT; the job engine then resets the registers
+        m.reset_pending = true;
         m.abort_requested = true;
         m.feeder.abort();
         m.abort.notify(SC_ZERO_TIME);
@@ -511,7 +513,7 @@ void RtUnitPeripheral::run_jobs() {
                     error = e;
                 }
                 const uint64_t job_cycles = m.core.cycle_at_or_after(sc_time_stamp() - job_from);
-                if (m.in_reset) break;  // reset: no memory access after the edge, not even the completion record
+                if (m.reset_pending) break;  // reset: no memory access after the edge, not even the completion record
                 if (m.chain) {  // the completion half, then its status word last
                     rtu_job_desc c{};
                     c.rays = uint32_t(std::min<uint64_t>(r.rays, UINT32_MAX));
@@ -553,7 +555,8 @@ void RtUnitPeripheral::run_jobs() {
             SC_REPORT_WARNING(name(), ("job failed: error code " + std::to_string(e.code) + " (rtunit/rtu_regs.h RTU_ERR_*) at " + addr).c_str());
         }
         m.regs.count(RTU_PERF_BUSY_CYCLES, m.core.cycle_at_or_after(sc_time_stamp() - busy_from));
-        if (m.in_reset) {  // rst rose during the job: it ends with every register at its reset value
+        if (m.reset_pending) {  // rst rose during the job: it ends with every register at its reset value
+            m.reset_pending = false;
             m.regs.reset();
             m.irq_update.notify(SC_ZERO_TIME);
             continue;

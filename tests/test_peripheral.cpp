@@ -146,10 +146,11 @@ void program_job(Cpu& cpu, const Inputs& in, uint64_t bvh_at, uint32_t job_id = 
 // the image and the rays are read, so the rays are being traced (for about 900 cycles).
 void start_and_wait_for_tracing(Bench& b, const Inputs& in) {
     Cpu& c = b.cpu;
+    const uint64_t before = b.ram.bytes_read;
     c.wr(RTU_INT_ENABLE, RTU_INT_ALL);
     program_job(c, in, kBvhAt);
     c.wr(RTU_CTRL, RTU_CTRL_START);
-    while (b.ram.bytes_read < in.image.size() + in.rays.size() * sizeof(rtu_ray)) wait(20, SC_NS);
+    while (b.ram.bytes_read - before < in.image.size() + in.rays.size() * sizeof(rtu_ray)) wait(20, SC_NS);
     EXPECT_TRUE(c.rd(RTU_STATUS) & RTU_STATUS_BUSY);
 }
 
@@ -759,6 +760,7 @@ TEST(Peripheral, ResetLineAbortsAndResetsThenTheNextJobRuns) {
     in.load(b.ram, kBvhAt);
     uint32_t status_in_reset = ~0u, int_status_in_reset = ~0u, ray_count_in_reset = ~0u, status_start_in_reset = ~0u;
     uint64_t writes_after_reset = ~0ull;
+    uint32_t status_after_pulse = ~0u;
     bool irq_in_reset = true, second_done = false;
     b.cpu.script = [&] {
         Cpu& c = b.cpu;
@@ -775,6 +777,13 @@ TEST(Peripheral, ResetLineAbortsAndResetsThenTheNextJobRuns) {
         status_start_in_reset = c.rd(RTU_STATUS);
         rst.write(false);
         wait(10, SC_NS);
+        // A pulse of 1 ns during a job resets as well, although rst is low again when the job ends.
+        start_and_wait_for_tracing(b, in);
+        rst.write(true);
+        wait(1, SC_NS);
+        rst.write(false);
+        wait(2, SC_US);
+        status_after_pulse = c.rd(RTU_STATUS);
         c.wr(RTU_INT_ENABLE, RTU_INT_ALL);
         program_job(c, in, kBvhAt);
         c.wr(RTU_CTRL, RTU_CTRL_START);
@@ -788,6 +797,7 @@ TEST(Peripheral, ResetLineAbortsAndResetsThenTheNextJobRuns) {
     EXPECT_FALSE(irq_in_reset);
     EXPECT_EQ(writes_after_reset, 0u);   // the first job wrote no hit
     EXPECT_EQ(status_start_in_reset, 0u);
+    EXPECT_EQ(status_after_pulse, 0u);
     EXPECT_TRUE(second_done);
     EXPECT_EQ(differing_hits(b.ram, in.hit_at(kBvhAt), in.reference()), 0u);
 }
