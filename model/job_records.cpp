@@ -11,8 +11,8 @@ JobSpec job_of_descriptor(const rtu_job_desc& d) {
     JobSpec j;
     j.bvh_base = d.bvh_base, j.bvh_size = d.bvh_size, j.ray_base = d.ray_base, j.hit_base = d.hit_base;
     j.ray_count = d.ray_count, j.flags = d.flags, j.job_id = d.job_id, j.next = d.next;
-    j.ray_stride = d.ray_stride ? d.ray_stride : uint32_t(sizeof(rtu_ray));
-    j.hit_stride = d.hit_stride ? d.hit_stride : uint32_t(sizeof(rtu_hit));
+    j.ray_stride = job_stride(d.ray_stride, sizeof(rtu_ray));
+    j.hit_stride = job_stride(d.hit_stride, sizeof(rtu_hit));
     return j;
 }
 

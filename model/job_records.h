@@ -28,7 +28,10 @@ struct JobSpec {
     uint64_t bvh_base = 0, bvh_size = 0, ray_base = 0, hit_base = 0, next = 0;
     uint32_t ray_count = 0, ray_stride = sizeof(rtu_ray), hit_stride = sizeof(rtu_hit), flags = 0, job_id = 0;
 };
-// A descriptor's job (a stride of 0 means the record's size); its magic is the caller's check.
+// A job's stride as software wrote it (a descriptor's field or the STRIDES register): 0 means the
+// record's own size.
+inline uint32_t job_stride(uint32_t field, uint32_t record_bytes) { return field == 0 ? record_bytes : field; }
+// A descriptor's job (strides by job_stride); its magic is the caller's check.
 JobSpec job_of_descriptor(const rtu_job_desc& d);
 // The first error a job's own fields give, before any memory is read: an RTU_ERR_* code (0:
 // none) and the address it concerns. Sizes beyond RTU_MAX_BVH_BYTES and RTU_MAX_RAYS are refused

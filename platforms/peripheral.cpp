@@ -56,7 +56,6 @@ struct JobError {
     uint64_t addr;
 };
 
-uint32_t stride_or_default(uint32_t s, uint32_t dflt) { return s == 0 ? dflt : s; }
 
 // What one job did, for the completion record and the counters.
 struct JobResult {
@@ -174,6 +173,13 @@ struct RtUnitPeripheral::Impl {
     uint64_t desc_addr = 0;
     Job latched;
 
+    // ABORT, and a reset during a job: the job engine ends the job at its next step.
+    void request_abort(const sc_time& delay) {
+        abort_requested = true;
+        feeder.abort();
+        abort.notify(delay);
+    }
+
     Impl(const PeripheralConfig& c, TraversalOrder o, const HwConfig& h, Fidelity f)
         : pc(c), order(o), hw(h), fidelity(f),
           regs(std::min<uint32_t>(h.sms, 255) | std::min<uint32_t>(h.warp_size, 255) << 8 | std::min<uint32_t>(h.warp_buffer, 255) << 16 |
@@ -222,9 +228,7 @@ void RtUnitPeripheral::on_reset() {
     if (!m.in_reset) return;
     if (m.regs.state.busy) {  // ended like ABORT; the job engine then resets the registers
         m.reset_pending = true;
-        m.abort_requested = true;
-        m.feeder.abort();
-        m.abort.notify(SC_ZERO_TIME);
+        m.request_abort(SC_ZERO_TIME);
     } else {
         m.regs.reset();
     }
@@ -262,19 +266,15 @@ void RtUnitPeripheral::b_transport(tlm::tlm_generic_payload& t, sc_time& delay) 
             j.ray_base = m.regs.pair(RTU_RAY_BASE_LO);
             j.hit_base = m.regs.pair(RTU_HIT_BASE_LO);
             j.ray_count = m.regs.word(RTU_RAY_COUNT);
-            j.ray_stride = stride_or_default(m.regs.word(RTU_STRIDES) & 0xFFFFu, sizeof(rtu_ray));
-            j.hit_stride = stride_or_default(m.regs.word(RTU_STRIDES) >> 16, sizeof(rtu_hit));
+            j.ray_stride = job_stride(m.regs.word(RTU_STRIDES) & 0xFFFFu, sizeof(rtu_ray));
+            j.hit_stride = job_stride(m.regs.word(RTU_STRIDES) >> 16, sizeof(rtu_hit));
             j.flags = m.regs.word(RTU_JOB_FLAGS);
             j.job_id = m.regs.word(RTU_JOB_ID);
             j.next = 0;
             m.start.notify(delay);
         }
     }
-    if (c.abort && s.busy) {  // the job engine ends the job, then sets ABORTED
-        m.abort_requested = true;
-        m.feeder.abort();
-        m.abort.notify(delay);
-    }
+    if (c.abort && s.busy) m.request_abort(delay);  // the job engine ends the job, then sets ABORTED
     if (c.irq_changed) m.irq_update.notify(delay);
 }
 
