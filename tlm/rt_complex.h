@@ -5,12 +5,14 @@
 // one; an SoC peripheral would build another around its own trace source. It has no process-wide
 // side effects: it sets no global quantum, no report actions, and never stops or starts the
 // simulation, so several may live in one simulation.
-// LT: one thread (lt_schedule) runs the RT units' cycles quantum by quantum, each unit's cycles of
-// the quantum in turn (SM k first in the k-th quantum with work, then k + 1, ...), ahead of
-// simulated time, then waits for the next quantum with work. The quantum is sim.quantum core
-// cycles, or a platform's global quantum where that is smaller. With a thread per unit, the
-// kernel chose which unit ran its quantum first, and any other process in the simulation
-// (rtsim's own monitor) changed that choice and LT's cycles.
+// LT: one thread (lt_schedule) runs the RT units' cycles quantum by quantum, ahead of simulated
+// time, then waits for the next quantum with work. Within a quantum it steps the units cycle by
+// cycle (each cycle's first unit rotating: the unit of SM c mod n first in cycle c), so that the
+// memory they share sees their requests nearly in time order; the quantum only sets how often the
+// thread synchronises with the kernel. The quantum is sim.quantum core cycles, or a platform's
+// global quantum where that is smaller. With a thread per unit, the kernel chose which unit ran
+// its quantum first, and any other process in the simulation (rtsim's own monitor) changed that
+// choice and LT's cycles.
 #pragma once
 #include <memory>
 #include <vector>
@@ -70,7 +72,6 @@ private:
     ClockDomain core_, mem_;
     bool started_ = false;   // start_job has set the epoch
     sc_core::sc_event work_;  // LT: a job started
-    uint64_t window_ = 0;     // LT: windows run so far (of the current job): who goes first
     bool follow_global_quantum_ = true;
     sc_core::sc_time quantum_;  // LT: sim.quantum core cycles
     PayloadPool pool_;
