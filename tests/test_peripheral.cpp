@@ -23,6 +23,7 @@
 #include "model/node_format.h"
 #include "platforms/soc_vp.h"
 #include "test_util.h"
+#include "tlm/protocol_checker.h"
 #include "tlm/rtu_registers.h"
 #include "workloads/bvh_builder.h"
 #include "workloads/rays.h"
@@ -39,23 +40,32 @@ constexpr uint64_t kBvhAt = 0x81234040;  // 64 B aligned, deliberately no power 
 using vp::Cpu;
 using vp::Ram;
 
+// The peripheral between a scripted CPU and a RAM, a protocol checker (tlm/protocol_checker.h)
+// on each of its sockets: every test built on it also checks that the peripheral keeps the base
+// protocol's rules of blocking and debug transport and DMI, as a target on `regs` and as an
+// initiator on `mem`.
 struct Bench {
     Ram ram{"ram", kRamBase, kRamBytes};
     Cpu cpu{"cpu"};
     RtUnitPeripheral rtu;
+    ProtocolChecker regs_check{"regs_check"}, mem_check{"mem_check"};
     sc_signal<bool> line{"rtu_irq"};
     // The RAM grants no DMI unless asked: the tests of timing and traffic watch its transactions.
     explicit Bench(const PeripheralConfig& cfg, bool dmi = false) : rtu("rtu", cfg) {
         ram.dmi = dmi;
-        cpu.bus.bind(rtu.regs);
+        cpu.bus.bind(regs_check.in);
+        regs_check.out.bind(rtu.regs);
         cpu.reg_base = kRegBase;
-        rtu.mem.bind(ram.in);
+        rtu.mem.bind(mem_check.in);
+        mem_check.out.bind(ram.in);
         rtu.irq.bind(line);
         cpu.irq.bind(line);
     }
     ~Bench() {
         EXPECT_TRUE(cpu.ok) << "a register access answered an error";
         EXPECT_EQ(ram.violations, 0u) << "the peripheral broke a rule of blocking transport on mem";
+        for (const ProtocolChecker* c : {&regs_check, &mem_check})
+            EXPECT_TRUE(c->violations().empty()) << c->violations().front();
     }
 };
 
@@ -313,6 +323,8 @@ TEST_P(PeripheralJob, HitsEqualTheReferenceAndCyclesEqualRtsim) {
     ASSERT_TRUE(b.cpu.finished);
     ASSERT_TRUE(irq_came);
     EXPECT_EQ(int_status, RTU_INT_JOB_DONE);
+    EXPECT_GT(b.regs_check.transactions(), 10u);  // the checkers saw the traffic (Bench asserts no violation)
+    EXPECT_GT(b.mem_check.transactions(), in.rays.size() / 64);
     EXPECT_TRUE(line_low_after_clear);
     EXPECT_EQ(status & 0xFFFFu, RTU_STATUS_DONE);
     EXPECT_EQ(differing_hits(b.ram, in.hit_at(kBvhAt), want), 0u);

@@ -2,6 +2,8 @@
 // builds one platform and runs it once (ctest runs each case in its own process).
 #include <gtest/gtest.h>
 
+#include <cstring>
+
 #include <systemc>
 
 #include "platforms/functional_run.h"
@@ -20,6 +22,8 @@
 
 #include <glm/common.hpp>
 #include <tlm_utils/peq_with_get.h>
+#include <tlm_utils/simple_initiator_socket.h>
+#include <tlm_utils/simple_target_socket.h>
 #include "workloads/bvh_builder.h"
 #include "workloads/scenes.h"
 
@@ -275,6 +279,105 @@ TEST(ProtocolChecker, DetectsViolations) {
     a->release();
     b->release();
     EXPECT_EQ(pool.outstanding(), 0u);
+}
+
+// The checker's rules of blocking transport, debug transport and DMI, each broken once: by an
+// initiator calling from a method process, handing over a status already set and no data; by a
+// target leaving the status incomplete and changing the data length; by a DMI grant beside the
+// address. A well-behaved exchange through the checker adds nothing.
+namespace {
+struct BlockingTarget : sc_core::sc_module {
+    tlm_utils::simple_target_socket<BlockingTarget> in{"in"};
+    unsigned char mem[64] = {};
+    explicit BlockingTarget(sc_core::sc_module_name n) : sc_module(n) {
+        in.register_b_transport(this, &BlockingTarget::b_transport);
+        in.register_transport_dbg(this, &BlockingTarget::transport_dbg);
+    }
+    void b_transport(tlm::tlm_generic_payload& t, sc_core::sc_time& d) {
+        std::memcpy(t.get_data_ptr(), mem, t.get_data_length());
+        d += sc_core::sc_time(10, sc_core::SC_NS);
+        t.set_response_status(tlm::TLM_OK_RESPONSE);
+    }
+    unsigned transport_dbg(tlm::tlm_generic_payload& t) { return t.get_data_length(); }
+};
+struct BlockingInitiator : sc_core::sc_module {
+    tlm_utils::simple_initiator_socket<BlockingInitiator> out{"out"};
+    bool from_method = false;
+    SC_HAS_PROCESS(BlockingInitiator);
+    explicit BlockingInitiator(sc_core::sc_module_name n) : sc_module(n) {
+        SC_THREAD(thread);
+        SC_METHOD(method);
+    }
+    void read(uint64_t addr) {
+        unsigned char data[4];
+        tlm::tlm_generic_payload t;
+        t.set_read();
+        t.set_address(addr);
+        t.set_data_ptr(data);
+        t.set_data_length(4);
+        t.set_streaming_width(4);
+        t.set_response_status(tlm::TLM_INCOMPLETE_RESPONSE);
+        sc_core::sc_time d = sc_core::SC_ZERO_TIME;
+        out->b_transport(t, d);
+        EXPECT_TRUE(t.is_response_ok());
+        EXPECT_EQ(out->transport_dbg(t), 4u);
+    }
+    void thread() { read(0); }
+    void method() {
+        if (from_method) read(4);
+    }
+};
+}  // namespace
+
+TEST(ProtocolChecker, DetectsBlockingTransportViolations) {
+    FsResolution resolution;
+    BlockingInitiator clean("clean"), wrong("wrong");
+    wrong.from_method = true;
+    BlockingTarget target_a("target_a"), target_b("target_b");
+    ProtocolChecker chk_clean("chk_clean"), chk_wrong("chk_wrong");
+    clean.out.bind(chk_clean.in);
+    chk_clean.out.bind(target_a.in);
+    wrong.out.bind(chk_wrong.in);
+    chk_wrong.out.bind(target_b.in);
+    sc_core::sc_start();
+    EXPECT_EQ(chk_clean.transactions(), 1u);
+    EXPECT_TRUE(chk_clean.violations().empty()) << chk_clean.violations().front();
+    ASSERT_EQ(chk_wrong.violations().size(), 1u);
+    EXPECT_NE(chk_wrong.violations()[0].find("method process"), std::string::npos) << chk_wrong.violations()[0];
+
+    // By hand: an initiator's payload with its status already set and no data pointer; then a
+    // target that leaves the status incomplete and shortens the data.
+    ProtocolChecker& chk = chk_clean;
+    const size_t before = chk.violations().size();
+    tlm::tlm_generic_payload t;
+    t.set_write();
+    t.set_data_length(8);
+    t.set_streaming_width(8);
+    t.set_response_status(tlm::TLM_OK_RESPONSE);
+    const ProtocolChecker::Request r = chk.check_b_request(t);
+    ASSERT_EQ(chk.violations().size(), before + 2);
+    EXPECT_NE(chk.violations()[before].find("without a data pointer"), std::string::npos);
+    EXPECT_NE(chk.violations()[before + 1].find("must be TLM_INCOMPLETE_RESPONSE"), std::string::npos);
+    t.set_response_status(tlm::TLM_INCOMPLETE_RESPONSE);
+    t.set_data_length(4);
+    chk.check_b_response(t, r);
+    ASSERT_EQ(chk.violations().size(), before + 4);
+    EXPECT_NE(chk.violations()[before + 2].find("returned TLM_INCOMPLETE_RESPONSE"), std::string::npos);
+    EXPECT_NE(chk.violations()[before + 3].find("changed the command, data pointer, data length"), std::string::npos);
+    // A DMI grant of [0x100, 0x1FF] for a transaction at 0x80.
+    unsigned char mem[256];
+    tlm::tlm_dmi d;
+    d.set_start_address(0x100);
+    d.set_end_address(0x1FF);
+    d.set_dmi_ptr(mem);
+    d.allow_read();
+    t.set_address(0x80);
+    chk.check_dmi_grant(t, d);
+    ASSERT_EQ(chk.violations().size(), before + 5);
+    EXPECT_NE(chk.violations()[before + 4].find("does not cover"), std::string::npos);
+    t.set_address(0x180);
+    chk.check_dmi_grant(t, d);
+    EXPECT_EQ(chk.violations().size(), before + 5);
 }
 
 // The RT unit tracks its chunks in flight in a ring indexed by chunk id. A response held back

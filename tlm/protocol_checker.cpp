@@ -7,7 +7,10 @@ using namespace sc_core;
 ProtocolChecker::ProtocolChecker(sc_module_name name) : sc_module(name), in("in"), out("out") {
     in.register_nb_transport_fw(this, &ProtocolChecker::nb_transport_fw);
     in.register_b_transport(this, &ProtocolChecker::b_transport);
+    in.register_transport_dbg(this, &ProtocolChecker::transport_dbg);
+    in.register_get_direct_mem_ptr(this, &ProtocolChecker::get_direct_mem_ptr);
     out.register_nb_transport_bw(this, &ProtocolChecker::nb_transport_bw);
+    out.register_invalidate_direct_mem_ptr(this, &ProtocolChecker::invalidate_direct_mem_ptr);
 }
 
 void ProtocolChecker::violation(const std::string& what) {
@@ -118,6 +121,54 @@ tlm::tlm_sync_enum ProtocolChecker::nb_transport_bw(tlm::tlm_generic_payload& t,
     return r;
 }
 
-void ProtocolChecker::b_transport(tlm::tlm_generic_payload& t, sc_time& d) { out->b_transport(t, d); }
+ProtocolChecker::Request ProtocolChecker::check_b_request(const tlm::tlm_generic_payload& t) {
+    sc_process_handle p = sc_get_current_process_handle();
+    if (p.valid() && p.proc_kind() == SC_METHOD_PROC_) violation("b_transport called from a method process (it may wait)");
+    if (t.get_command() == tlm::TLM_IGNORE_COMMAND) violation("b_transport with TLM_IGNORE_COMMAND");
+    if (!t.get_data_ptr()) violation("b_transport without a data pointer");
+    if (t.get_data_length() == 0) violation("b_transport with zero data length");
+    if (t.get_streaming_width() == 0) violation("b_transport with zero streaming width");
+    if (t.get_byte_enable_ptr() && t.get_byte_enable_length() == 0) violation("byte-enable pointer with zero byte-enable length");
+    if (t.get_response_status() != tlm::TLM_INCOMPLETE_RESPONSE)
+        violation("b_transport handed over with response status " + t.get_response_string() + " (must be TLM_INCOMPLETE_RESPONSE)");
+    ++transactions_;
+    return {t.get_command(), t.get_data_ptr(), t.get_byte_enable_ptr(), t.get_data_length(), t.get_streaming_width(), t.get_byte_enable_length()};
+}
+
+void ProtocolChecker::check_b_response(const tlm::tlm_generic_payload& t, const Request& r) {
+    if (t.get_response_status() == tlm::TLM_INCOMPLETE_RESPONSE) violation("b_transport returned TLM_INCOMPLETE_RESPONSE");
+    if (t.get_command() != r.command || t.get_data_ptr() != r.data || t.get_data_length() != r.length ||
+        t.get_streaming_width() != r.streaming_width || t.get_byte_enable_ptr() != r.byte_enable || t.get_byte_enable_length() != r.byte_enable_length)
+        violation("the target changed the command, data pointer, data length, streaming width or byte enables");
+}
+
+void ProtocolChecker::check_dmi_grant(const tlm::tlm_generic_payload& t, const tlm::tlm_dmi& d) {
+    if (t.get_address() < d.get_start_address() || t.get_address() > d.get_end_address())
+        violation("a DMI grant that does not cover the transaction's address");
+    if (!d.get_dmi_ptr()) violation("a DMI grant without a pointer");
+    if (!d.is_read_allowed() && !d.is_write_allowed()) violation("a DMI grant that allows neither read nor write");
+}
+
+void ProtocolChecker::b_transport(tlm::tlm_generic_payload& t, sc_time& d) {
+    const Request r = check_b_request(t);
+    out->b_transport(t, d);
+    check_b_response(t, r);
+}
+
+unsigned ProtocolChecker::transport_dbg(tlm::tlm_generic_payload& t) {
+    const sc_time now = sc_time_stamp();
+    const unsigned n = out->transport_dbg(t);
+    if (n > t.get_data_length()) violation("transport_dbg returned more bytes than the data length");
+    if (sc_time_stamp() != now) violation("transport_dbg took simulated time");
+    return n;
+}
+
+bool ProtocolChecker::get_direct_mem_ptr(tlm::tlm_generic_payload& t, tlm::tlm_dmi& d) {
+    const bool granted = out->get_direct_mem_ptr(t, d);
+    if (granted) check_dmi_grant(t, d);
+    return granted;
+}
+
+void ProtocolChecker::invalidate_direct_mem_ptr(sc_dt::uint64 start, sc_dt::uint64 end) { in->invalidate_direct_mem_ptr(start, end); }
 
 }  // namespace rtu
