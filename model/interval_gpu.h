@@ -16,9 +16,10 @@
 // sector remembers the cycle its data arrives (a later read before then waits for it, as an
 // MSHR merge would), and MSHR counts are kept (a miss waits for a free one, as in LT). An L1 read
 // past the MSHR's merge limit is a reservation fail: it retries when the sector arrives, and the
-// RT unit's request port is held until then (END_REQ withheld, as in AT). Not modelled, against
-// AT: the warp scheduler's one-warp-per-cycle choice, the L2's merge limit, the DRAM's request
-// queue and FR-FCFS reordering.
+// RT unit's request port is held until then (END_REQ withheld, as in AT). The warp scheduler picks
+// one trace per SM and cycle, oldest first; threads of the others wait a cycle. Not modelled,
+// against AT: round robin among warps (mobile), the L2's merge limit, the DRAM's request queue and
+// FR-FCFS reordering.
 // Plain C++ (no SystemC).
 #pragma once
 #include <cstdint>
@@ -127,6 +128,7 @@ private:
     struct Trace {  // in a warp-buffer slot; reused
         uint32_t sm = 0, live = 0;  // live: threads not done
         uint64_t start = 0, end = 0;
+        uint64_t age = 0;  // order of entry into a warp buffer (the warp scheduler's oldest first)
         std::vector<Thread> threads;
     };
     // A thread's next node fetch, scheduled at `at`; or, with thread == kPrefetch, SM `trace`'s
@@ -141,6 +143,7 @@ private:
         bool l1_miss, dram;
     };
     void finish(uint32_t trace, std::vector<Finished>& finished);
+    void run_event(const Event& ev, std::vector<Finished>& finished);
     void send_prefetch(uint32_t sm, uint64_t cycle);
 
     std::vector<Trace> traces_;
@@ -151,6 +154,10 @@ private:
     FetchCoalescer<std::pair<uint32_t, uint64_t>> coalescer_;
     std::vector<Fetch> coalesced_;
     uint64_t coalesce_at_ = ~0ull;
+    std::vector<uint64_t> sched_cycle_;   // per SM: the last cycle its warp scheduler picked a trace
+    std::vector<uint32_t> sched_trace_;   // per SM: that trace
+    uint64_t next_age_ = 0;
+    std::vector<Event> batch_;            // the events of one cycle, in the order they run
 };
 
 }  // namespace rtu
