@@ -21,7 +21,9 @@ IntervalGpu::IntervalGpu(const HwConfig& cfg, const BvhImage& image, TraversalOr
       dram_(cfg.dram, map_),
       rt_(cfg.sms),
       sched_cycle_(cfg.sms, ~0ull),
-      sched_trace_(cfg.sms, ~0u) {
+      sched_trace_(cfg.sms, ~0u),
+      rr_next_(cfg.sms, 0),
+      slot_busy_(cfg.sms, std::vector<uint8_t>(cfg.warp_buffer, 0)) {
     if (order == TraversalOrder::Treelet)
         throw std::invalid_argument("the interval fidelity models DFS and BFS traversal, not treelet traversal (use --fidelity at or lt)");
     if (cfg.response_fifo != 0)
@@ -113,6 +115,12 @@ void IntervalGpu::start_trace(uint32_t sm, const std::vector<WarpRay>& rays, uin
     tr.sm = sm;
     tr.start = tr.end = start;
     tr.age = next_age_++;
+    // The first free warp-buffer slot, as the RT unit's accept_warp takes it.
+    std::vector<uint8_t>& busy = slot_busy_[sm];
+    const auto free_slot = std::find(busy.begin(), busy.end(), uint8_t(0));
+    if (free_slot == busy.end()) throw std::logic_error("interval: a trace started with every warp-buffer slot of its SM busy");
+    *free_slot = 1;
+    tr.slot = uint32_t(free_slot - busy.begin());
     tr.live = 0;
     tr.threads.resize(rays.size());
     for (uint32_t i = 0; i < rays.size(); ++i) {
@@ -138,6 +146,7 @@ void IntervalGpu::finish(uint32_t id, std::vector<Finished>& finished) {
         f.rays.push_back(t.rt.retired());
     }
     finished.push_back(std::move(f));
+    slot_busy_[tr.sm][tr.slot] = 0;
     free_traces_.push_back(id);
 }
 
@@ -189,11 +198,12 @@ void IntervalGpu::send_prefetch(uint32_t sm, uint64_t cycle) {
 
 uint64_t IntervalGpu::next_event() const { return events_.empty() ? ~0ull : events_.top().at; }
 
-// The events of one cycle run together, in the warp scheduler's order: the prefetch queues'
-// first (they only try the request port in this cycle, which no demand of this cycle books), then
-// the threads' fetches by their trace's age, oldest first (the TTP authors' scheduler picks the
-// first non-stalled warp in uid order, shader.cc l.3254-3267; mobile's round robin is not
-// modelled apart). No event of a cycle schedules another in the same cycle.
+// The events of one cycle run together, in the warp scheduler's order (model/warp_scheduler.h):
+// the prefetch queues first (they only try the request port in this cycle, which no demand of
+// this cycle books), then the threads' fetches, per SM by rt.warp_scheduler: round robin, the
+// slots from the one after the last picked; oldest first, by their trace's entry (the TTP
+// authors' scheduler, the first non-stalled warp in uid order, shader.cc l.3254-3267). No event
+// of a cycle schedules another in the same cycle.
 void IntervalGpu::run_next(std::vector<Finished>& finished) {
     const uint64_t at = events_.top().at;
     batch_.clear();
@@ -201,7 +211,13 @@ void IntervalGpu::run_next(std::vector<Finished>& finished) {
         batch_.push_back(events_.top());
         events_.pop();
     }
-    auto order = [&](const Event& e) { return e.thread == kPrefetch ? 0 : 1 + traces_[e.trace].age; };
+    const uint32_t slots = cfg_.warp_buffer;
+    const bool oldest = cfg_.warp_order == WarpOrder::OldestFirst;
+    auto order = [&](const Event& e) -> std::pair<uint64_t, uint64_t> {
+        if (e.thread == kPrefetch) return {0, 0};
+        const Trace& tr = traces_[e.trace];
+        return {1 + (oldest ? 0 : (tr.slot + slots - rr_next_[tr.sm]) % slots), tr.age};
+    };
     std::stable_sort(batch_.begin(), batch_.end(), [&](const Event& a, const Event& b) { return order(a) < order(b); });
     for (const Event& ev : batch_) run_event(ev, finished);
 }
@@ -228,6 +244,7 @@ void IntervalGpu::run_event(const Event& ev, std::vector<Finished>& finished) {
         events_.push({ev.at + 1, next_seq_++, ev.trace, ev.thread});
         return;
     }
+    if (sched_cycle_[sm] != ev.at) rr_next_[sm] = (tr.slot + 1) % cfg_.warp_buffer;
     sched_cycle_[sm] = ev.at;
     sched_trace_[sm] = ev.trace;
     PortCalendar& issue = issue_[sm];

@@ -17,9 +17,9 @@
 // MSHR merge would), and MSHR counts are kept (a miss waits for a free one, as in LT). An L1 read
 // past the MSHR's merge limit is a reservation fail: it retries when the sector arrives, and the
 // RT unit's request port is held until then (END_REQ withheld, as in AT). The warp scheduler picks
-// one trace per SM and cycle, oldest first; threads of the others wait a cycle. Not modelled,
-// against AT: round robin among warps (mobile), the L2's merge limit, the DRAM's request queue and
-// FR-FCFS reordering.
+// one trace per SM and cycle, by rt.warp_scheduler (round robin over the warp-buffer slots, or
+// oldest first); threads of the others wait a cycle. Not modelled, against AT: the L2's merge
+// limit, the DRAM's request queue and FR-FCFS reordering.
 // Plain C++ (no SystemC).
 #pragma once
 #include <cstdint>
@@ -128,7 +128,8 @@ private:
     struct Trace {  // in a warp-buffer slot; reused
         uint32_t sm = 0, live = 0;  // live: threads not done
         uint64_t start = 0, end = 0;
-        uint64_t age = 0;  // order of entry into a warp buffer (the warp scheduler's oldest first)
+        uint64_t age = 0;   // order of entry into a warp buffer (the warp scheduler's oldest first)
+        uint32_t slot = 0;  // its warp-buffer slot (the scheduler's round robin)
         std::vector<Thread> threads;
     };
     // A thread's next node fetch, scheduled at `at`; or, with thread == kPrefetch, SM `trace`'s
@@ -156,6 +157,8 @@ private:
     uint64_t coalesce_at_ = ~0ull;
     std::vector<uint64_t> sched_cycle_;   // per SM: the last cycle its warp scheduler picked a trace
     std::vector<uint32_t> sched_trace_;   // per SM: that trace
+    std::vector<uint32_t> rr_next_;       // per SM, round robin: the slot the scheduler looks at first
+    std::vector<std::vector<uint8_t>> slot_busy_;  // per SM and warp-buffer slot: holds a trace
     uint64_t next_age_ = 0;
     std::vector<Event> batch_;            // the events of one cycle, in the order they run
 };

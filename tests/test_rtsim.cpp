@@ -838,10 +838,8 @@ TEST(RtsimTiming, LtStatisticsDoNotDependOnTheQuantum) {
 
 // The interval fidelity against AT (docs/interval.md). Stated bound on these 32x32 frames:
 // within 5 % in total cycles and 8 % in TTP's speed-up over the baseline, with TTP a speed-up
-// in both (measured at 8168a82: bunny -0.1 % and 1.320x against 1.332x, ship -4.98 % and 1.516x
-// against 1.530x: ship sits at the bound since the interval fidelity's warp scheduler picks the
-// oldest trace, where mobile's AT scheduler goes round robin; docs/interval.md). Same inputs,
-// same statistics.
+// in both (measured with the interval fidelity's warp scheduler: ship -0.6 % and 1.584x against
+// 1.530x; docs/interval.md). Same inputs, same statistics.
 TEST(RtsimTiming, IntervalIsWithinTheStatedBoundOfAt) {
     RTU_NEED_SHARED_SCENES();
     TempDir dir;
