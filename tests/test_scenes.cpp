@@ -306,7 +306,10 @@ TEST(MeshFiles, ImporterThatSpinsStopsWithinItsCpuLimit) {
     const std::string err = load_error(path);
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     EXPECT_NE(err.find("spin.gltf: "), std::string::npos) << err;
-    EXPECT_LT(seconds, 15.0) << err;  // 5 s of CPU, or 15 s of wall time, at most
+    // 5 s of CPU, or 15 s of wall time, at most; on a machine busy with other jobs the CPU limit
+    // comes late and the wall limit ends it, plus the time to reap the importer (16.1 s once with
+    // six jobs on two cores): within the promise of 30 s for an input under 1 MB.
+    EXPECT_LT(seconds, 20.0) << err;
 }
 
 // Found by fuzz/fuzz_mesh: an OFF body in a .glb file reaches Assimp's OFF reader (it sniffs the
