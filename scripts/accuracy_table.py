@@ -12,7 +12,7 @@ root = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..")
 d = json.load(open(os.path.join(root, "platforms", "configs", "error_bounds.json")))
 b = d["bounds"]
 sizes = sorted({int(s) for f in b.values() for w in f.values() for s in w["by_size"]})
-names = {"lt": "`lt` (quantum 1,000)", "interval": "`interval`"}
+names = {"lt": "`lt` (any quantum)", "interval": "`interval`"}
 workloads = {"primary": "primary rays", "pt": f"path tracing, {d['grid']['spp']} spp"}
 lines = ["| fidelity | workload | " + " | ".join(f"{n}x{n}: mean / worst" if i == 0 else f"{n}x{n}" for i, n in enumerate(sizes)) + " |",
          "|---|---|" + "---|" * len(sizes)]

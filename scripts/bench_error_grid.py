@@ -9,7 +9,7 @@ Usage: scripts/bench_error_grid.py RTSIM OUTDIR [SCENES]
   SCENES: comma-separated from mesh (the Stanford bunny as a bare mesh, automatic camera), bunny,
   ship, bath, sprng, party, cornell, wknd; default mesh,bunny,ship,bath,sprng,party.
 Environment: PRIMARY_SIZES (64,128,256,512), PT_SIZES (64,128,256), CONFIGS (mobile,paper,
-paper+ttp,desktop; NAME+PREFETCHER), SEED (1), JOBS (2), SHARED (../shared/scenes beside the
+paper+ttp,desktop,mobile+ttp; NAME+PREFETCHER), SEED (1), JOBS (2), SHARED (../shared/scenes beside the
 repository), ANALYSE_ONLY (1: no runs, tables from the runs already in OUTDIR), COMMIT (the
 commit RTSIM was built from; default: the repository's HEAD)."""
 import concurrent.futures as cf
@@ -28,7 +28,7 @@ for n in ("bunny", "ship", "bath", "sprng", "party"):
 scenes = sys.argv[3].split(",") if len(sys.argv) > 3 else ["mesh", "bunny", "ship", "bath", "sprng", "party"]
 sizes = {"primary": [int(x) for x in os.environ.get("PRIMARY_SIZES", "64,128,256,512").split(",")],
          "pt": [int(x) for x in os.environ.get("PT_SIZES", "64,128,256").split(",")]}
-configs = os.environ.get("CONFIGS", "mobile,paper,paper+ttp,desktop").split(",")
+configs = os.environ.get("CONFIGS", "mobile,paper,paper+ttp,desktop,mobile+ttp").split(",")
 seed = int(os.environ.get("SEED", "1"))
 fids = ["at", "lt", "interval"]
 os.makedirs(out, exist_ok=True)
