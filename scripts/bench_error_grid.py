@@ -20,11 +20,10 @@ import os
 import subprocess
 import sys
 
+from bench_util import config_args, run_stats, scene_args
+
 rtsim, out = sys.argv[1], sys.argv[2]
-S = os.environ.get("SHARED", os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "shared", "scenes"))
-SC = {"mesh": f"--scene {S}/bunny/stanford-bunny.obj", "cornell": "--scene cornell", "wknd": "--scene wknd"}
-for n in ("bunny", "ship", "bath", "sprng", "party"):
-    SC[n] = f"--scene {n} --assets {S}/{n}"
+SC = scene_args()
 scenes = sys.argv[3].split(",") if len(sys.argv) > 3 else ["mesh", "bunny", "ship", "bath", "sprng", "party"]
 sizes = {"primary": [int(x) for x in os.environ.get("PRIMARY_SIZES", "64,128,256,512").split(",")],
          "pt": [int(x) for x in os.environ.get("PT_SIZES", "64,128,256").split(",")]}
@@ -35,13 +34,7 @@ os.makedirs(out, exist_ok=True)
 
 
 def run(key, args):
-    f = f"{out}/{key}.json"
-    if os.path.exists(f) or os.environ.get("ANALYSE_ONLY") == "1":
-        return key, 0, ""
-    p = subprocess.run(f"{rtsim} {args} --stats {f}.tmp -q", shell=True, capture_output=True, text=True)
-    if p.returncode == 0:
-        os.rename(f + ".tmp", f)
-    return key, p.returncode, p.stderr.strip()[-300:]
+    return (key,) + run_stats(rtsim, f"{out}/{key}.json", args, skip=os.environ.get("ANALYSE_ONLY") == "1")
 
 
 cases = []  # (scene, workload, size, config)
@@ -57,10 +50,7 @@ def key(c, fid):
 
 jobs = []
 for c in cases:
-    name, _, pf = c[3].partition("+")
-    base = f"{SC[c[0]]} --workload {c[1]} --width {c[2]} --height {c[2]} --seed {seed} --config {name}"
-    if pf:
-        base += f" --prefetcher {pf}"
+    base = f"{SC[c[0]]} --workload {c[1]} --width {c[2]} --height {c[2]} --seed {seed} {config_args(c[3])}"
     for fid in fids:
         jobs.append((key(c, fid), base + f" --fidelity {fid}"))
 fails = {}

@@ -20,11 +20,10 @@ import statistics
 import subprocess
 import sys
 
+from bench_util import config_args, run_stats, scene_args
+
 rtsim, out = sys.argv[1], sys.argv[2]
-S = os.environ.get("SHARED", os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "shared", "scenes"))
-SC = {"mesh": f"--scene {S}/bunny/stanford-bunny.obj", "cornell": "--scene cornell", "wknd": "--scene wknd"}
-for n in ("bunny", "ship", "bath", "sprng", "party"):
-    SC[n] = f"--scene {n} --assets {S}/{n}"
+SC = scene_args()
 DEFAULT = ("sprng:primary:128:desktop,bunny:primary:256:desktop,ship:primary:64:desktop,party:primary:64:mobile,"
            "bath:primary:128:paper,mesh:primary:128:mobile,party:primary:64:paper+ttp,sprng:pt:128:paper+ttp,"
            "ship:primary:256:mobile,bath:pt:128:mobile")
@@ -45,21 +44,12 @@ def key(c, d, fid):
 
 
 def run(k, args):
-    f = f"{out}/{k}.json"
-    if os.path.exists(f):
-        return k, 0, ""
-    p = subprocess.run(f"{rtsim} {args} --stats {f}.tmp -q", shell=True, capture_output=True, text=True)
-    if p.returncode == 0:
-        os.rename(f + ".tmp", f)
-    return k, p.returncode, p.stderr.strip()[-300:]
+    return (k,) + run_stats(rtsim, f"{out}/{k}.json", args)
 
 
 jobs = []
 for c in cases:
-    name, _, pf = c[3].partition("+")
-    base = f"{SC[c[0]]} --workload {c[1]} --width {c[2]} --height {c[2]} --config {name}"
-    if pf:
-        base += f" --prefetcher {pf}"
+    base = f"{SC[c[0]]} --workload {c[1]} --width {c[2]} --height {c[2]} {config_args(c[3])}"
     for d in DELTAS:
         for fid in FIDS:
             jobs.append((key(c, d, fid), f"{base} --set l2.latency={l2_latency(c[3]) + d} --fidelity {fid}"))

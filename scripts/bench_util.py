@@ -1,0 +1,33 @@
+"""What the benchmark scripts that run rtsim on the shared scenes share (bench_error_grid.py,
+bench_sensitivity.py): the scenes' arguments, a preset with its prefetcher, and one resumable run."""
+import os
+import subprocess
+
+SCENES_DIR = os.environ.get("SHARED", os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "shared", "scenes"))
+
+
+def scene_args(shared=SCENES_DIR):
+    """rtsim's arguments per scene name: mesh (the Stanford bunny as a bare mesh, automatic camera),
+    the built-in cornell and wknd, and the LumiBench scenes under `shared`."""
+    sc = {"mesh": f"--scene {shared}/bunny/stanford-bunny.obj", "cornell": "--scene cornell", "wknd": "--scene wknd"}
+    for n in ("bunny", "ship", "bath", "sprng", "party"):
+        sc[n] = f"--scene {n} --assets {shared}/{n}"
+    return sc
+
+
+def config_args(config):
+    """`NAME` or `NAME+PREFETCHER` as rtsim's --config (and --prefetcher) arguments."""
+    name, _, pf = config.partition("+")
+    return f"--config {name}" + (f" --prefetcher {pf}" if pf else "")
+
+
+def run_stats(rtsim, path, args, skip=False):
+    """rtsim ARGS with its statistics in PATH, unless PATH exists (or `skip`): written under
+    PATH.tmp and renamed when rtsim succeeds, so a killed run leaves no PATH. Returns (exit
+    status, the end of stderr)."""
+    if os.path.exists(path) or skip:
+        return 0, ""
+    p = subprocess.run(f"{rtsim} {args} --stats {path}.tmp -q", shell=True, capture_output=True, text=True)
+    if p.returncode == 0:
+        os.rename(path + ".tmp", path)
+    return p.returncode, p.stderr.strip()[-300:]
