@@ -25,7 +25,6 @@ std::string join(const std::vector<std::string>& v) {
     return s;
 }
 
-// The configuration `name` (NAME or NAME+PREFETCHER) of the grid, as a run would hold it.
 // A configuration's hardware: all but its `sim` keys (the LT quantum, the watchdog, the trace
 // window), which change no statistic of a run (test RtsimTiming.LtStatisticsDoNotDependOnTheQuantum).
 nlohmann::ordered_json hardware(nlohmann::ordered_json config) {
@@ -33,6 +32,7 @@ nlohmann::ordered_json hardware(nlohmann::ordered_json config) {
     return config;
 }
 
+// The hardware of the configuration `name` (NAME or NAME+PREFETCHER) of the grid, as a run would hold it.
 nlohmann::ordered_json grid_config(const std::string& name) {
     const size_t plus = name.find('+');
     Config c = Config::load(name.substr(0, plus));
