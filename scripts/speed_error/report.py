@@ -214,11 +214,14 @@ def main():
     if all(lts.values()):
         best = min(lts, key=lambda q: lts[q][1])
         fastest = max(lts, key=lambda q: lts[q][0])
+        same_error = len({tuple(round(x, 9) for x in lts[q][1:]) for q in lts}) == 1
         p("- **LT**: " + "; ".join(f"quantum {q:,}: {lts[q][0]:.2f}x faster than AT, cycles within {lts[q][1]:.2f} % on average "
                                   f"(worst {lts[q][2]:.2f} %), TTP speed-up within {lts[q][3]:.2f} %" for q in lts) +
-          f". The smallest error is at quantum {best:,}, the highest speed at quantum {fastest:,}" +
-          (f" ({lts[fastest][0] / lts[best][0]:.2f}x the speed of quantum {best:,} for {lts[fastest][1] - lts[best][1]:+.2f} points "
-           "of mean cycle error)." if fastest != best else "."))
+          (f". The error is the same at every quantum (LT's statistics do not depend on it); the highest speed is at "
+           f"quantum {fastest:,}." if same_error else
+           f". The smallest error is at quantum {best:,}, the highest speed at quantum {fastest:,}" +
+           (f" ({lts[fastest][0] / lts[best][0]:.2f}x the speed of quantum {best:,} for {lts[fastest][1] - lts[best][1]:+.2f} points "
+            "of mean cycle error)." if fastest != best else ".")))
     iv = row("interval")
     if iv:
         lt_best = min((r for r in lts.values() if r), key=lambda r: r[1], default=None)
