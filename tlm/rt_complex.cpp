@@ -74,7 +74,7 @@ void RtComplex::lt_schedule() {
         // 128x128) L2 misses waited 15 % less than in AT (median 331 cycles against 453), DRAM
         // row hits came out 18 % above AT's, and LT ran 8.7 % fast (now -1.8 % on that frame; over
         // five L2 latencies the bias went from -10.0 % to -7.7 %, docs/accuracy.md). The cost:
-        // 10-30 % more wall time (the units are stepped once per busy cycle, not once per window).
+        // 20-40 % more wall time (the units are stepped once per busy cycle, not once per window).
         const size_t n = rt_.size();
         for (;;) {
             uint64_t c = ~0ull;
