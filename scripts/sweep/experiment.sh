@@ -29,6 +29,8 @@ mkdir -p "$work"
 /usr/bin/python3 "$experiments" "$work/manifest.tsv" "${pass[@]}"
 status=0
 scripts/sweep/run.sh "${run_args[@]}" --jobs "$jobs" "$work/manifest.tsv" "$work" || status=$?
-if [ $status -eq 75 ] || [ $status -eq 2 ]; then exit $status; fi
+# No report from a sweep that was not run (75: submitted, not waited for; 2: bad usage) or was
+# stopped (130, or killed: 128 + N): the report in the tree stays the last complete one.
+if [ $status -eq 75 ] || [ $status -eq 2 ] || [ $status -ge 128 ]; then exit $status; fi
 /usr/bin/python3 "$report" "$work/results.csv" "$report_dir"
 exit $status

@@ -9,7 +9,8 @@
 #          --no-wait, --failed-only, --poll S)
 # Usage: run.sh [--engine local|slurm] [--jobs N] [slurm options] MANIFEST OUTDIR [JOBS]
 # Exit status: 0 done (local: failed runs are listed in results.csv with their exit status),
-# 1 runs failed (slurm; listed), 2 bad usage, 75 submitted and not waited for (slurm --no-wait).
+# 1 runs failed (slurm; listed), 2 bad usage, 75 submitted and not waited for (slurm --no-wait),
+# 130 stopped before every run had run (no results.csv written).
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 engine=local jobs=$(nproc) engine_args=() pos=()
@@ -37,7 +38,15 @@ case $engine in
   local)
     if [ ${#engine_args[@]} -gt 0 ]; then echo "run.sh: ${engine_args[*]}: options of the slurm engine" >&2; exit 2; fi
     echo "sweep: $n runs from $manifest, $jobs at a time, into $outdir" >&2
-    seq 1 "$n" | parallel --will-cite -j "$jobs" --joblog "+$outdir/joblog" "$here/worker.sh" "$manifest" {} "$outdir" || true ;;
+    # Failed runs are the collector's to list (parallel exits with their count). A sweep stopped
+    # on the way (Ctrl-C, kill: parallel then starts no more runs and exits as usual) leaves
+    # runs that never started, without a .status: no results.csv then, exit 130.
+    seq 1 "$n" | parallel --will-cite -j "$jobs" --joblog "+$outdir/joblog" "$here/worker.sh" "$manifest" {} "$outdir" || true
+    not_run=$(awk -F'\t' 'NR > 1 { print $3 }' "$manifest" | while read -r o; do [ -f "$outdir/$o.status" ] || echo x; done | wc -l)
+    if [ "$not_run" -gt 0 ]; then
+      echo "sweep: stopped with $not_run of $n runs not run; no results.csv written (the same command resumes)" >&2
+      exit 130
+    fi ;;
   slurm)
     echo "sweep: $n runs from $manifest as Slurm job arrays, into $outdir" >&2
     /usr/bin/python3 "$here/slurm.py" "$manifest" "$outdir" "${engine_args[@]}" || status=$?
