@@ -10,11 +10,10 @@ FID (at), SHARED (../shared/scenes beside the repository). Two runs at a time.
 The grids of docs/sampling.md:
   SIZES=128,256 RATES=0.25,0.5 scripts/bench_sampling_grid.py build/rtsim out/grid
   SIZES=256 RATES=0.1,0.25 PRESETS=mobile,paper scripts/bench_sampling_grid.py build/rtsim out/heldout ship,sprng"""
-import json, os, subprocess, sys, itertools, concurrent.futures as cf
+import json, os, sys, itertools, concurrent.futures as cf
+from bench_util import run_stats, scene_args
 rtsim, out = sys.argv[1], sys.argv[2]
-S = os.environ.get("SHARED", os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "shared", "scenes"))
-SC = {"mesh": f"--scene {S}/bunny/stanford-bunny.obj", "bunny": f"--scene bunny --assets {S}/bunny", "cornell": "--scene cornell",
-      "sprng": f"--scene sprng --assets {S}/sprng", "ship": f"--scene ship --assets {S}/ship"}
+SC = scene_args()
 scenes = sys.argv[3].split(",") if len(sys.argv) > 3 else ["mesh", "bunny", "cornell"]
 sizes = [int(x) for x in os.environ.get("SIZES", "64,128").split(",")]
 presets = os.environ.get("PRESETS", "mobile,desktop").split(",")
@@ -23,11 +22,7 @@ seeds = range(1, int(os.environ.get("SEEDS", "4")) + 1)
 fid = os.environ.get("FID", "at")
 os.makedirs(out, exist_ok=True)
 def run(key, args):
-    f = f"{out}/{key}.json"
-    if os.path.exists(f): return key, 0, ""
-    p = subprocess.run(f"{rtsim} {args} --stats {f}.tmp -q", shell=True, capture_output=True, text=True)
-    if p.returncode == 0: os.rename(f + ".tmp", f)
-    return key, p.returncode, p.stderr.strip()[-300:]
+    return (key,) + run_stats(rtsim, f"{out}/{key}.json", args)
 jobs = []
 for sc, n, pre in itertools.product(scenes, sizes, presets):
     base = f"{SC[sc]} --width {n} --height {n} --config {pre} --fidelity {fid}"

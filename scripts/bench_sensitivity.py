@@ -90,7 +90,8 @@ for c in cases:
     summary["at_spread"].append(max(abs(s) for s in spread))
     cells = [":".join(c), f"{at[0]:,}", f"{100 * min(spread):+.1f} .. {100 * max(spread):+.1f} %"]
     for fid in ("lt", "interval"):
-        err = [cycles(c, d, fid) / at[d] - 1 for d in DELTAS if cycles(c, d, fid)]
+        got = {d: cycles(c, d, fid) for d in DELTAS}
+        err = [got[d] / at[d] - 1 for d in DELTAS if got[d]]
         if len(err) < len(DELTAS):
             cells += ["-", "-"]
             continue

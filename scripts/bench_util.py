@@ -1,5 +1,6 @@
 """What the benchmark scripts that run rtsim on the shared scenes share (bench_error_grid.py,
-bench_sensitivity.py): the scenes' arguments, a preset with its prefetcher, and one resumable run."""
+bench_sensitivity.py, bench_sampling_grid.py): the scenes' arguments, a preset with its
+prefetcher, and one resumable run."""
 import os
 import subprocess
 
