@@ -121,7 +121,7 @@ ErrorEstimate estimate_error(const RunSpec& spec, const TimingResult& t, const s
     if (t.sampled) {
         if (!t.estimate.design.has_interval) {
             e.kind = "none";
-            e.basis = "a sample of fewer than 10 strata (--sample-unchecked) has no interval";
+            e.basis = "a sample too small for an interval (fewer than 10 strata, or segments of fewer than 16 clusters; --sample-unchecked) has none";
             return e;
         }
         sampling = t.estimate.relative_half_width(double(t.cycles_simulated));

@@ -98,9 +98,7 @@ struct GpuPlatform::Impl {
     Impl(const HwConfig& c, const BvhImage& img, Workload& w, const TimingOptions& o)
         : cfg(c), image(img), opt(o),
           // Treelet traversal (and with it the Treelet prefetcher, which needs it) works on treelets.
-          treelets(o.order == TraversalOrder::Treelet ? std::make_unique<Treelets>(form_treelets(img, c.prefetch.treelet_budget, c.prefetch.treelet_contiguous,
-                                                                                                     c.prefetch.treelet_stride))
-                                                      : nullptr),
+          treelets(traversal_treelets(c, img, o.order)),
           driver(w, c.sms, c.warp_size, c.shade_latency, c.resident_warps, sampling_options(c, img, o, treelets.get())),
           gpu("gpu", c, img, o.order, driver, o.fidelity, treelets.get(), o.check_protocol),
           core(gpu.core_clock()),
@@ -278,6 +276,7 @@ TimingResult GpuPlatform::run() {
     r.counts.dram = m.gpu.dram().stats();
     r.sampled = m.driver.sampled();
     r.estimate = est;
+    if (m.driver.segment_run()) r.segment_records = m.driver.warp_records();
     r.payloads_allocated = m.gpu.pool().allocated();
     for (const auto& c : m.gpu.checkers()) {
         r.protocol_transactions += c->transactions();

@@ -80,6 +80,7 @@ TimingResult run_interval(const HwConfig& cfg, const BvhImage& image, Workload& 
     r.counts.memory_cycles = double(gpu.memory_cycle(end));
     r.sampled = driver.sampled();
     r.estimate = est;
+    if (driver.segment_run()) r.segment_records = driver.warp_records();
     r.interrupted = interrupted;
     if (interrupted) return r;  // rays are in flight: the invariants of a whole frame do not hold
     if (!driver.finished() || driver.rays_retired() != driver.rays_issued()) r.invariant_failures.push_back("not every ray retired");

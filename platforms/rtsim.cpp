@@ -72,6 +72,9 @@ struct Args {
     std::optional<uint64_t> sample_seed;  // which clusters a sampled run simulates (default: --seed)
     bool sample_unchecked = false;
     uint64_t check_error = 0;  // --check-error N
+    long long sample_segments = 1;  // --sample-segments K (signed: a negative number is an error, not a wrap)
+    std::optional<uint64_t> segment;  // --segment I
+    std::vector<std::string> merge_segments;  // --merge-segments FILE...
     // The sampling pre-pass's threads; read as signed so that a negative number is an error,
     // not a wrap to 4 billion.
     long long threads = std::max(1u, std::thread::hardware_concurrency());
@@ -108,22 +111,23 @@ std::pair<int, int> parse_trace_warp(const std::string& s, const HwConfig& hw) {
     }
 }
 
-// --check-error: rtsim itself, run twice as a child process (SystemC elaborates one platform per
-// process) on the same frame and options, sampled at `rate` with the run's sample seed (the same
-// clusters, the same functional warming) or whole at rate 1: once in the run's fidelity, once in
-// AT. Their simulated cycles are the check.
-ErrorCheck run_error_check(const Args& a, double rate) {
-    namespace fs = std::filesystem;
-    std::string tmpl = (fs::temp_directory_path() / "rtsim-check-XXXXXX").string();
-    if (!mkdtemp(tmpl.data())) throw std::runtime_error("--check-error: cannot make a temporary folder in " + fs::temp_directory_path().string());
-    const fs::path dir(tmpl);
-    struct Cleanup {
-        fs::path d;
-        ~Cleanup() {
-            std::error_code ec;
-            fs::remove_all(d, ec);
-        }
-    } cleanup{dir};
+// A temporary folder, removed with everything in it when this goes out of scope.
+struct TempFolder {
+    std::filesystem::path path;
+    explicit TempFolder(const char* what) {
+        namespace fs = std::filesystem;
+        std::string tmpl = (fs::temp_directory_path() / "rtsim-XXXXXX").string();
+        if (!mkdtemp(tmpl.data())) throw std::runtime_error(std::string(what) + ": cannot make a temporary folder in " + fs::temp_directory_path().string());
+        path = tmpl;
+    }
+    ~TempFolder() {
+        std::error_code ec;
+        std::filesystem::remove_all(path, ec);
+    }
+};
+
+// The frame, workload and configuration options of the run, for a child rtsim.
+std::vector<std::string> frame_args(const Args& a) {
     std::vector<std::string> base = {"--scene", a.scene, "--workload", a.workload, "--width", std::to_string(a.width), "--height",
                                      std::to_string(a.height), "--spp", std::to_string(a.spp), "--bounces", std::to_string(a.bounces),
                                      "--seed", std::to_string(a.seed), "--traversal", a.traversal, "--config", a.config,
@@ -133,11 +137,51 @@ ErrorCheck run_error_check(const Args& a, double rate) {
     for (const std::string& set : a.sets) base.insert(base.end(), {"--set", set});
     if (!a.prefetcher.empty()) base.insert(base.end(), {"--prefetcher", a.prefetcher});
     if (a.flatten) base.push_back("--flatten");
-    if (rate < 1.0) {
-        char r[32];
-        std::snprintf(r, sizeof r, "%.17g", rate);
-        base.insert(base.end(), {"--sample", r, "--sample-seed", std::to_string(a.sample_seed.value_or(a.seed)), "--sample-unchecked"});
+    return base;
+}
+
+std::string exact(double v) {
+    char r[32];
+    std::snprintf(r, sizeof r, "%.17g", v);
+    return r;
+}
+
+// Runs rtsim itself (SystemC elaborates one platform per process) with `args`, its standard error
+// into `err`; throws, with that error text, if it does not exit 0.
+void run_child(std::vector<std::string> args, const std::string& err, const std::string& what) {
+    args.insert(args.begin(), "rtsim");
+    std::vector<char*> argv;
+    for (std::string& s : args) argv.push_back(s.data());
+    argv.push_back(nullptr);
+    posix_spawn_file_actions_t fa;
+    posix_spawn_file_actions_init(&fa);
+    posix_spawn_file_actions_addopen(&fa, 1, "/dev/null", O_WRONLY, 0);
+    posix_spawn_file_actions_addopen(&fa, 2, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    pid_t pid = 0;
+    const int rc = posix_spawn(&pid, "/proc/self/exe", &fa, nullptr, argv.data(), environ);
+    posix_spawn_file_actions_destroy(&fa);
+    if (rc != 0) throw std::runtime_error(what + ": cannot start rtsim: " + std::string(std::strerror(rc)));
+    int status = 0;
+    while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
     }
+    if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+        std::ifstream in(err);
+        std::stringstream msg;
+        msg << in.rdbuf();
+        const std::string text = what + " failed (" + (WIFEXITED(status) ? "exit " + std::to_string(WEXITSTATUS(status)) : std::string("a signal")) +
+                                 "): " + msg.str();
+        if (WIFEXITED(status) && WEXITSTATUS(status) == 2) throw InputError(text);
+        throw std::runtime_error(text);
+    }
+}
+
+// --check-error: rtsim itself, run twice as a child process on the same frame and options,
+// sampled at `rate` with the run's sample seed (the same clusters, the same functional warming)
+// or whole at rate 1: once in the run's fidelity, once in AT. Their simulated cycles are the check.
+ErrorCheck run_error_check(const Args& a, double rate) {
+    const TempFolder dir("--check-error");
+    std::vector<std::string> base = frame_args(a);
+    if (rate < 1.0) base.insert(base.end(), {"--sample", exact(rate), "--sample-seed", std::to_string(a.sample_seed.value_or(a.seed)), "--sample-unchecked"});
     struct Child {
         uint64_t cycles;
         double seconds;
@@ -145,31 +189,13 @@ ErrorCheck run_error_check(const Args& a, double rate) {
     };
     auto child = [&](const std::string& fidelity) {
         std::vector<std::string> args = base;
-        args.insert(args.begin(), "rtsim");
-        const std::string stats = (dir / (fidelity + ".json")).string(), err = (dir / (fidelity + ".err")).string();
+        const std::string stats = (dir.path / (fidelity + ".json")).string(), err = (dir.path / (fidelity + ".err")).string();
         args.insert(args.end(), {"--fidelity", fidelity, "--stats", stats});
         if (fidelity == "lt" && a.quantum) args.insert(args.end(), {"--quantum", std::to_string(*a.quantum)});
-        std::vector<char*> argv;
-        for (std::string& s : args) argv.push_back(s.data());
-        argv.push_back(nullptr);
-        posix_spawn_file_actions_t fa;
-        posix_spawn_file_actions_init(&fa);
-        posix_spawn_file_actions_addopen(&fa, 1, "/dev/null", O_WRONLY, 0);
-        posix_spawn_file_actions_addopen(&fa, 2, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-        pid_t pid = 0;
-        const int rc = posix_spawn(&pid, "/proc/self/exe", &fa, nullptr, argv.data(), environ);
-        posix_spawn_file_actions_destroy(&fa);
-        if (rc != 0) throw std::runtime_error("--check-error: cannot start rtsim: " + std::string(std::strerror(rc)));
-        int status = 0;
-        while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
-        }
-        if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-            std::ifstream in(err);
-            std::stringstream msg;
-            msg << in.rdbuf();
-            throw std::runtime_error("--check-error: the " + fidelity + " run of the check failed (" +
-                                     (WIFEXITED(status) ? "exit " + std::to_string(WEXITSTATUS(status)) : std::string("a signal")) +
-                                     "): " + msg.str());
+        try {
+            run_child(args, err, "--check-error: the " + fidelity + " run of the check");
+        } catch (const InputError& e) {
+            throw std::runtime_error(e.what());  // the run itself was accepted: not the user's input
         }
         const nlohmann::json j = nlohmann::json::parse(std::ifstream(stats));
         const bool sampled = j["timing"].contains("sampling");
@@ -191,6 +217,34 @@ ErrorCheck run_error_check(const Args& a, double rate) {
     c.fidelity_s = f.seconds;
     c.at_s = at.seconds;
     return c;
+}
+
+// --sample-segments K without --segment: each segment simulated by a child rtsim, one after
+// another, and their statistics read back for the merge (the same files an array of cluster
+// tasks would write, so the estimate is the same, bit for bit).
+std::vector<SegmentRun> run_segment_children(const Args& a) {
+    const TempFolder dir("--sample-segments");
+    std::vector<std::string> base = frame_args(a);
+    base.insert(base.end(), {"--fidelity", a.fidelity, "--sample", exact(a.sample), "--sample-seed", std::to_string(a.sample_seed.value_or(a.seed)),
+                             "--sample-segments", std::to_string(a.sample_segments)});
+    if (a.sample_unchecked) base.push_back("--sample-unchecked");
+    if (a.quantum) base.insert(base.end(), {"--quantum", std::to_string(*a.quantum)});
+    std::vector<SegmentRun> runs;
+    for (long long i = 0; i < a.sample_segments; ++i) {
+        if (stop_signal.load()) throw Interrupted{stop_signal.load()};
+        if (!a.quiet) std::cerr << "segment " << i + 1 << " of " << a.sample_segments << "\n";
+        std::vector<std::string> args = base;
+        const std::string stats = (dir.path / ("segment" + std::to_string(i) + ".json")).string();
+        args.insert(args.end(), {"--segment", std::to_string(i), "--stats", stats});
+        try {
+            run_child(args, (dir.path / ("segment" + std::to_string(i) + ".err")).string(), "segment " + std::to_string(i));
+        } catch (...) {
+            if (stop_signal.load()) throw Interrupted{stop_signal.load()};  // the child got the signal too
+            throw;
+        }
+        runs.push_back(read_segment(stats));
+    }
+    return runs;
 }
 
 // The run's specification from the command line; every check that needs no scene comes first.
@@ -221,6 +275,21 @@ RunSpec spec_of(const Args& a) {
     if (a.sample_unchecked && a.sample == 1.0) throw InputError("--sample-unchecked needs --sample RATE below 1");
     if (a.check_error && spec.fidelity != Fidelity::LT && spec.fidelity != Fidelity::Interval)
         throw InputError("--check-error compares a fast fidelity with AT: it needs --fidelity lt or interval (AT is the reference)");
+    if (a.sample_segments < 1 || a.sample_segments > 4096)
+        throw InputError("--sample-segments " + std::to_string(a.sample_segments) + ": a sample splits into 1 to 4096 segments");
+    if (a.sample_segments > 1 && a.sample == 1.0)
+        throw InputError("--sample-segments splits a sample: it needs --sample RATE below 1 (a whole frame is one continuous run)");
+    if ((a.segment || !a.merge_segments.empty()) && a.sample_segments == 1)
+        throw InputError("--segment and --merge-segments need --sample-segments K (2 or more)");
+    if (a.segment && *a.segment >= uint64_t(a.sample_segments))
+        throw InputError("--segment " + std::to_string(*a.segment) + ": the segments are numbered 0.." + std::to_string(a.sample_segments - 1));
+    if (a.segment && !a.merge_segments.empty()) throw InputError("--segment simulates one segment, --merge-segments merges them: give one of the two");
+    if (a.sample_segments > 1 && (!a.hits.empty() || !a.image.empty() || !a.vcd.empty() || a.check_error || a.verify))
+        throw InputError("--hits, --image, --vcd, --check-error and --verify need one continuous run: not with --sample-segments "
+                         "(each segment simulates some of the rays)");
+    if (!a.merge_segments.empty() && a.merge_segments.size() != size_t(a.sample_segments))
+        throw InputError("--merge-segments: " + std::to_string(a.merge_segments.size()) + " files for --sample-segments " +
+                         std::to_string(a.sample_segments) + ": give each segment's statistics once");
     if (a.threads < 1 || a.threads > 4096)
         throw InputError("--threads " + std::to_string(a.threads) + ": the sampling pre-pass takes 1 to 4096 threads");
     // Outputs are checked before anything runs: a bad path should not wait for the simulation.
@@ -254,6 +323,10 @@ RunSpec spec_of(const Args& a) {
     spec.sample_rate = a.sample;
     spec.sample_seed = a.sample_seed.value_or(a.seed);
     spec.sample_unchecked = a.sample_unchecked;
+    spec.sample_segments = uint32_t(a.sample_segments);
+    if (a.segment) spec.segment = uint32_t(*a.segment);
+    spec.merge_segments = a.merge_segments;
+    if (a.sample_segments > 1 && !a.segment && a.merge_segments.empty()) spec.run_segments = [&a] { return run_segment_children(a); };
     spec.threads = unsigned(a.threads);
     spec.vcd = a.vcd;
     if (spec.vcd.size() > 4 && spec.vcd.compare(spec.vcd.size() - 4, 4, ".vcd") == 0) spec.vcd.resize(spec.vcd.size() - 4);
@@ -287,7 +360,7 @@ void print_summary(const Args& a, const RunResult& r) {
                 std::cout << " (95 % interval " << std::llround(sm["cycles_ci95"][0].get<double>()) << ".."
                           << std::llround(sm["cycles_ci95"][1].get<double>()) << ")\n";
             else
-                std::cout << " (no interval: fewer than 10 strata, --sample-unchecked)\n";
+                std::cout << " (no interval: too few strata or clusters per segment, --sample-unchecked)\n";
         }
         std::cout << error_line(j["error_estimate"]) << "\n";
         std::cout << "cycles " << j["cycles"] << ", L1 miss rate " << t["l1"]["demand"]["miss_rate"].get<double>()
@@ -363,7 +436,8 @@ int sc_main(int argc, char** argv) {
         "             [--width W --height H --spp N --bounces B --seed S] [--traversal dfs|bfs|treelet] [--flatten]\n"
         "             [--fidelity functional|at|lt|interval] [--config NAME|FILE] [--set KEY=VALUE]... [--quantum CYCLES]\n"
         "             [--prefetcher none|ttp|park|treelet|perfect-up|perfect-down]\n"
-        "             [--sample RATE [--sample-seed S] [--sample-unchecked] [--threads N]] [--check-error N]\n"
+        "             [--sample RATE [--sample-seed S] [--sample-unchecked] [--threads N]\n"
+        "              [--sample-segments K [--segment I | --merge-segments FILE...]]] [--check-error N]\n"
         "             [--stats FILE.json] [--image FILE.png] [--vcd FILE] [--trace-warp SM:WARP] [--verify] [--quiet]\n"
         "             [--dump-bvh FILE] [--dump-rays FILE] [--dump-hits FILE]\n"
         "       rtsim --stats-schema | --help\n"
@@ -399,6 +473,12 @@ int sc_main(int argc, char** argv) {
          "which clusters --sample draws (default: --seed, which also seeds the rays)")
         ("sample-unchecked", po::bool_switch(&a.sample_unchecked),
          "run a sample too small for a 95 % interval (fewer than 10 strata) and report no interval")
+        ("sample-segments", po::value(&a.sample_segments), "simulate the sample as K independent segments and merge them "
+         "(docs/sampling.md, \"Segments\"); alone: each segment in a child process, one after another")
+        ("segment", po::value<uint64_t>()->notifier([&a](uint64_t v) { a.segment = v; }),
+         "with --sample-segments K: simulate only segment I (0..K-1) and write it for --merge-segments (a cluster's array task)")
+        ("merge-segments", po::value(&a.merge_segments)->multitoken(),
+         "with --sample-segments K and the same frame options: merge the K segments' --stats files into the frame's estimate")
         ("threads", po::value(&a.threads)->default_value(a.threads),
          "threads for --sample's functional pre-pass (the simulation itself runs on one; results do not depend on it)")
         ("check-error", po::value<uint64_t>()->notifier([&a](uint64_t v) {

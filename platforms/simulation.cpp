@@ -90,6 +90,9 @@ struct RunRecord {
     uint64_t speed_rays = 0;
     double ours_s = 0, embree_s = 0;
     bool interrupted = false;  // stopped by RunSpec::stop before the end
+    // One segment of a split sample (--segment): its "segment" section instead of an estimate.
+    const std::vector<IdentityKey>* segment_identity = nullptr;
+    uint32_t segment = 0, segments = 0;
 };
 
 void write_error_estimate(StatsOut& out, const ErrorEstimate& e) {
@@ -171,10 +174,11 @@ void write_stats(StatsOut& out, const RunRecord& r) {
         out.value("cycles", t.cycles, "core cycles", "the frame's cycles (a sampled run's estimate; simulated cycles under timing.sampling)");
         write_error_estimate(out, r.error);
         StatsOut tm = out.child("timing", "the timing model's statistics");
-        if (t.sampled && !t.interrupted) write_sampling(tm, t.estimate, r.sample_rate, t.cycles, t.cycles_simulated);
+        if (t.sampled && !t.interrupted && !r.segment_identity) write_sampling(tm, t.estimate, r.sample_rate, t.cycles, t.cycles_simulated);
         write_hierarchy(tm, *r.hw, t.counts, t.summary, t.estimate.scale());
         if (r.fidelity != Fidelity::Interval)
             tm.value("payloads_allocated", t.payloads_allocated, "payloads", "TLM payloads the pool made (AT, LT)");
+        if (r.segment_identity) write_segment(out, t, r.segment, r.segments, *r.segment_identity);
         StatsOut rate = out.child("simulation_rate", "the simulator's speed");
         rate.value("rays_per_s", r.run_s > 0 ? double(r.rays) / r.run_s : 0.0, "rays / s", "rays over time_s.run");
         rate.value("cycles_per_s", r.run_s > 0 ? double(t.cycles) / r.run_s : 0.0, "cycles / s", "cycles over time_s.run");
@@ -232,7 +236,27 @@ std::vector<StatKey> stats_schema() {
     nlohmann::ordered_json j;
     StatsOut out(j, &schema);
     write_stats(out, r);
+    RunSpec spec;
+    spec.fidelity = Fidelity::AT;
+    spec.config = config;
+    write_segment(out, t, 0, 2, segment_identity(spec, ""));
     return schema;
+}
+
+std::vector<IdentityKey> segment_identity(const RunSpec& spec, const std::string& scene) {
+    char sample[64];
+    std::snprintf(sample, sizeof sample, "%.17g seed %llu", spec.sample_rate, static_cast<unsigned long long>(spec.sample_seed));
+    const WorkloadParams& p = spec.params;
+    return {{"scene", scene, "the scene's name"},
+            {"workload", spec.rays.empty() ? spec.workload : "rays " + spec.rays, "the workload, or the ray file"},
+            {"frame", std::to_string(p.width) + "x" + std::to_string(p.height) + " spp " + std::to_string(p.spp) + " bounces " +
+                          std::to_string(p.bounces) + " seed " + std::to_string(p.seed),
+             "the frame's size, samples, bounces and ray seed"},
+            {"fidelity", fidelity_name(spec.fidelity), "at, lt or interval"},
+            {"traversal", traversal_name(spec.order), "dfs, bfs or treelet"},
+            {"sample", sample, "--sample and --sample-seed"},
+            {"segments", std::to_string(spec.sample_segments), "--sample-segments"},
+            {"config", spec.config.to_json().dump(), "the effective configuration"}};
 }
 
 RunResult run_simulation(const RunSpec& spec, std::ostream* log) {
@@ -351,6 +375,8 @@ RunResult run_simulation(const RunSpec& spec, std::ostream* log) {
         to.sample_rate = spec.sample_rate;
         to.sample_seed = spec.sample_seed;
         to.sample_unchecked = spec.sample_unchecked;
+        to.sample_segments = spec.sample_segments;
+        to.sample_segment = spec.segment;
         // A sampled run traces the whole frame functionally first, with fresh instances of the
         // workload (the run's own one accumulates the simulated image).
         if (spec.sample_rate < 1.0) {
@@ -363,7 +389,17 @@ RunResult run_simulation(const RunSpec& spec, std::ostream* log) {
         to.trace_warp = spec.trace_warp;
         to.keep_rays = spec.keep_rays || spec.verify;  // else memory for the rays in flight only
         to.stop = spec.stop;
-        if (spec.fidelity == Fidelity::Interval) {
+        const bool merge = spec.sample_segments > 1 && spec.segment >= spec.sample_segments;
+        if (merge) {
+            // The segments ran elsewhere (files) or as child processes: merged into one estimate.
+            std::vector<SegmentRun> segments;
+            if (!spec.merge_segments.empty()) {
+                for (const std::string& f : spec.merge_segments) segments.push_back(read_segment(f));
+            } else if (spec.run_segments) {
+                segments = spec.run_segments();
+            }
+            timing_result = merge_segments(spec.hw, image, *workload, to, std::move(segments), segment_identity(spec, scene.name));
+        } else if (spec.fidelity == Fidelity::Interval) {
             try {
                 timing_result = run_interval(spec.hw, image, *workload, to);
             } catch (const std::invalid_argument& e) {
@@ -372,6 +408,12 @@ RunResult run_simulation(const RunSpec& spec, std::ostream* log) {
         } else {
             GpuPlatform platform(spec.hw, image, *workload, to);
             timing_result = platform.run();
+        }
+        if (!merge && spec.sample_segments > 1 && !timing_result.interrupted) {
+            // One segment: its own cycles; the frame's estimate is the merge's.
+            timing_result.cycles = timing_result.cycles_simulated;
+            rec.segment = spec.segment;
+            rec.segments = spec.sample_segments;
         }
         rays = std::move(timing_result.rays);
         rec.nodes_visited = timing_result.summary.nodes_visited;
@@ -417,6 +459,9 @@ RunResult run_simulation(const RunSpec& spec, std::ostream* log) {
         if (rec.interrupted) {
             rec.error.kind = "none";
             rec.error.basis = "interrupted: the cycles simulated before the stop, not the frame's";
+        } else if (rec.segments) {
+            rec.error.kind = "none";
+            rec.error.basis = "one segment of a split sample: its cycles simulated; --merge-segments gives the frame's estimate and error";
         } else {
             rec.error = estimate_error(spec, timing_result, check);
         }
@@ -453,6 +498,11 @@ RunResult run_simulation(const RunSpec& spec, std::ostream* log) {
         rec.mismatch_rays = &mismatch_rays;
         out.mismatches = verify.mismatches();
         if (!mismatch_rays.empty()) out.first_mismatch = mismatch_rays.front();
+    }
+    std::vector<IdentityKey> identity;  // a segment's, for the merge
+    if (rec.segments) {
+        identity = segment_identity(spec, scene.name);
+        rec.segment_identity = &identity;
     }
     StatsOut stats(out.stats);
     write_stats(stats, rec);

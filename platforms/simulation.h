@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "error_estimate.h"
+#include "sample_segments.h"
 #include "model/config.h"
 #include "model/fidelity.h"
 #include "model/stats.h"
@@ -37,6 +38,14 @@ struct RunSpec {
     double sample_rate = 1.0;  // < 1: sampled simulation (docs/sampling.md)
     uint64_t sample_seed = 1;
     bool sample_unchecked = false;  // --sample-unchecked
+    // --sample-segments K (docs/sampling.md, "Segments"): the sample as K independent segments.
+    // `segment` < K: simulate that one and write its "segment" section; else merge the K
+    // segments' statistics, from `merge_segments` (files) or from `run_segments` (rtsim runs
+    // each segment as a child process and returns their statistics files).
+    uint32_t sample_segments = 1;
+    uint32_t segment = ~0u;
+    std::vector<std::string> merge_segments;
+    std::function<std::vector<SegmentRun>()> run_segments;
     unsigned threads = 1;      // the sampling pre-pass's threads
     std::string vcd;           // AT, LT: waveforms into this file (without the .vcd SystemC adds)
     int trace_sm = -1, trace_warp = -1;
@@ -77,6 +86,10 @@ struct RunResult {
 // `log` (may be null) receives the scene and BVH lines as the run reaches them. Throws
 // InputError for bad input and std::exception for internal errors.
 RunResult run_simulation(const RunSpec& spec, std::ostream* log);
+
+// What must be equal in every segment of one split sampled run (--sample-segments): the frame,
+// the sample, the fidelity and the configuration. `scene`: the loaded scene's name.
+std::vector<IdentityKey> segment_identity(const RunSpec& spec, const std::string& scene);
 
 // Every key a run's statistics can have (RunResult::stats, rtsim --stats): dotted path, list
 // items as "[]", unit and description; from the code that writes them (model/stats.h).

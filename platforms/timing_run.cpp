@@ -1,5 +1,7 @@
 #include "timing_run.h"
 
+#include "model/treelet.h"
+
 namespace rtu {
 
 SamplingOptions sampling_options(const HwConfig& c, const BvhImage& img, const TimingOptions& o, const Treelets* treelets) {
@@ -10,6 +12,8 @@ SamplingOptions sampling_options(const HwConfig& c, const BvhImage& img, const T
     s.capacity = gpu_warp_capacity(c);
     s.make_workload = o.sample_workload;
     s.threads = o.sample_threads;
+    s.segments = o.sample_segments;
+    s.segment = o.sample_segment;
     s.progress = o.progress;
     s.stop = o.stop;
     // Enough fetches to refill every cache twice over.
@@ -20,6 +24,11 @@ SamplingOptions sampling_options(const HwConfig& c, const BvhImage& img, const T
         return trace_ray(img, r, order, treelets, fetched, next_node_register);
     };
     return s;
+}
+
+std::unique_ptr<Treelets> traversal_treelets(const HwConfig& c, const BvhImage& img, TraversalOrder order) {
+    if (order != TraversalOrder::Treelet) return nullptr;
+    return std::make_unique<Treelets>(form_treelets(img, c.prefetch.treelet_budget, c.prefetch.treelet_contiguous, c.prefetch.treelet_stride));
 }
 
 }  // namespace rtu

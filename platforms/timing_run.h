@@ -35,6 +35,10 @@ struct TimingOptions {
     // (docs/sampling.md), one per thread; empty: the plain stratified estimate.
     std::function<std::unique_ptr<Workload>()> sample_workload;
     unsigned sample_threads = 1;
+    // A sample split into independent segments (docs/sampling.md, "Segments"): this run simulates
+    // segment `sample_segment` of `sample_segments` (SamplingOptions::segment).
+    uint32_t sample_segments = 1;
+    uint32_t sample_segment = SamplingOptions::kAllSegments;
     // Keep every ray with its hit for TimingResult::rays (hits files, verification); without,
     // memory holds only the rays in flight.
     bool keep_rays = true;
@@ -56,6 +60,7 @@ struct TimingResult {
     HierarchyCounts counts;         // per instance (platforms/timing_stats.h writes them)
     bool sampled = false;
     SampleEstimate estimate;        // sampled runs
+    std::vector<WarpRecord> segment_records;  // one segment of a split sample: its warps' records for the merge
     uint64_t payloads_allocated = 0;  // AT and LT: transaction payloads the pool made
     // Stopped by TimingOptions::stop before the frame ended: the statistics are those of the
     // cycles simulated so far; no estimate, no invariant checks.
@@ -69,5 +74,9 @@ inline uint32_t gpu_warp_capacity(const HwConfig& c) { return c.sms * c.warp_buf
 // many warps as the GPU holds, the functional pre-pass on `image`, warming enough to refill
 // every cache twice. `treelets` as for the run's traversal (may be null).
 SamplingOptions sampling_options(const HwConfig& cfg, const BvhImage& image, const TimingOptions& opt, const Treelets* treelets);
+
+// The treelets a traversal order works on (AT, LT: treelet traversal and the Treelet prefetcher);
+// null for the others.
+std::unique_ptr<Treelets> traversal_treelets(const HwConfig& cfg, const BvhImage& image, TraversalOrder order);
 
 }  // namespace rtu

@@ -189,7 +189,7 @@ void write_sampling(StatsOut& out, const SampleEstimate& est, double rate, uint6
     s.value("saturated_until_cycle", est.saturated_until, "cycles", "while at least as many shader warps as the GPU holds were unfinished");
     s.value("work_done_saturated", est.work_saturated, "slot-cycles", "residence done by then");
     s.value("cycles_ci95", has_interval ? nlohmann::ordered_json{std::max(c - h, double(cycles_simulated)), c + h} : nlohmann::ordered_json(),
-            "cycles", "95 % interval of the frame's cycles [low, high], low at least cycles_simulated; null without one (--sample-unchecked, fewer than 10 strata)");
+            "cycles", "95 % interval of the frame's cycles [low, high], low at least cycles_simulated; null without one (--sample-unchecked: fewer than 10 strata, or segments of fewer than 16 clusters)");
     s.value("relative_se", est.relative_se, "ratio", "standard error of the work estimate / the estimate");
     s.value("variance_pairs", est.variance_pairs, "pairs", "collapsed stratum pairs behind relative_se");
     for (const auto& [name, share, what] :

@@ -682,6 +682,95 @@ TEST(RtsimSampling, IntervalFidelitySampledAsAt) {
     }
 }
 
+// A sample split into segments (docs/sampling.md, "Segments"): the segments run as separate
+// processes (as array tasks on a cluster would) and merged in any order give the same statistics,
+// bit for bit, as rtsim --sample-segments alone; the segments together simulate the warps of
+// the continuous sample, each once, and their cycles add up to the merged run's simulated
+// cycles; the merged interval covers the full run. Merging refuses a missing segment, a
+// duplicate and a segment of another draw; a split of fewer than 16 clusters per segment is
+// refused, or runs without an interval when unchecked.
+TEST(RtsimSampling, SegmentsMergedEqualTheSingleProcessRun) {
+    TempDir dir;
+    for (const char* fidelity : {"at", "interval"}) {
+        SCOPED_TRACE(fidelity);
+        // 256x256: 128 clusters, 64 simulated, 21-22 per segment (16 needed).
+        const std::string base = std::string("--scene cornell --width 256 --height 256 --sample 0.5 --threads 1 --fidelity ") + fidelity;
+        const std::string split = base + " --sample-segments 3";
+        auto load = [&](const std::string& f) {
+            auto j = nlohmann::json::parse(read_text(dir.file(f)));
+            for (const char* k : {"time_s", "simulation_rate", "memory_mb"}) j.erase(k);
+            return j;
+        };
+        const Result single = rtsim(dir, split + " --stats " + dir.file("single.json"));
+        ASSERT_EQ(single.status, 0) << single.err;
+        uint64_t cycles = 0, rays = 0, warps = 0;
+        std::set<uint64_t> simulated;
+        for (int i = 0; i < 3; ++i) {
+            const std::string f = "seg" + std::to_string(i) + ".json";
+            const Result r = rtsim(dir, split + " --segment " + std::to_string(i) + " --stats " + dir.file(f));
+            ASSERT_EQ(r.status, 0) << r.err;
+            const auto j = load(f);
+            EXPECT_FALSE(j["timing"].contains("sampling"));  // one segment is no estimate of the frame
+            EXPECT_EQ(j["error_estimate"]["kind"], "none");
+            EXPECT_EQ(j["cycles"], j["segment"]["cycles_simulated"]);
+            cycles += j["segment"]["cycles_simulated"].get<uint64_t>();
+            rays += j["rays"].get<uint64_t>();
+            for (const auto& w : j["segment"]["warps"]) EXPECT_TRUE(simulated.insert(w[0].get<uint64_t>()).second) << "warp " << w[0];
+            warps += j["segment"]["warps"].size();
+        }
+        const Result merged = rtsim(dir, split + " --merge-segments " + dir.file("seg2.json") + " " + dir.file("seg0.json") + " " +
+                                             dir.file("seg1.json") + " --stats " + dir.file("merged.json"));
+        ASSERT_EQ(merged.status, 0) << merged.err;
+        const auto m = load("merged.json");
+        EXPECT_EQ(m, load("single.json"));
+        const auto& s = m["timing"]["sampling"];
+        EXPECT_EQ(s["cycles_simulated"].get<uint64_t>(), cycles);
+        EXPECT_EQ(m["rays"].get<uint64_t>(), rays);
+        EXPECT_EQ(s["warps_simulated"].get<uint64_t>(), warps);
+        ASSERT_EQ(rtsim(dir, base + " --stats " + dir.file("continuous.json")).status, 0);
+        const auto c = load("continuous.json");
+        EXPECT_EQ(c["timing"]["sampling"]["warps_simulated"].get<uint64_t>(), warps);
+        EXPECT_EQ(c["rays"], m["rays"]);
+        ASSERT_EQ(rtsim(dir, std::string("--scene cornell --width 256 --height 256 --fidelity ") + fidelity + " --stats " + dir.file("full.json")).status, 0);
+        const double truth = load("full.json")["cycles"].get<double>();
+        EXPECT_LE(s["cycles_ci95"][0].get<double>(), truth) << m["cycles"];
+        EXPECT_GE(s["cycles_ci95"][1].get<double>(), truth) << m["cycles"];
+        // Refused: a segment missing, one twice, one of another draw of the sample.
+        const Result missing = rtsim(dir, split + " --merge-segments " + dir.file("seg0.json") + " " + dir.file("seg1.json"));
+        EXPECT_EQ(missing.status, 2);
+        EXPECT_NE(missing.err.find("give each segment's statistics once"), std::string::npos) << missing.err;
+        const Result twice = rtsim(dir, split + " --merge-segments " + dir.file("seg0.json") + " " + dir.file("seg1.json") + " " + dir.file("seg1.json"));
+        EXPECT_EQ(twice.status, 2);
+        EXPECT_NE(twice.err.find("segment 2 is missing"), std::string::npos) << twice.err;
+        ASSERT_EQ(rtsim(dir, split + " --sample-seed 7 --segment 1 --stats " + dir.file("other.json")).status, 0);
+        const Result other = rtsim(dir, split + " --merge-segments " + dir.file("seg0.json") + " " + dir.file("other.json") + " " + dir.file("seg2.json"));
+        EXPECT_EQ(other.status, 2);
+        EXPECT_NE(other.err.find("segment 1 is of another run: its sample is '0.5 seed 7'"), std::string::npos) << other.err;
+        EXPECT_FALSE(exists(dir.file("s.json")));
+    }
+    // Options that cannot work: exit 2 before anything runs.
+    const std::string wknd = "--scene wknd --fidelity at --width 128 --height 128 --sample 0.5 ";
+    for (const std::string& bad : {std::string("--sample-segments 0"), std::string("--sample-segments -1"), std::string("--segment 0"),
+                                   std::string("--sample-segments 2 --segment 2"), std::string("--sample-segments 2 --hits h.csv"),
+                                   std::string("--sample-segments 17 --segment 0"), std::string("--sample-segments 2")}) {
+        const Result r = rtsim(dir, wknd + bad + " --stats " + dir.file("bad.json"));
+        EXPECT_EQ(r.status, 2) << bad << ": " << r.err;
+        EXPECT_FALSE(exists(dir.file("bad.json"))) << bad;
+    }
+    EXPECT_EQ(rtsim(dir, "--scene wknd --fidelity at --sample-segments 2").status, 2);  // needs --sample
+    // 128x128 at a half: 16 simulated clusters, 8 per segment of 2: refused (too few to split);
+    // unchecked, it runs and reports no interval. 256x256 at a half: 64 clusters, at most 4 segments.
+    const Result few = rtsim(dir, wknd + "--sample-segments 2 --segment 0");
+    EXPECT_NE(few.err.find("8 per segment; a segment needs 16"), std::string::npos) << few.err;
+    EXPECT_NE(few.err.find("too few to split"), std::string::npos) << few.err;
+    const Result five = rtsim(dir, "--scene wknd --fidelity at --width 256 --height 256 --sample 0.5 --sample-segments 5 --segment 0");
+    EXPECT_EQ(five.status, 2);
+    EXPECT_NE(five.err.find("use --sample-segments 4 or fewer"), std::string::npos) << five.err;
+    const Result unchecked = rtsim(dir, wknd + "--sample-segments 2 --sample-unchecked --stats " + dir.file("u.json"));
+    ASSERT_EQ(unchecked.status, 0) << unchecked.err;
+    EXPECT_TRUE(nlohmann::json::parse(read_text(dir.file("u.json")))["timing"]["sampling"]["cycles_ci95"].is_null());
+}
+
 // The sampled estimate against the truth, known from simulating the whole frame: on two scenes
 // (the built-in cornell box and the bunny, 128x128, 2 spp, half of the frame: the first wave and
 // 15 strata) and four draws of the sample each, the 95 % interval covers the full run's cycles,
@@ -914,7 +1003,8 @@ void flatten_keys(const nlohmann::json& j, const std::string& path, std::set<std
 
 // `rtsim --stats-schema` lists every key a stats file can hold, once, with a unit column and a
 // description, and nothing that no run writes: a functional run with --verify, a sampled AT run
-// with TTP and --verify, and an interval run with --check-error together write every key of the schema.
+// with TTP and --verify, an interval run with --check-error and one segment of a split sample
+// together write every key of the schema.
 TEST(RtsimStats, SchemaListsEveryKeyWrittenAndNothingElse) {
     RTU_NEED_SHARED_SCENES();
     TempDir dir;
@@ -932,7 +1022,8 @@ TEST(RtsimStats, SchemaListsEveryKeyWrittenAndNothingElse) {
     }
     std::set<std::string> written;
     const std::string scene = "--scene bunny --assets " + rtu::test::shared_dir() + "/scenes/bunny --width 32 --height 32 ";
-    for (const std::string args : {"--verify", "--fidelity at --prefetcher ttp --sample 0.75 --verify", "--fidelity interval --check-error 1"}) {
+    for (const std::string args : {"--verify", "--fidelity at --prefetcher ttp --sample 0.75 --verify", "--fidelity interval --check-error 1",
+                                   "--fidelity at --sample 0.75 --sample-unchecked --sample-segments 2 --segment 1"}) {
         ASSERT_EQ(rtsim(dir, scene + args + " --stats " + dir.file("s.json")).status, 0) << args;
         std::set<std::string> keys;
         flatten_keys(nlohmann::json::parse(read_text(dir.file("s.json"))), "", keys);

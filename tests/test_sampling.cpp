@@ -125,6 +125,28 @@ TEST(SampleDesign, FirstWaveEmptyClustersAndStrataByWork) {
         for (size_t i = 0; i < sim.size(); ++i)
             for (uint64_t w = i ? d.end_warp(i - 1) : 0; w < d.first_warp(i); ++w) EXPECT_EQ(feeds[w], i);
     }
+    // Segments: consecutive simulated clusters, sizes differing by one at most, the first wave in
+    // segment 0; each segment's first cluster is warmed from the frame's first warp on (it runs
+    // from cold caches), the others from the end of the cluster before them.
+    for (uint32_t k = 1; k <= 5; ++k) {
+        rtu::SampleDesign d(40, 4, 0.5, 3, work);
+        d.split(k);
+        std::vector<size_t> sizes(k, 0);
+        for (size_t i = 0; i < d.simulated().size(); ++i) {
+            ++sizes.at(d.segment_of(i));
+            if (i > 0) {
+                EXPECT_LE(d.segment_of(i - 1), d.segment_of(i));
+            }
+            EXPECT_EQ(d.warm_from(i), d.starts_segment(i) ? 0u : d.end_warp(i - 1)) << "k " << k << " cluster " << i;
+            EXPECT_EQ(d.starts_segment(i), i == 0 || d.segment_of(i) != d.segment_of(i - 1));
+        }
+        EXPECT_EQ(d.segment_of(0), 0u);
+        EXPECT_LE(*std::max_element(sizes.begin(), sizes.end()) - *std::min_element(sizes.begin(), sizes.end()), 1u) << "k " << k;
+        EXPECT_GE(*std::min_element(sizes.begin(), sizes.end()), 1u);
+    }
+    rtu::SampleDesign six(40, 4, 0.5, 3, work);
+    EXPECT_THROW(six.split(6), std::invalid_argument);  // 5 simulated clusters
+    EXPECT_THROW(six.split(0), std::invalid_argument);
     // Everything asked for: the first wave and every non-empty cluster, a census.
     const rtu::SampleDesign all(40, 4, 0.95, 1, work);
     EXPECT_TRUE(all.census());

@@ -69,6 +69,12 @@ std::vector<uint32_t> SampleDesign::feeds() const {
     return feeds;
 }
 
+void SampleDesign::split(uint32_t k) {
+    if (k < 1 || k > sim_.size())
+        throw std::invalid_argument(std::to_string(k) + " segments of " + std::to_string(sim_.size()) + " simulated clusters");
+    segments_ = k;
+}
+
 namespace {
 
 // Runs body(thread, workload) on `threads` threads, each with its own workload, and rethrows the
@@ -203,7 +209,8 @@ std::vector<std::vector<WarmFetch>> warming_fetches(const FrameWarps& frame, con
         std::vector<std::vector<WarmFetch>> by_warp;  // the recorded warps, last first
         for (size_t i = t; i < sim.size(); i += threads) {
             if (opt.stop.requested()) throw Interrupted{opt.stop.signal()};
-            const uint64_t from = i ? design.end_warp(i - 1) : 0;
+            if (design.segments() > 1 && design.segment_of(i) != opt.segment) continue;  // simulated in another run
+            const uint64_t from = design.warm_from(i);
             size_t recorded = 0;
             by_warp.clear();
             for (uint64_t w = design.first_warp(i); w-- > from && recorded < opt.warm_window;) {
@@ -230,13 +237,7 @@ void SampleEstimator::on_trace_done(WarpRecord& w, double residence) {
     // starts on cold caches, unlike the rest of the frame).
     if (w.stratum != SampledCluster::kCertain && w.traces_done < w.trace_nodes.size()) {
         const double x = w.trace_nodes[w.traces_done];
-        if (x > 0) {
-            fit_n_ += 1;
-            fit_x_ += x;
-            fit_y_ += residence;
-            fit_xx_ += x * x;
-            fit_xy_ += x * residence;
-        }
+        if (x > 0) fit_.add(x, residence);
     }
     ++w.traces_done;
     w.residences.push_back(residence);
@@ -251,7 +252,8 @@ void SampleEstimator::on_warp_finished(uint64_t unfinished, uint64_t now) {
     }
 }
 
-SampleEstimate SampleEstimator::estimate(const std::vector<WarpRecord>& warps, uint64_t warps_total, bool sampled) const {
+SampleEstimate SampleEstimator::estimate(const std::vector<WarpRecord>& warps, uint64_t warps_total, bool sampled,
+                                         const std::vector<size_t>& segment_ends) const {
     SampleEstimate e;
     e.warps_total = warps_total;
     e.warps_simulated = warps.size();
@@ -283,12 +285,21 @@ SampleEstimate SampleEstimator::estimate(const std::vector<WarpRecord>& warps, u
     const double rest_nodes = std::max(0.0, critical_nodes_total_ - certain_nodes);
     e.work_estimate_stratified = certain_work + (ratio ? r * rest_nodes : drawn_work);
     e.work_estimate = e.work_estimate_stratified;
-    const double det = fit_n_ * fit_xx_ - fit_x_ * fit_x_;
-    if (ratio && fit_n_ >= 2 && det > 0) {
+    // Segments: the same traces as on_trace_done fits, taken in frame order.
+    FitSums fit = fit_;
+    if (!segment_ends.empty()) {
+        fit = FitSums{};
+        for (const WarpRecord& w : warps)
+            if (w.stratum != SampledCluster::kCertain)
+                for (size_t k = 0; k < std::min(w.residences.size(), w.trace_nodes.size()); ++k)
+                    if (w.trace_nodes[k] > 0) fit.add(w.trace_nodes[k], w.residences[k]);
+    }
+    const double det = fit.n * fit.xx - fit.x * fit.x;
+    if (ratio && fit.n >= 2 && det > 0) {
         e.schedule = true;
-        e.fit_traces = uint64_t(fit_n_);
-        e.fit_b = (fit_n_ * fit_xy_ - fit_x_ * fit_y_) / det;
-        e.fit_a = (fit_y_ - e.fit_b * fit_x_) / fit_n_;
+        e.fit_traces = uint64_t(fit.n);
+        e.fit_b = (fit.n * fit.xy - fit.x * fit.y) / det;
+        e.fit_a = (fit.y - e.fit_b * fit.x) / fit.n;
         // The schedule model is fed with the fitted durations, but for the first wave's traces,
         // which ran on the frame's cold caches, with their own residences. A trace whose rays all
         // miss the root box never occupies a slot.
@@ -311,7 +322,17 @@ SampleEstimate SampleEstimator::estimate(const std::vector<WarpRecord>& warps, u
         }
         for (const WarpRecord& w : warps) sample.push_back(durations(w.frame_warp));
         e.model_frame = schedule_cycles(frame, shape_);
-        e.model_sample = schedule_cycles(sample, shape_);
+        if (segment_ends.empty()) {
+            e.model_sample = schedule_cycles(sample, shape_);
+        } else {
+            // Each segment ran alone, from its own start: its ramp and tail are in the simulated
+            // cycles (their sum), so they are in the model of the sample too.
+            size_t begin = 0;
+            for (size_t end : segment_ends) {
+                e.model_sample += schedule_cycles({sample.begin() + long(begin), sample.begin() + long(end)}, shape_);
+                begin = end;
+            }
+        }
     }
     // The stratified work's variance: of the strata's weighted work, or for the ratio estimate of
     // their residuals from the ratio line, scaled to the frame's nodes outside the first wave.

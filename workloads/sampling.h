@@ -10,6 +10,8 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "model/stop_request.h"
@@ -48,11 +50,26 @@ struct SamplingOptions {
     size_t warm_window = 0;
     bool progress = false;  // report the pre-pass's progress on stderr every 2 s
     StopRequest stop;       // requested: the pre-pass throws Interrupted between warps
+    // Segments (docs/sampling.md, "Segments"): > 1 splits the simulated clusters, in frame order,
+    // into this many independent runs, each from cold caches warmed with the fetches before its
+    // first cluster; `segment` is the one this run simulates, or kNoSegment for none (the merge's
+    // own driver, which only draws the design and runs the pre-pass). With one segment, `segment`
+    // is kAllSegments: the one continuous run.
+    uint32_t segments = 1;
+    uint32_t segment = kAllSegments;
+    static constexpr uint32_t kAllSegments = ~0u, kNoSegment = ~0u - 1;
 };
 
 // Drawn strata a sample needs for its interval (collapsed pairs: 5 pairs, Student's t with 5
 // degrees of freedom, 2.57).
 constexpr uint64_t kMinStrata = 10;
+
+// Simulated clusters a segment of a split sample needs for its interval: each segment pays its own
+// start and drain, which the schedule model carries only in part. Measured (docs/sampling.md,
+// "Segments"): with 16 or more per segment the split estimate erred as the continuous one did
+// (mean 2.2-3.5 %, every interval covering); with 8, 4.4 % and 7 of 8 covering; with 4, 7.4 %
+// and 5 of 8.
+constexpr uint64_t kMinSegmentClusters = 16;
 
 // A node fetch of the functional pre-pass, replayed into an SM's L1 and the L2 (functional
 // warming) before a simulated cluster starts; `sm` is the SM that made it in the full frame.
@@ -90,9 +107,20 @@ public:
     // Per warp of the frame, the simulated cluster (index into simulated()) whose start its
     // fetches warm: the warps between the previous simulated cluster and it; ~0 otherwise.
     std::vector<uint32_t> feeds() const;
+    // Splits the simulated clusters, in frame order, into `k` segments of consecutive ones
+    // (sizes differing by one at most; the first wave in segment 0). Needs 1 <= k <= simulated().size().
+    void split(uint32_t k);
+    uint32_t segments() const { return segments_; }
+    uint32_t segment_of(size_t i) const { return uint32_t(i * segments_ / sim_.size()); }
+    // The first simulated cluster of its segment: its segment runs from cold caches, so it is
+    // warmed from the frame's first warp on (the clusters simulated in earlier segments included).
+    bool starts_segment(size_t i) const { return i == 0 || segment_of(i) != segment_of(i - 1); }
+    // The first warp whose fetches warm simulated cluster i.
+    uint64_t warm_from(size_t i) const { return starts_segment(i) ? 0 : end_warp(i - 1); }
 
 private:
     uint64_t warps_, cluster_, clusters_, certain_ = 0, empty_ = 0, candidates_ = 0, strata_ = 0;
+    uint32_t segments_ = 1;
     std::vector<SampledCluster> sim_;
 };
 
@@ -223,8 +251,13 @@ public:
     void on_trace_done(WarpRecord& w, double residence);
     // A shader warp finished its last trace at cycle `now`, leaving `unfinished` warps.
     void on_warp_finished(uint64_t unfinished, uint64_t now);
-    // `warps`: the simulated warps; `warps_total`: the frame's.
-    SampleEstimate estimate(const std::vector<WarpRecord>& warps, uint64_t warps_total, bool sampled) const;
+    // `warps`: the simulated warps; `warps_total`: the frame's. `segment_ends`: empty for one
+    // continuous run; else the warps are those of independent segments in frame order, segment s
+    // ending before warps[segment_ends[s]]: the sample's schedule model is then the sum of the
+    // segments' (each ran alone), and the fit is taken from the records in frame order, so that
+    // the estimate depends on the records only, not on the order the segments ran in.
+    SampleEstimate estimate(const std::vector<WarpRecord>& warps, uint64_t warps_total, bool sampled,
+                            const std::vector<size_t>& segment_ends = {}) const;
 
 private:
     ScheduleShape shape_;
@@ -232,7 +265,12 @@ private:
     std::vector<std::vector<uint32_t>> frame_traces_;  // pre-pass: every warp of the frame, in frame order
     double critical_nodes_total_ = 0;
     unsigned prepass_threads_ = 0;
-    double fit_n_ = 0, fit_x_ = 0, fit_y_ = 0, fit_xx_ = 0, fit_xy_ = 0;  // least-squares sums over simulated traces
+    // Least-squares sums of residence = a + b x critical path, over the drawn clusters' traces.
+    struct FitSums {
+        double n = 0, x = 0, y = 0, xx = 0, xy = 0;
+        void add(double cx, double cy) { n += 1, x += cx, y += cy, xx += cx * cx, xy += cx * cy; }
+    };
+    FitSums fit_;  // as the traces left the RT units
     double work_done_ = 0, work_saturated_ = 0;
     uint64_t saturated_until_ = 0;
 };

@@ -104,7 +104,7 @@ WorkloadDriver::WorkloadDriver(Workload& workload, uint32_t sms, uint32_t warp_s
             for (size_t w = 0; w < prepass.trace_nodes.size(); ++w)
                 for (uint32_t n : prepass.trace_nodes[w]) cluster_work[w / cluster] += n;
         }
-        const SampleDesign design(warps_.size(), cluster, sampling.rate, sampling.seed, cluster_work);
+        SampleDesign design(warps_.size(), cluster, sampling.rate, sampling.seed, cluster_work);
         // Never an estimate of 0 (or of the first wave alone) for a frame with work beyond it: a
         // draw of no stratum cannot extrapolate, checked or not.
         if (design.strata() == 0 && !design.census())
@@ -114,17 +114,40 @@ WorkloadDriver::WorkloadDriver(Workload& workload, uint32_t sms, uint32_t warp_s
                              std::to_string(std::ceil(1000.0 * 1.5 / double(design.clusters())) / 1000.0).substr(0, 5) + " or more)");
         design_ = {cluster, design.strata(), design.first_wave_clusters(), design.empty_clusters(),
                    design.strata() >= kMinStrata || design.census()};
+        if (sampling.segments > 1) {
+            if (sampling.segments > design.simulated().size())
+                throw InputError("--sample-segments " + std::to_string(sampling.segments) + ": this sample simulates " +
+                                 std::to_string(design.simulated().size()) + " clusters, and a segment needs one at least; use " +
+                                 std::to_string(design.simulated().size()) + " segments or fewer");
+            const uint64_t per_segment = design.simulated().size() / sampling.segments;
+            if (per_segment < kMinSegmentClusters) {
+                if (!sampling.unchecked)
+                    throw InputError("--sample-segments " + std::to_string(sampling.segments) + ": this sample simulates " +
+                                     std::to_string(design.simulated().size()) + " clusters, " + std::to_string(per_segment) +
+                                     " per segment; a segment needs " + std::to_string(kMinSegmentClusters) +
+                                     " for the interval (fewer ran 4-11 % off, docs/sampling.md): " +
+                                     (design.simulated().size() >= 2 * kMinSegmentClusters
+                                          ? "use --sample-segments " + std::to_string(design.simulated().size() / kMinSegmentClusters) + " or fewer, "
+                                          : std::string("too few to split; use ")) +
+                                     "a larger sample or frame, or --sample-unchecked for an estimate without an interval");
+                design_.has_interval = false;
+            }
+            if (sampling.segment != SamplingOptions::kNoSegment && sampling.segment >= sampling.segments)
+                throw InputError("--segment " + std::to_string(sampling.segment) + ": the segments are numbered 0.." +
+                                 std::to_string(sampling.segments - 1));
+            design.split(sampling.segments);
+            segment_ = sampling.segment;
+        }
+        // A cluster this run simulates: every one, or those of its segment.
+        auto simulated_here = [&](size_t i) { return design.segments() == 1 || design.segment_of(i) == sampling.segment; };
         // The caches are warmed, when a simulated cluster starts, with the last node fetches of
-        // the clusters skipped before it.
+        // the clusters skipped before it (a segment's first cluster: of every warp before it).
         if (traced) warm_ = warming_fetches(Frame(warps_), sampling, design, *workloads);
         std::vector<ShaderWarp> kept;
         std::vector<WarpRecord> kept_records;
+        if (design.segments() > 1) segment_ends_.assign(design.segments(), 0);
         for (size_t i = 0; i < design.simulated().size(); ++i)
             for (uint64_t w = design.first_warp(i); w < design.end_warp(i); ++w) {
-                ShaderWarp sw = std::move(warps_[w]);
-                sw.sm = uint32_t(kept.size() % sms);
-                sw.cluster = uint32_t(i);
-                kept.push_back(std::move(sw));
                 WarpRecord rec;
                 rec.weight = design.simulated()[i].weight;
                 rec.stratum = design.simulated()[i].stratum;
@@ -133,6 +156,15 @@ WorkloadDriver::WorkloadDriver(Workload& workload, uint32_t sms, uint32_t warp_s
                     rec.trace_nodes = prepass.trace_nodes[w];  // the estimator keeps the frame's
                     for (uint32_t n : rec.trace_nodes) rec.critical_nodes += n;
                 }
+                if (design.segments() > 1) {  // what the merge expects of each segment
+                    merge_records_.push_back(rec);
+                    segment_ends_[design.segment_of(i)] = merge_records_.size();
+                }
+                if (!simulated_here(i)) continue;
+                ShaderWarp sw = std::move(warps_[w]);
+                sw.sm = uint32_t(kept.size() % sms);
+                sw.cluster = uint32_t(i);
+                kept.push_back(std::move(sw));
                 kept_records.push_back(std::move(rec));
             }
         if (traced) estimator_.set_prepass(std::move(prepass));
@@ -148,6 +180,36 @@ WorkloadDriver::WorkloadDriver(Workload& workload, uint32_t sms, uint32_t warp_s
 
 WorkloadDriver::Estimate WorkloadDriver::estimate() const {
     Estimate e = estimator_.estimate(records_of_warps_, warps_total_, sampled_);
+    e.design = design_;
+    return e;
+}
+
+WorkloadDriver::Estimate WorkloadDriver::merge(const std::vector<std::vector<WarpRecord>>& segments) const {
+    if (segment_ends_.empty() || segments.size() != segment_ends_.size())
+        throw InputError("merging " + std::to_string(segments.size()) + " segments of a sample drawn in " +
+                         std::to_string(segment_ends_.size()) + " segments");
+    std::vector<WarpRecord> all = merge_records_;
+    size_t at = 0;
+    for (size_t s = 0; s < segments.size(); ++s) {
+        const size_t expected = segment_ends_[s] - at;
+        if (segments[s].size() != expected)
+            throw InputError("segment " + std::to_string(s) + " simulated " + std::to_string(segments[s].size()) +
+                             " shader warps where this sample's segment has " + std::to_string(expected) +
+                             ": it is not a segment of the same frame, sample and seed");
+        for (const WarpRecord& r : segments[s]) {
+            WarpRecord& w = all[at++];
+            if (r.frame_warp != w.frame_warp || r.residences.size() > w.trace_nodes.size())
+                throw InputError("segment " + std::to_string(s) + " holds shader warp " + std::to_string(r.frame_warp) + " where warp " +
+                                 std::to_string(w.frame_warp) + " was drawn: it is not a segment of the same frame, sample and seed");
+            w.work = r.work;
+            w.nodes = r.nodes;
+            w.l1_miss_nodes = r.l1_miss_nodes;
+            w.dram_nodes = r.dram_nodes;
+            w.residences = r.residences;
+            w.traces_done = uint32_t(r.residences.size());
+        }
+    }
+    Estimate e = estimator_.estimate(all, warps_total_, true, segment_ends_);
     e.design = design_;
     return e;
 }

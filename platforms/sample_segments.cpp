@@ -1,0 +1,176 @@
+#include "sample_segments.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+#include "model/stats.h"
+#include "model/treelet.h"
+#include "timing_stats.h"
+#include "workloads/input_error.h"
+
+namespace rtu {
+namespace {
+
+// A counter group (model/stats.h) as JSON and back, field by field from its own list.
+template <class G>
+void group_from(const nlohmann::json& j, G& g) {
+    if constexpr (HasCounters<G>::value)
+        for (const Counter<G>& c : G::kCounters) g.*c.member = j.at(c.name).template get<uint64_t>();
+    if constexpr (HasParts<G>::value) G::parts([&](const char* name, auto member, const char*) { group_from(j.at(name), g.*member); });
+}
+
+template <class G>
+std::vector<G> groups_from(const nlohmann::json& a) {
+    std::vector<G> v(a.size());
+    for (size_t i = 0; i < v.size(); ++i) group_from(a.at(i), v[i]);
+    return v;
+}
+
+// Per instance a += b; the instances must match (the same configuration).
+template <class G>
+void add_each(std::vector<G>& a, const std::vector<G>& b, const char* what) {
+    if (a.size() != b.size()) throw InputError(std::string("segments with different numbers of ") + what);
+    for (size_t i = 0; i < a.size(); ++i) add(a[i], b[i]);
+}
+
+}  // namespace
+
+void write_segment(StatsOut& out, const TimingResult& r, uint32_t index, uint32_t count, const std::vector<IdentityKey>& identity) {
+    StatsOut o = out.child("segment", "one segment of a split sampled run (--segment): what --merge-segments reads (docs/sampling.md)");
+    o.value("index", index, "", "this segment's number, 0..count-1");
+    o.value("count", count, "segments", "--sample-segments");
+    StatsOut id = o.child("identity", "the frame, sample and configuration: equal in every segment of one run");
+    for (const IdentityKey& k : identity) id.value(k.name.c_str(), k.value, "", k.what.c_str());
+    o.value("cycles_simulated", r.cycles_simulated, "core cycles", "this segment's simulated cycles (cycles above, too)");
+    o.value("memory_cycles", r.counts.memory_cycles, "memory cycles", "of the simulated time (DRAM bandwidth utilisation)");
+    o.value("core_period_fs", r.counts.core_period_fs, "fs", "the core clock's period (static energy)");
+    o.value("l1_miss_nodes", r.summary.l1_miss_nodes, "node reads", "the simulated rays' node reads not served by L1");
+    o.value("dram_nodes", r.summary.dram_nodes, "node reads", "the simulated rays' node reads served by DRAM");
+    o.value("payloads_allocated", r.payloads_allocated, "payloads", "TLM payloads the pool made (AT, LT; 0: interval)");
+    // Per simulated warp: its index in the frame, its rays' node reads (and of them those that
+    // missed L1 / went to DRAM), and each trace's residence in whole cycles, so that the file
+    // reads back bit for bit. The rest (stratum, weight, critical paths) the merge draws again.
+    nlohmann::ordered_json warps = nlohmann::ordered_json::array();
+    for (const WarpRecord& w : r.segment_records)
+        warps.push_back({w.frame_warp, w.nodes, w.l1_miss_nodes, w.dram_nodes, w.residences});
+    o.json()["warps"] = std::move(warps);
+    o.note("warps", "", "per simulated warp: [frame warp, node reads, of them L1 misses, of them DRAM reads, [each trace's residence in cycles]]");
+}
+
+SegmentRun read_segment(const std::string& file) {
+    std::ifstream in(file, std::ios::binary);
+    if (!in) throw InputError(file + ": cannot read (a segment's --stats file from rtsim --segment)");
+    std::stringstream text;
+    text << in.rdbuf();
+    SegmentRun s;
+    try {
+        // Our own files nest 5 levels; a deeper one is not one of them (and must not exhaust the stack).
+        const nlohmann::json stats = nlohmann::json::parse(text.str(), [](int depth, nlohmann::json::parse_event_t, nlohmann::json&) {
+            if (depth > 16) throw InputError("nested deeper than 16 levels");
+            return true;
+        });
+        if (!stats.is_object() || !stats.contains("segment"))
+            throw InputError("no \"segment\" section: not the statistics of one segment (rtsim --sample-segments K --segment I)");
+        const nlohmann::json& j = stats.at("segment");
+        s.index = j.at("index").get<uint32_t>();
+        s.count = j.at("count").get<uint32_t>();
+        s.identity = j.at("identity");
+        s.cycles_simulated = j.at("cycles_simulated").get<uint64_t>();
+        s.payloads_allocated = j.at("payloads_allocated").get<uint64_t>();
+        s.summary.rays = stats.at("rays").get<uint64_t>();
+        s.summary.invalid = stats.at("invalid_rays").get<uint64_t>();
+        s.summary.hits = stats.at("hits").get<uint64_t>();
+        s.summary.nodes_visited = stats.at("nodes_visited").get<uint64_t>();
+        s.summary.max_nodes = stats.at("max_nodes_per_ray").get<uint32_t>();
+        s.summary.l1_miss_nodes = j.at("l1_miss_nodes").get<uint64_t>();
+        s.summary.dram_nodes = j.at("dram_nodes").get<uint64_t>();
+        // The counters per instance, as the timing section lists them.
+        const nlohmann::json& t = stats.at("timing");
+        s.counts.rt = groups_from<RtUnitStats>(t.at("rt_unit").at("per_sm"));
+        s.counts.l1 = groups_from<CacheCounts>(t.at("l1").at("per_sm"));
+        s.counts.l2 = groups_from<CacheCounts>(t.at("l2").at("per_slice"));
+        s.counts.dram = groups_from<DramStats>(t.at("dram").at("per_channel"));
+        s.counts.memory_cycles = j.at("memory_cycles").get<double>();
+        s.counts.core_period_fs = j.at("core_period_fs").get<double>();
+        s.counts.cycles_simulated = s.cycles_simulated;
+        for (const nlohmann::json& w : j.at("warps")) {
+            WarpRecord rec;
+            rec.frame_warp = w.at(0).get<uint64_t>();
+            rec.nodes = w.at(1).get<double>();
+            rec.l1_miss_nodes = w.at(2).get<double>();
+            rec.dram_nodes = w.at(3).get<double>();
+            rec.residences = w.at(4).get<std::vector<double>>();
+            for (double d : rec.residences)
+                if (!(d >= 0 && d <= 1e15 && d == std::floor(d)))
+                    throw InputError("shader warp " + std::to_string(rec.frame_warp) + ": a residence of " + std::to_string(d) + " cycles (whole cycles expected)");
+            for (double d : rec.residences) rec.work += d;  // as on_trace_done sums them
+            s.warps.push_back(std::move(rec));
+        }
+    } catch (const InputError& e) {
+        throw InputError(file + ": " + e.what());
+    } catch (const nlohmann::json::exception& e) {
+        throw InputError(file + ": not a segment's statistics: " + e.what());
+    }
+    return s;
+}
+
+TimingResult merge_segments(const HwConfig& cfg, const BvhImage& image, Workload& workload, const TimingOptions& opt,
+                            std::vector<SegmentRun> segments, const std::vector<IdentityKey>& identity) {
+    const uint32_t count = opt.sample_segments;
+    if (segments.size() != count)
+        throw InputError("--merge-segments: " + std::to_string(segments.size()) + " files for " + std::to_string(count) +
+                         " segments (--sample-segments): give each segment's statistics once");
+    std::sort(segments.begin(), segments.end(), [](const SegmentRun& a, const SegmentRun& b) { return a.index < b.index; });
+    for (uint32_t i = 0; i < count; ++i) {
+        const SegmentRun& s = segments[i];
+        if (s.count != count) throw InputError("--merge-segments: a file holds segment " + std::to_string(s.index) + " of " + std::to_string(s.count) + ", not of " + std::to_string(count));
+        if (s.index != i) throw InputError("--merge-segments: segment " + std::to_string(i) + " is missing (or another one is given twice)");
+        for (const IdentityKey& k : identity) {
+            const auto it = s.identity.find(k.name);
+            const std::string theirs = it == s.identity.end() || !it->is_string() ? std::string("nothing") : it->get<std::string>();
+            if (theirs != k.value)
+                throw InputError("--merge-segments: segment " + std::to_string(i) + " is of another run: its " + k.name + " is '" + theirs +
+                                 "', this run's '" + k.value + "' (" + k.what + ")");
+        }
+    }
+    // The design and the pre-pass again (deterministic), no warp simulated.
+    const std::unique_ptr<Treelets> treelets = traversal_treelets(cfg, image, opt.order);
+    TimingOptions o = opt;
+    o.sample_segment = SamplingOptions::kNoSegment;
+    WorkloadDriver driver(workload, cfg.sms, cfg.warp_size, cfg.shade_latency, cfg.resident_warps, sampling_options(cfg, image, o, treelets.get()));
+    std::vector<std::vector<WarpRecord>> records;
+    TimingResult r;
+    r.counts = segments[0].counts;
+    r.counts.cycles_simulated = 0;
+    r.counts.memory_cycles = 0;
+    for (size_t i = 0; i < segments.size(); ++i) {
+        SegmentRun& s = segments[i];
+        if (i > 0) {
+            add_each(r.counts.rt, s.counts.rt, "RT units");
+            add_each(r.counts.l1, s.counts.l1, "L1 caches");
+            add_each(r.counts.l2, s.counts.l2, "L2 slices");
+            add_each(r.counts.dram, s.counts.dram, "DRAM channels");
+        }
+        r.counts.cycles_simulated += s.cycles_simulated;
+        r.counts.memory_cycles += s.counts.memory_cycles;
+        r.cycles_simulated += s.cycles_simulated;
+        r.payloads_allocated += s.payloads_allocated;
+        r.summary.rays += s.summary.rays;
+        r.summary.invalid += s.summary.invalid;
+        r.summary.hits += s.summary.hits;
+        r.summary.nodes_visited += s.summary.nodes_visited;
+        r.summary.l1_miss_nodes += s.summary.l1_miss_nodes;
+        r.summary.dram_nodes += s.summary.dram_nodes;
+        r.summary.max_nodes = std::max(r.summary.max_nodes, s.summary.max_nodes);
+        records.push_back(std::move(s.warps));
+    }
+    r.sampled = true;
+    r.estimate = driver.merge(records);
+    r.cycles = uint64_t(std::llround(r.estimate.cycles_estimate(double(r.cycles_simulated))));
+    for (const std::string& f : counter_invariants(r.counts, r.summary)) r.invariant_failures.push_back(f);
+    return r;
+}
+
+}  // namespace rtu

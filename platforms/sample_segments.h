@@ -1,0 +1,47 @@
+// A sampled run split into independent segments (docs/sampling.md, "Segments"), so that one frame's
+// sample can run as many processes (Slurm array tasks, docs/sweeps.md) and be merged into one
+// estimate: what a segment's run writes for the merge (the "segment" section of its statistics)
+// and the merge itself. Plain C++ (no SystemC).
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "timing_run.h"
+
+namespace rtu {
+
+// One segment's run as the merge reads it back.
+struct SegmentRun {
+    uint32_t index = 0, count = 0;
+    nlohmann::json identity;  // IdentityKey values by name
+    uint64_t cycles_simulated = 0;
+    std::vector<WarpRecord> warps;  // the simulated warps' records, in the segment's order
+    HierarchyCounts counts;
+    WorkloadDriver::RaySummary summary;
+    uint64_t payloads_allocated = 0;
+};
+
+// One key of a segment's identity: what must be equal in every segment of one run.
+struct IdentityKey {
+    std::string name, value, what;
+};
+
+// The "segment" section of segment `index` of `count`: with the per-instance counters of the
+// timing section, everything the merge needs, in JSON that reads back bit for bit (counters and
+// cycles are integers; residences are whole cycles).
+void write_segment(StatsOut& out, const TimingResult& r, uint32_t index, uint32_t count, const std::vector<IdentityKey>& identity);
+
+// Reads a segment's statistics file (written by rtsim --segment); InputError naming `file` if it
+// is not one.
+SegmentRun read_segment(const std::string& file);
+
+// The frame's result from its segments (any order; each index 0..count-1 once, every identity
+// equal to `identity`): counters and rays summed, cycles simulated summed, the estimate from every
+// segment's records (WorkloadDriver::merge on a driver drawn with SamplingOptions::kNoSegment).
+TimingResult merge_segments(const HwConfig& cfg, const BvhImage& image, Workload& workload, const TimingOptions& opt,
+                            std::vector<SegmentRun> segments, const std::vector<IdentityKey>& identity);
+
+}  // namespace rtu
