@@ -8,7 +8,9 @@
 #   2. --failed-only submits that run alone, and it finishes;
 #   3. the results equal the local engine's, bit for bit but wall-clock times;
 #   4. a second pass submits nothing; --no-wait after a changed rtsim returns at once with every run
-#      submitted again, and the same command then waits, collects, and gives the same results.
+#      submitted again, and the same command then waits, collects, and gives the same results;
+#   5. one sampled frame split into 4 segments as an array (split_frame.sh) merges into the same
+#      statistics as rtsim --sample-segments 4 in one process.
 # Stops the two daemons it started (local_cluster.sh, by their process ids) and removes the
 # folder, whatever happens.
 # Prints `N passed, M failed`; exit status 0 if none failed.
@@ -91,6 +93,26 @@ cat "$tmp/out.txt"
 check "the same command then waits without submitting twice, and collects" \
   bash -c "[ $rc -eq 0 ] && grep -q '0 submitted now' '$tmp/out.txt' && [ -s '$tmp/slurm/results.csv' ]"
 check "and its results equal the local engine's" scripts/sweep/same_results.py "$manifest" "$tmp/local" "$tmp/slurm"
+
+# --- one sampled frame across array tasks ------------------------------------------------------
+frame="--scene cornell --fidelity at --width 256 --height 256 --sample 0.5 --threads 1"  # 64 clusters simulated, 16 per segment
+rc=0; scripts/sweep/split_frame.sh --engine slurm --poll 1 --segments 4 "$tmp/frame" -- $frame >"$tmp/out.txt" 2>&1 || rc=$?
+cat "$tmp/out.txt"
+# shellcheck disable=SC2086
+"$rtsim" $frame --sample-segments 4 -q --stats "$tmp/frame-single.json"
+same_frame() {
+  /usr/bin/python3 - "$tmp/frame/frame.json" "$tmp/frame-single.json" <<'PY'
+import json, sys
+a, b = (json.load(open(p)) for p in sys.argv[1:3])
+for j in (a, b):
+    for k in ("time_s", "simulation_rate", "memory_mb"):
+        j.pop(k)
+sys.exit(0 if a == b and a["timing"]["sampling"]["cycles_ci95"] else 1)
+PY
+}
+same=1; same_frame && same=0
+check "a sampled frame split over 4 array tasks merges into the single-process estimate, bit for bit" \
+  bash -c "[ $rc -eq 0 ] && [ $same -eq 0 ] && grep -q 'job [0-9]*: 4 tasks' '$tmp/out.txt'"
 
 # Nothing of ours left running but the two daemons (an exited slurmstepd is a zombie for a moment).
 strays=$(ps -eo pid=,stat=,args= | awk -v t="$tmp" '$2 !~ /^Z/ && index($0, t) && $0 !~ /slurmctld|slurmd -D|awk/' | wc -l)
