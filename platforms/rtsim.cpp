@@ -75,6 +75,7 @@ struct Args {
     long long sample_segments = 1;  // --sample-segments K (signed: a negative number is an error, not a wrap)
     std::optional<uint64_t> segment;  // --segment I
     std::vector<std::string> merge_segments;  // --merge-segments FILE...
+    std::string sample_plan;  // --sample-plan FILE
     // The sampling pre-pass's threads; read as signed so that a negative number is an error,
     // not a wrap to 4 billion.
     long long threads = std::max(1u, std::thread::hardware_concurrency());
@@ -229,6 +230,7 @@ std::vector<SegmentRun> run_segment_children(const Args& a) {
                              "--sample-segments", std::to_string(a.sample_segments)});
     if (a.sample_unchecked) base.push_back("--sample-unchecked");
     if (a.quantum) base.insert(base.end(), {"--quantum", std::to_string(*a.quantum)});
+    if (!a.sample_plan.empty()) base.insert(base.end(), {"--sample-plan", a.sample_plan});  // the first segment writes it, the rest read it
     std::vector<SegmentRun> runs;
     for (long long i = 0; i < a.sample_segments; ++i) {
         if (stop_signal.load()) throw Interrupted{stop_signal.load()};
@@ -273,6 +275,7 @@ RunSpec spec_of(const Args& a) {
     if (!a.trace_warp.empty() && a.vcd.empty()) throw InputError("--trace-warp traces into the waveforms: it needs --vcd FILE");
     if (a.sample_seed && a.sample == 1.0) throw InputError("--sample-seed needs --sample RATE below 1");
     if (a.sample_unchecked && a.sample == 1.0) throw InputError("--sample-unchecked needs --sample RATE below 1");
+    if (!a.sample_plan.empty() && a.sample == 1.0) throw InputError("--sample-plan keeps a sampled run's pre-pass: it needs --sample RATE below 1");
     if (a.check_error && spec.fidelity != Fidelity::LT && spec.fidelity != Fidelity::Interval)
         throw InputError("--check-error compares a fast fidelity with AT: it needs --fidelity lt or interval (AT is the reference)");
     if (a.sample_segments < 1 || a.sample_segments > 4096)
@@ -295,7 +298,7 @@ RunSpec spec_of(const Args& a) {
     // Outputs are checked before anything runs: a bad path should not wait for the simulation.
     for (const auto& [option, path] : {std::pair<const char*, std::string>{"--stats", a.stats}, {"--image", a.image},
                                        {"--hits", a.hits}, {"--vcd", a.vcd}, {"--dump-bvh", a.dump_bvh},
-                                       {"--dump-rays", a.dump_rays}, {"--dump-hits", a.dump_hits}})
+                                       {"--dump-rays", a.dump_rays}, {"--dump-hits", a.dump_hits}, {"--sample-plan", a.sample_plan}})
         if (!path.empty()) check_writable_folder(option, path);
     if (!(a.sample > 0.0 && a.sample <= 1.0))
         throw InputError("--sample " + std::to_string(a.sample) + ": the share of the frame to simulate must be in (0, 1]");
@@ -326,6 +329,7 @@ RunSpec spec_of(const Args& a) {
     spec.sample_segments = uint32_t(a.sample_segments);
     if (a.segment) spec.segment = uint32_t(*a.segment);
     spec.merge_segments = a.merge_segments;
+    spec.sample_plan = a.sample_plan;
     if (a.sample_segments > 1 && !a.segment && a.merge_segments.empty()) spec.run_segments = [&a] { return run_segment_children(a); };
     spec.threads = unsigned(a.threads);
     spec.vcd = a.vcd;
@@ -384,7 +388,15 @@ void print_summary(const Args& a, const RunResult& r) {
     }
 }
 
-int run(const Args& a) {
+int run(const Args& given) {
+    // --sample-segments alone: its child runs share one pre-pass through a plan file (the first
+    // writes it) unless --sample-plan names one.
+    Args a = given;
+    std::optional<TempFolder> plan_dir;
+    if (a.sample_segments > 1 && !a.segment && a.merge_segments.empty() && a.sample_plan.empty() && a.sample < 1.0) {
+        plan_dir.emplace("--sample-segments");
+        a.sample_plan = (plan_dir->path / "plan.bin").string();
+    }
     const RunSpec spec = spec_of(a);
     const RunResult r = run_simulation(spec, a.quiet ? nullptr : &std::cout);
     if (r.interrupted) {
@@ -437,7 +449,7 @@ int sc_main(int argc, char** argv) {
         "             [--fidelity functional|at|lt|interval] [--config NAME|FILE] [--set KEY=VALUE]... [--quantum CYCLES]\n"
         "             [--prefetcher none|ttp|park|treelet|perfect-up|perfect-down]\n"
         "             [--sample RATE [--sample-seed S] [--sample-unchecked] [--threads N]\n"
-        "              [--sample-segments K [--segment I | --merge-segments FILE...]]] [--check-error N]\n"
+        "              [--sample-plan FILE] [--sample-segments K [--segment I | --merge-segments FILE...]]] [--check-error N]\n"
         "             [--stats FILE.json] [--image FILE.png] [--vcd FILE] [--trace-warp SM:WARP] [--verify] [--quiet]\n"
         "             [--dump-bvh FILE] [--dump-rays FILE] [--dump-hits FILE]\n"
         "       rtsim --stats-schema | --help\n"
@@ -477,6 +489,8 @@ int sc_main(int argc, char** argv) {
          "(docs/sampling.md, \"Segments\"); alone: each segment in a child process, one after another")
         ("segment", po::value<uint64_t>()->notifier([&a](uint64_t v) { a.segment = v; }),
          "with --sample-segments K: simulate only segment I (0..K-1) and write it for --merge-segments (a cluster's array task)")
+        ("sample-plan", po::value(&a.sample_plan), "keep the sampling pre-pass in this file: read if it exists (of the same frame "
+         "and configuration), else written; segments and their merge then trace the frame once")
         ("merge-segments", po::value(&a.merge_segments)->multitoken(),
          "with --sample-segments K and the same frame options: merge the K segments' --stats files into the frame's estimate")
         ("threads", po::value(&a.threads)->default_value(a.threads),

@@ -2,11 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <fstream>
 #include <sstream>
 
 #include "model/stats.h"
 #include "model/treelet.h"
+#include "output.h"
 #include "timing_stats.h"
 #include "workloads/input_error.h"
 
@@ -57,6 +59,78 @@ void write_segment(StatsOut& out, const TimingResult& r, uint32_t index, uint32_
         warps.push_back({w.frame_warp, w.nodes, w.l1_miss_nodes, w.dram_nodes, w.residences});
     o.json()["warps"] = std::move(warps);
     o.note("warps", "", "per simulated warp: [frame warp, node reads, of them L1 misses, of them DRAM reads, [each trace's residence in cycles]]");
+}
+
+std::string plan_identity(const std::vector<IdentityKey>& identity) {
+    std::string id;
+    for (const IdentityKey& k : identity)
+        if (k.name != "sample" && k.name != "segments") id += k.name + "=" + k.value + "\n";  // the pre-pass traces the whole frame
+    return id;
+}
+
+namespace {
+constexpr char kPlanMagic[8] = {'R', 'T', 'U', 'P', 'L', 'A', 'N', '1'};
+
+void put(std::string& out, uint64_t v, size_t bytes) { out.append(reinterpret_cast<const char*>(&v), bytes); }
+}  // namespace
+
+void write_plan(const std::string& file, const std::string& identity, const PrepassResult& p) {
+    std::string out(kPlanMagic, sizeof kPlanMagic);
+    put(out, identity.size(), 8);
+    out += identity;
+    put(out, p.trace_nodes.size(), 8);
+    put(out, p.threads, 4);
+    for (const std::vector<uint32_t>& w : p.trace_nodes) {
+        put(out, w.size(), 4);
+        out.append(reinterpret_cast<const char*>(w.data()), w.size() * sizeof(uint32_t));
+    }
+    write_file_atomic(file, out);  // several segment tasks may write the same plan at once: whole files only
+}
+
+std::optional<PrepassResult> read_plan(const std::string& file, const std::string& identity) {
+    std::ifstream in(file, std::ios::binary);
+    if (!in) return std::nullopt;
+    std::stringstream buf;
+    buf << in.rdbuf();
+    const std::string data = buf.str();
+    size_t at = 0;
+    auto need = [&](size_t n, const char* what) {
+        if (data.size() - at < n) throw InputError(file + ": a sample plan cut short (in its " + what + ")");
+    };
+    auto get = [&](size_t bytes, const char* what) {
+        need(bytes, what);
+        uint64_t v = 0;
+        std::memcpy(&v, data.data() + at, bytes);
+        at += bytes;
+        return v;
+    };
+    need(sizeof kPlanMagic, "header");
+    if (data.compare(0, sizeof kPlanMagic, kPlanMagic, sizeof kPlanMagic) != 0)
+        throw InputError(file + ": not a sample plan (rtsim --sample-plan writes them)");
+    at = sizeof kPlanMagic;
+    const uint64_t id_size = get(8, "header");
+    need(id_size, "identity");
+    const std::string theirs = data.substr(at, id_size);
+    at += id_size;
+    if (theirs != identity)
+        throw InputError(file + ": a sample plan of another frame or configuration: it has\n" + theirs + "this run has\n" + identity +
+                         "(remove it, or give another --sample-plan file)");
+    PrepassResult p;
+    const uint64_t warps = get(8, "header");
+    p.threads = unsigned(get(4, "header"));
+    if (warps > (data.size() - at) / 4) throw InputError(file + ": a sample plan of " + std::to_string(warps) + " warps in " + std::to_string(data.size()) + " bytes");
+    p.trace_nodes.resize(warps);
+    for (std::vector<uint32_t>& w : p.trace_nodes) {
+        const uint64_t n = get(4, "warps");
+        need(n * sizeof(uint32_t), "warps");
+        w.resize(n);
+        std::memcpy(w.data(), data.data() + at, n * sizeof(uint32_t));
+        at += n * sizeof(uint32_t);
+    }
+    if (at != data.size()) throw InputError(file + ": " + std::to_string(data.size() - at) + " bytes after the sample plan's last warp");
+    for (const std::vector<uint32_t>& w : p.trace_nodes)  // summed as run_prepass sums them
+        for (uint32_t n : w) p.critical_nodes_total += n;
+    return p;
 }
 
 SegmentRun read_segment(const std::string& file) {

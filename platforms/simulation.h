@@ -46,6 +46,7 @@ struct RunSpec {
     uint32_t segment = ~0u;
     std::vector<std::string> merge_segments;
     std::function<std::vector<SegmentRun>()> run_segments;
+    std::string sample_plan;  // --sample-plan FILE: the pre-pass kept between runs of one frame
     unsigned threads = 1;      // the sampling pre-pass's threads
     std::string vcd;           // AT, LT: waveforms into this file (without the .vcd SystemC adds)
     int trace_sm = -1, trace_warp = -1;

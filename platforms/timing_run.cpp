@@ -1,6 +1,7 @@
 #include "timing_run.h"
 
 #include "model/treelet.h"
+#include "sample_segments.h"
 
 namespace rtu {
 
@@ -14,6 +15,10 @@ SamplingOptions sampling_options(const HwConfig& c, const BvhImage& img, const T
     s.threads = o.sample_threads;
     s.segments = o.sample_segments;
     s.segment = o.sample_segment;
+    if (!o.sample_plan.empty()) {
+        s.load_prepass = [file = o.sample_plan, id = o.plan_identity] { return read_plan(file, id); };
+        s.save_prepass = [file = o.sample_plan, id = o.plan_identity](const PrepassResult& p) { write_plan(file, id, p); };
+    }
     s.progress = o.progress;
     s.stop = o.stop;
     // Enough fetches to refill every cache twice over.

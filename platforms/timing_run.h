@@ -39,6 +39,9 @@ struct TimingOptions {
     // segment `sample_segment` of `sample_segments` (SamplingOptions::segment).
     uint32_t sample_segments = 1;
     uint32_t sample_segment = SamplingOptions::kAllSegments;
+    // --sample-plan: the pre-pass read from this file if it exists, else run and written to it;
+    // `plan_identity` (sample_segments.h) is what the plan must match.
+    std::string sample_plan, plan_identity;
     // Keep every ray with its hit for TimingResult::rays (hits files, verification); without,
     // memory holds only the rays in flight.
     bool keep_rays = true;

@@ -686,9 +686,10 @@ TEST(RtsimSampling, IntervalFidelitySampledAsAt) {
 // processes (as array tasks on a cluster would) and merged in any order give the same statistics,
 // bit for bit, as rtsim --sample-segments alone; the segments together simulate the warps of
 // the continuous sample, each once, and their cycles add up to the merged run's simulated
-// cycles; the merged interval covers the full run. Merging refuses a missing segment, a
-// duplicate and a segment of another draw; a split of fewer than 16 clusters per segment is
-// refused, or runs without an interval when unchecked.
+// cycles; the merged interval covers the full run. A sample plan (the pre-pass kept in a file)
+// changes no statistic, and a plan of another frame is refused. Merging refuses a missing
+// segment, a duplicate and a segment of another draw; a split of fewer than 16 clusters per
+// segment is refused, or runs without an interval when unchecked.
 TEST(RtsimSampling, SegmentsMergedEqualTheSingleProcessRun) {
     TempDir dir;
     for (const char* fidelity : {"at", "interval"}) {
@@ -723,6 +724,26 @@ TEST(RtsimSampling, SegmentsMergedEqualTheSingleProcessRun) {
         ASSERT_EQ(merged.status, 0) << merged.err;
         const auto m = load("merged.json");
         EXPECT_EQ(m, load("single.json"));
+        // The same through a sample plan: the first segment writes the pre-pass, the others and
+        // the merge read it; the statistics do not change.
+        std::filesystem::remove(dir.file("plan.bin"));
+        const std::string plan = " --sample-plan " + dir.file("plan.bin");
+        for (int i = 0; i < 3; ++i)
+            ASSERT_EQ(rtsim(dir, split + plan + " --segment " + std::to_string(i) + " --stats " + dir.file("p" + std::to_string(i) + ".json")).status, 0);
+        EXPECT_TRUE(exists(dir.file("plan.bin")));
+        for (int i = 0; i < 3; ++i) EXPECT_EQ(load("p" + std::to_string(i) + ".json"), load("seg" + std::to_string(i) + ".json")) << i;
+        ASSERT_EQ(rtsim(dir, split + plan + " --merge-segments " + dir.file("p0.json") + " " + dir.file("p1.json") + " " + dir.file("p2.json") +
+                                 " --stats " + dir.file("mp.json")).status, 0);
+        EXPECT_EQ(load("mp.json"), m);
+        // A plan of another frame, or not a plan, is refused.
+        const Result foreign = rtsim(dir, split + plan + " --seed 9 --segment 0 --stats " + dir.file("f.json"));
+        EXPECT_EQ(foreign.status, 2);
+        EXPECT_NE(foreign.err.find("a sample plan of another frame or configuration"), std::string::npos) << foreign.err;
+        write_text(dir.file("junk.bin"), "RTUPLAN1\x05");
+        const Result junk = rtsim(dir, split + " --sample-plan " + dir.file("junk.bin") + " --segment 0 --stats " + dir.file("f.json"));
+        EXPECT_EQ(junk.status, 2);
+        EXPECT_NE(junk.err.find("cut short"), std::string::npos) << junk.err;
+        EXPECT_FALSE(exists(dir.file("f.json")));
         const auto& s = m["timing"]["sampling"];
         EXPECT_EQ(s["cycles_simulated"].get<uint64_t>(), cycles);
         EXPECT_EQ(m["rays"].get<uint64_t>(), rays);

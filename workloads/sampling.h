@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -21,6 +22,8 @@
 #include "rays.h"
 
 namespace rtu {
+
+struct PrepassResult;  // below
 
 // rate < 1 (docs/sampling.md): the frame's shader warps (groups of warp_size neighbouring pixel
 // samples) are cut into clusters of `capacity` consecutive warps (as many as the GPU holds, so
@@ -58,6 +61,11 @@ struct SamplingOptions {
     uint32_t segments = 1;
     uint32_t segment = kAllSegments;
     static constexpr uint32_t kAllSegments = ~0u, kNoSegment = ~0u - 1;
+    // The pre-pass's result kept between runs of one frame (--sample-plan): `load_prepass` gives
+    // it if it was kept (else nullopt: the pre-pass runs), `save_prepass` keeps it. Either may be
+    // empty.
+    std::function<std::optional<PrepassResult>()> load_prepass;
+    std::function<void(const PrepassResult&)> save_prepass;
 };
 
 // Drawn strata a sample needs for its interval (collapsed pairs: 5 pairs, Student's t with 5

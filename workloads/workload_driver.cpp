@@ -99,7 +99,16 @@ WorkloadDriver::WorkloadDriver(Workload& workload, uint32_t sms, uint32_t warp_s
         std::optional<PrepassWorkloads> workloads;
         if (traced) {
             workloads.emplace(sampling);
-            prepass = run_prepass(Frame(warps_), sampling, *workloads);
+            std::optional<PrepassResult> kept = sampling.load_prepass ? sampling.load_prepass() : std::nullopt;
+            if (kept && kept->trace_nodes.size() != warps_.size())
+                throw InputError("the sample plan holds " + std::to_string(kept->trace_nodes.size()) + " shader warps, this frame " +
+                                 std::to_string(warps_.size()));
+            if (kept) {
+                prepass = std::move(*kept);
+            } else {
+                prepass = run_prepass(Frame(warps_), sampling, *workloads);
+                if (sampling.save_prepass) sampling.save_prepass(prepass);
+            }
             cluster_work.assign((warps_.size() + cluster - 1) / cluster, 0.0);
             for (size_t w = 0; w < prepass.trace_nodes.size(); ++w)
                 for (uint32_t n : prepass.trace_nodes[w]) cluster_work[w / cluster] += n;

@@ -4,7 +4,9 @@
 # --sample-segments K --segment I, docs/sampling.md "Segments"), run as a manifest of K runs through
 # the local engine or as Slurm array tasks (run.sh: resumable, a changed rtsim reruns them), then
 # merged into the frame's estimate and interval: OUTDIR/frame.json, the same statistics, bit for
-# bit, as `rtsim RTSIM_ARGS --sample-segments K` in one process.
+# bit, as `rtsim RTSIM_ARGS --sample-segments K` in one process. Segment 0 runs first and keeps the
+# frame's functional pre-pass in OUTDIR/plan.bin (--sample-plan); the other K - 1 and the merge
+# read it.
 # Usage: split_frame.sh [--engine local|slurm] [--jobs N] [slurm options of run.sh] --segments K
 #                       OUTDIR -- RTSIM_ARGS...
 #   RTSIM_ARGS: the frame, fidelity and --sample RATE [--sample-seed S] (no --stats: the segments'
@@ -42,7 +44,7 @@ case " $* " in *" --sample "*) ;; *) echo "split_frame.sh: RTSIM_ARGS need --sam
 export RTSIM=${RTSIM:-$here/../../build/rtsim}
 shared=${SHARED:-$here/../../../shared/scenes}
 mkdir -p "$outdir"
-args="$* --sample-segments $segments"
+args="$* --sample-segments $segments --sample-plan $(readlink -f "$outdir")/plan.bin"
 manifest=$outdir/manifest.tsv
 {
   printf 'id\targs\toutput\n'
@@ -54,10 +56,18 @@ if [ -f "$manifest" ] && ! cmp -s "$manifest" "$manifest.tmp"; then
   echo "split_frame.sh: $outdir holds the segments of another frame or K (its manifest.tsv differs); use another OUTDIR" >&2; exit 2
 fi
 mv "$manifest.tmp" "$manifest"
+# The plan (the frame's functional pre-pass) of another rtsim binary is not this one's.
+sha=$(sha256sum "$RTSIM" | cut -d' ' -f1)
+if [ -f "$outdir/plan.sha256" ] && [ "$(cat "$outdir/plan.sha256")" != "$sha" ]; then rm -f "$outdir/plan.bin"; fi
+echo "$sha" >"$outdir/plan.sha256"
+# Segment 0 first, alone: it writes the plan, which the other segments and the merge then read
+# instead of tracing the whole frame again each.
+head -2 "$manifest" >"$outdir/first.tsv"
 status=0
-"$here/run.sh" "${run_args[@]}" "$manifest" "$outdir" || status=$?
+"$here/run.sh" "${run_args[@]}" "$outdir/first.tsv" "$outdir" || status=$?
+[ $status -eq 0 ] && { "$here/run.sh" "${run_args[@]}" "$manifest" "$outdir" || status=$?; }
 if [ $status -ne 0 ]; then
-  [ $status -eq 75 ] && echo "split_frame.sh: submitted; run the same command again to wait and merge" >&2
+  [ $status -eq 75 ] && echo "split_frame.sh: submitted; run the same command again to wait and go on (segment 0 first, then the rest, then the merge)" >&2
   exit $status
 fi
 # The local engine lists failed runs in results.csv and exits 0: a failed segment ends it here.

@@ -9,8 +9,9 @@
 #   3. the results equal the local engine's, bit for bit but wall-clock times;
 #   4. a second pass submits nothing; --no-wait after a changed rtsim returns at once with every run
 #      submitted again, and the same command then waits, collects, and gives the same results;
-#   5. one sampled frame split into 4 segments as an array (split_frame.sh) merges into the same
-#      statistics as rtsim --sample-segments 4 in one process.
+#   5. one sampled frame split into 4 segments as array tasks (split_frame.sh: segment 0, which
+#      keeps the pre-pass in a plan file, then the other 3) merges into the same statistics as
+#      rtsim --sample-segments 4 in one process.
 # Stops the two daemons it started (local_cluster.sh, by their process ids) and removes the
 # folder, whatever happens.
 # Prints `N passed, M failed`; exit status 0 if none failed.
@@ -111,8 +112,8 @@ sys.exit(0 if a == b and a["timing"]["sampling"]["cycles_ci95"] else 1)
 PY
 }
 same=1; same_frame && same=0
-check "a sampled frame split over 4 array tasks merges into the single-process estimate, bit for bit" \
-  bash -c "[ $rc -eq 0 ] && [ $same -eq 0 ] && grep -q 'job [0-9]*: 4 tasks' '$tmp/out.txt'"
+check "a sampled frame split over 4 array tasks (segment 0, then 3 reading its plan) merges into the single-process estimate, bit for bit" \
+  bash -c "[ $rc -eq 0 ] && [ $same -eq 0 ] && grep -q 'job [0-9]*: 1 tasks' '$tmp/out.txt' && grep -q 'job [0-9]*: 3 tasks' '$tmp/out.txt' && [ -s '$tmp/frame/plan.bin' ]"
 
 # Nothing of ours left running but the two daemons (an exited slurmstepd is a zombie for a moment).
 strays=$(ps -eo pid=,stat=,args= | awk -v t="$tmp" '$2 !~ /^Z/ && index($0, t) && $0 !~ /slurmctld|slurmd -D|awk/' | wc -l)
