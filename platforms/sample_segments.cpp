@@ -16,10 +16,24 @@ namespace rtu {
 namespace {
 
 // A counter group (model/stats.h) as JSON and back, field by field from its own list.
+// A whole number in [0, max] (nlohmann's get<uint64_t> of a negative or fractional number, or of
+// one beyond the type, would wrap or be undefined); any other value is bad input.
+uint64_t whole(const nlohmann::json& j, uint64_t max = UINT64_MAX) {
+    if (!j.is_number_unsigned()) throw InputError("expected a whole number, found " + j.dump().substr(0, 40));
+    const uint64_t v = j.get<uint64_t>();
+    if (v > max) throw InputError(std::to_string(v) + " is more than " + std::to_string(max));
+    return v;
+}
+
+double real(const nlohmann::json& j) {
+    if (!j.is_number()) throw InputError("expected a number, found " + j.dump().substr(0, 40));
+    return j.get<double>();
+}
+
 template <class G>
 void group_from(const nlohmann::json& j, G& g) {
     if constexpr (HasCounters<G>::value)
-        for (const Counter<G>& c : G::kCounters) g.*c.member = j.at(c.name).template get<uint64_t>();
+        for (const Counter<G>& c : G::kCounters) g.*c.member = whole(j.at(c.name));
     if constexpr (HasParts<G>::value) G::parts([&](const char* name, auto member, const char*) { group_from(j.at(name), g.*member); });
 }
 
@@ -124,7 +138,7 @@ std::optional<PrepassResult> read_plan(const std::string& file, const std::strin
         const uint64_t n = get(4, "warps");
         need(n * sizeof(uint32_t), "warps");
         w.resize(n);
-        std::memcpy(w.data(), data.data() + at, n * sizeof(uint32_t));
+        if (n) std::memcpy(w.data(), data.data() + at, n * sizeof(uint32_t));  // an empty vector's data() may be null
         at += n * sizeof(uint32_t);
     }
     if (at != data.size()) throw InputError(file + ": " + std::to_string(data.size() - at) + " bytes after the sample plan's last warp");
@@ -148,38 +162,40 @@ SegmentRun read_segment(const std::string& file) {
         if (!stats.is_object() || !stats.contains("segment"))
             throw InputError("no \"segment\" section: not the statistics of one segment (rtsim --sample-segments K --segment I)");
         const nlohmann::json& j = stats.at("segment");
-        s.index = j.at("index").get<uint32_t>();
-        s.count = j.at("count").get<uint32_t>();
+        s.index = uint32_t(whole(j.at("index"), 4095));
+        s.count = uint32_t(whole(j.at("count"), 4096));
         s.identity = j.at("identity");
-        s.cycles_simulated = j.at("cycles_simulated").get<uint64_t>();
-        s.payloads_allocated = j.at("payloads_allocated").get<uint64_t>();
-        s.summary.rays = stats.at("rays").get<uint64_t>();
-        s.summary.invalid = stats.at("invalid_rays").get<uint64_t>();
-        s.summary.hits = stats.at("hits").get<uint64_t>();
-        s.summary.nodes_visited = stats.at("nodes_visited").get<uint64_t>();
-        s.summary.max_nodes = stats.at("max_nodes_per_ray").get<uint32_t>();
-        s.summary.l1_miss_nodes = j.at("l1_miss_nodes").get<uint64_t>();
-        s.summary.dram_nodes = j.at("dram_nodes").get<uint64_t>();
+        s.cycles_simulated = whole(j.at("cycles_simulated"));
+        s.payloads_allocated = whole(j.at("payloads_allocated"));
+        s.summary.rays = whole(stats.at("rays"));
+        s.summary.invalid = whole(stats.at("invalid_rays"));
+        s.summary.hits = whole(stats.at("hits"));
+        s.summary.nodes_visited = whole(stats.at("nodes_visited"));
+        s.summary.max_nodes = uint32_t(whole(stats.at("max_nodes_per_ray"), UINT32_MAX));
+        s.summary.l1_miss_nodes = whole(j.at("l1_miss_nodes"));
+        s.summary.dram_nodes = whole(j.at("dram_nodes"));
         // The counters per instance, as the timing section lists them.
         const nlohmann::json& t = stats.at("timing");
         s.counts.rt = groups_from<RtUnitStats>(t.at("rt_unit").at("per_sm"));
         s.counts.l1 = groups_from<CacheCounts>(t.at("l1").at("per_sm"));
         s.counts.l2 = groups_from<CacheCounts>(t.at("l2").at("per_slice"));
         s.counts.dram = groups_from<DramStats>(t.at("dram").at("per_channel"));
-        s.counts.memory_cycles = j.at("memory_cycles").get<double>();
-        s.counts.core_period_fs = j.at("core_period_fs").get<double>();
+        s.counts.memory_cycles = real(j.at("memory_cycles"));
+        s.counts.core_period_fs = real(j.at("core_period_fs"));
         s.counts.cycles_simulated = s.cycles_simulated;
         for (const nlohmann::json& w : j.at("warps")) {
             WarpRecord rec;
-            rec.frame_warp = w.at(0).get<uint64_t>();
-            rec.nodes = w.at(1).get<double>();
-            rec.l1_miss_nodes = w.at(2).get<double>();
-            rec.dram_nodes = w.at(3).get<double>();
-            rec.residences = w.at(4).get<std::vector<double>>();
-            for (double d : rec.residences)
+            rec.frame_warp = whole(w.at(0));
+            rec.nodes = real(w.at(1));
+            rec.l1_miss_nodes = real(w.at(2));
+            rec.dram_nodes = real(w.at(3));
+            for (const nlohmann::json& r : w.at(4)) {
+                const double d = real(r);
                 if (!(d >= 0 && d <= 1e15 && d == std::floor(d)))
-                    throw InputError("shader warp " + std::to_string(rec.frame_warp) + ": a residence of " + std::to_string(d) + " cycles (whole cycles expected)");
-            for (double d : rec.residences) rec.work += d;  // as on_trace_done sums them
+                    throw InputError("shader warp " + std::to_string(rec.frame_warp) + ": a residence of " + r.dump() + " cycles (whole cycles expected)");
+                rec.residences.push_back(d);
+                rec.work += d;  // as on_trace_done sums them
+            }
             s.warps.push_back(std::move(rec));
         }
     } catch (const InputError& e) {

@@ -6,6 +6,10 @@
 #include "model/sector_cache.h"
 #include "model/trace_schedule.h"
 #include "workloads/sampling.h"
+#include "platforms/sample_segments.h"
+#include "workloads/input_error.h"
+#include "test_util.h"
+#include <fstream>
 
 #include <algorithm>
 
@@ -151,4 +155,42 @@ TEST(SampleDesign, FirstWaveEmptyClustersAndStrataByWork) {
     const rtu::SampleDesign all(40, 4, 0.95, 1, work);
     EXPECT_TRUE(all.census());
     EXPECT_EQ(all.simulated().size(), 8u);
+}
+
+// A sample plan (--sample-plan) reads back what was written, an empty warp included (a warp whose
+// rays all miss the root box has no traces; reading it once passed a null pointer to memcpy:
+// found by fuzz_segment); a missing file is no plan; another identity, a file cut short, bytes
+// after the last warp and a count beyond the file are bad input.
+TEST(SamplePlan, RoundTripsAndRefusesBadFiles) {
+    rtu::test::TempDir dir;
+    rtu::PrepassResult p;
+    p.trace_nodes = {{3, 5, 0}, {}, {7}};
+    p.threads = 2;
+    const std::string file = dir.file("plan.bin"), id = "scene=cornell\nframe=64x64\n";
+    EXPECT_FALSE(rtu::read_plan(file, id).has_value());
+    rtu::write_plan(file, id, p);
+    const auto back = rtu::read_plan(file, id);
+    ASSERT_TRUE(back.has_value());
+    EXPECT_EQ(back->trace_nodes, p.trace_nodes);
+    EXPECT_EQ(back->threads, 2u);
+    EXPECT_EQ(back->critical_nodes_total, 15.0);
+    EXPECT_THROW(rtu::read_plan(file, "scene=wknd\n"), rtu::InputError);
+    std::string bytes;
+    {
+        std::ifstream in(file, std::ios::binary);
+        bytes.assign(std::istreambuf_iterator<char>(in), {});
+    }
+    auto refused = [&](const std::string& content) {
+        {
+            std::ofstream out(dir.file("bad.bin"), std::ios::binary);
+            out << content;
+        }
+        EXPECT_THROW(rtu::read_plan(dir.file("bad.bin"), id), rtu::InputError) << content.size() << " bytes";
+    };
+    for (size_t cut : {size_t(0), size_t(5), size_t(12), bytes.size() - 1}) refused(bytes.substr(0, cut));
+    refused(bytes + "x");
+    std::string huge = bytes;
+    huge[8 + 8 + id.size()] = char(0xff);  // the warp count's low byte: far more warps than bytes
+    huge[8 + 8 + id.size() + 5] = char(0x7f);
+    refused(huge);
 }
