@@ -31,7 +31,7 @@
 
 namespace rtu {
 
-class Treelets;
+struct Treelets;
 
 class RtComplex : public sc_core::sc_module {
 public:

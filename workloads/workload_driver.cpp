@@ -145,7 +145,6 @@ WorkloadDriver::WorkloadDriver(Workload& workload, uint32_t sms, uint32_t warp_s
                 throw InputError("--segment " + std::to_string(sampling.segment) + ": the segments are numbered 0.." +
                                  std::to_string(sampling.segments - 1));
             design.split(sampling.segments);
-            segment_ = sampling.segment;
         }
         // A cluster this run simulates: every one, or those of its segment.
         auto simulated_here = [&](size_t i) { return design.segments() == 1 || design.segment_of(i) == sampling.segment; };

@@ -69,8 +69,6 @@ public:
     // A sample split into segments (SamplingOptions::segments): this run simulates one of them
     // (or none: the merge's driver). Its records are the segment's part of the estimate.
     bool segment_run() const { return !segment_ends_.empty(); }
-    uint32_t segment() const { return segment_; }
-    uint32_t segments() const { return uint32_t(segment_ends_.size()); }
     const std::vector<WarpRecord>& warp_records() const { return records_of_warps_; }
     // The frame's estimate from every segment's records (segments[s]: segment s's, in its
     // order), checked against this sample's design.
@@ -122,7 +120,6 @@ private:
     // Segments: every segment's warps as drawn (frame order), and where each segment ends.
     std::vector<WarpRecord> merge_records_;
     std::vector<size_t> segment_ends_;
-    uint32_t segment_ = SamplingOptions::kAllSegments;
 };
 
 }  // namespace rtu

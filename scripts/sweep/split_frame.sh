@@ -36,7 +36,7 @@ if ! [[ $segments =~ ^[0-9]+$ ]] || [ "$segments" -lt 2 ]; then
 fi
 for a in "$@"; do
   case $a in
-    --stats|--sample-segments|--segment|--merge-segments) echo "split_frame.sh: $a is split_frame.sh's to give, not in RTSIM_ARGS" >&2; exit 2 ;;
+    --stats|--sample-segments|--segment|--merge-segments|--sample-plan) echo "split_frame.sh: $a is split_frame.sh's to give, not in RTSIM_ARGS" >&2; exit 2 ;;
     *$'\t'*) echo "split_frame.sh: an argument with a tab cannot go into a manifest" >&2; exit 2 ;;
   esac
 done
