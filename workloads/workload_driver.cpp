@@ -154,6 +154,7 @@ WorkloadDriver::WorkloadDriver(Workload& workload, uint32_t sms, uint32_t warp_s
         std::vector<ShaderWarp> kept;
         std::vector<WarpRecord> kept_records;
         if (design.segments() > 1) segment_ends_.assign(design.segments(), 0);
+        size_t drawn = 0;  // warps of the design so far, in frame order
         for (size_t i = 0; i < design.simulated().size(); ++i)
             for (uint64_t w = design.first_warp(i); w < design.end_warp(i); ++w) {
                 WarpRecord rec;
@@ -164,9 +165,10 @@ WorkloadDriver::WorkloadDriver(Workload& workload, uint32_t sms, uint32_t warp_s
                     rec.trace_nodes = prepass.trace_nodes[w];  // the estimator keeps the frame's
                     for (uint32_t n : rec.trace_nodes) rec.critical_nodes += n;
                 }
-                if (design.segments() > 1) {  // what the merge expects of each segment
-                    merge_records_.push_back(rec);
-                    segment_ends_[design.segment_of(i)] = merge_records_.size();
+                if (design.segments() > 1) {
+                    segment_ends_[design.segment_of(i)] = ++drawn;
+                    // What the merge expects of each segment: kept by the merge's driver only.
+                    if (sampling.segment == SamplingOptions::kNoSegment) merge_records_.push_back(rec);
                 }
                 if (!simulated_here(i)) continue;
                 ShaderWarp sw = std::move(warps_[w]);
@@ -196,6 +198,8 @@ WorkloadDriver::Estimate WorkloadDriver::merge(const std::vector<std::vector<War
     if (segment_ends_.empty() || segments.size() != segment_ends_.size())
         throw InputError("merging " + std::to_string(segments.size()) + " segments of a sample drawn in " +
                          std::to_string(segment_ends_.size()) + " segments");
+    if (merge_records_.size() != segment_ends_.back())
+        throw std::logic_error("WorkloadDriver::merge needs a driver drawn with SamplingOptions::kNoSegment");
     std::vector<WarpRecord> all = merge_records_;
     size_t at = 0;
     for (size_t s = 0; s < segments.size(); ++s) {

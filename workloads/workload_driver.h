@@ -71,7 +71,8 @@ public:
     bool segment_run() const { return !segment_ends_.empty(); }
     const std::vector<WarpRecord>& warp_records() const { return records_of_warps_; }
     // The frame's estimate from every segment's records (segments[s]: segment s's, in its
-    // order), checked against this sample's design.
+    // order), checked against this sample's design. Only on a driver drawn with
+    // SamplingOptions::kNoSegment (the merge's).
     Estimate merge(const std::vector<std::vector<WarpRecord>>& segments) const;
     // Sampled runs with the pre-pass: called when a simulated cluster starts, with the last node
     // fetches of the clusters skipped before it, in order.
@@ -117,7 +118,8 @@ private:
     bool sampled_ = false;
     SampleEstimate::Design design_;
     SampleEstimator estimator_;
-    // Segments: every segment's warps as drawn (frame order), and where each segment ends.
+    // Segments: where each segment ends among the design's warps (frame order); for the merge's
+    // driver, those warps as drawn.
     std::vector<WarpRecord> merge_records_;
     std::vector<size_t> segment_ends_;
 };
