@@ -142,8 +142,7 @@ std::optional<PrepassResult> read_plan(const std::string& file, const std::strin
         at += n * sizeof(uint32_t);
     }
     if (at != data.size()) throw InputError(file + ": " + std::to_string(data.size() - at) + " bytes after the sample plan's last warp");
-    for (const std::vector<uint32_t>& w : p.trace_nodes)  // summed as run_prepass sums them
-        for (uint32_t n : w) p.critical_nodes_total += n;
+    p.critical_nodes_total = critical_nodes_total(p.trace_nodes);
     return p;
 }
 

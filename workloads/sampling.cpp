@@ -189,9 +189,15 @@ PrepassResult run_prepass(const FrameWarps& frame, const SamplingOptions& opt, P
         }
         if (printed) std::cerr << "\n";
     });
-    for (const std::vector<uint32_t>& trace : result.trace_nodes)
-        for (uint32_t n : trace) result.critical_nodes_total += n;
+    result.critical_nodes_total = critical_nodes_total(result.trace_nodes);
     return result;
+}
+
+double critical_nodes_total(const std::vector<std::vector<uint32_t>>& trace_nodes) {
+    double total = 0;
+    for (const std::vector<uint32_t>& trace : trace_nodes)
+        for (uint32_t n : trace) total += n;
+    return total;
 }
 
 // Only the last `window` fetches before a simulated cluster warm the caches: the warps it feeds

@@ -164,6 +164,9 @@ struct PrepassResult {
     unsigned threads = 0;
 };
 PrepassResult run_prepass(const FrameWarps& frame, const SamplingOptions& opt, PrepassWorkloads& workloads);
+// The sum of every trace's critical path, in frame order (the one order, so that a pre-pass read
+// back from a sample plan sums to the same double as the one that ran).
+double critical_nodes_total(const std::vector<std::vector<uint32_t>>& trace_nodes);
 
 // Per simulated cluster of `design`, the last opt.warm_window node fetches of the warps it feeds
 // (the clusters skipped before it), in frame order: traced again, backwards from the cluster,
