@@ -41,7 +41,7 @@ struct RunSpec {
     // --sample-segments K (docs/sampling.md, "Segments"): the sample as K independent segments.
     // `segment` < K: simulate that one and write its "segment" section; else merge the K
     // segments' statistics, from `merge_segments` (files) or from `run_segments` (rtsim runs
-    // each segment as a child process and returns their statistics files).
+    // each segment as a child process and returns their statistics, read back).
     uint32_t sample_segments = 1;
     uint32_t segment = ~0u;
     std::vector<std::string> merge_segments;
