@@ -13,9 +13,10 @@ packages=(
   nlohmann-json3-dev        # statistics and configuration files
   libstb-dev                # PNG output
   libabsl-dev               # Abseil flat hash maps (cache tags, MSHRs)
+  parallel                  # the sweeps' local engine, which the test suite runs (tests/sweep_*_test.sh)
 )
-# --reports: also what the experiment sweeps and reports need (GNU parallel, matplotlib).
-if [ "${1:-}" = "--reports" ]; then packages+=(parallel python3-matplotlib gawk); fi
+# --reports: also what the experiment reports need (matplotlib).
+if [ "${1:-}" = "--reports" ]; then packages+=(python3-matplotlib gawk); fi
 # --slurm: also Slurm's controller, node daemon and client (scripts/sweep/test_slurm.sh starts a
 # throw-away cluster with them; the packages' own services are not started).
 if [ "${1:-}" = "--slurm" ]; then packages+=(slurmctld slurmd slurm-client); fi
