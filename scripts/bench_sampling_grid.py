@@ -6,7 +6,8 @@ errors. Resumable (a run with stats is not redone; use a new OUTDIR for a new rt
 Usage: scripts/bench_sampling_grid.py RTSIM OUTDIR [SCENES]   (SCENES: comma-separated, from
 mesh, bunny, cornell, sprng, ship; default mesh,bunny,cornell)
 Environment: SIZES (default 64,128), PRESETS (mobile,desktop), RATES (0.1,0.25), SEEDS (4),
-FID (at), SHARED (../shared/scenes beside the repository). Two runs at a time.
+FID (at), WORKLOADS (pt; also primary, ao, sh), SHARED (../shared/scenes beside the repository).
+Two runs at a time.
 The grids of docs/sampling.md:
   SIZES=128,256 RATES=0.25,0.5 scripts/bench_sampling_grid.py build/rtsim out/grid
   SIZES=256 RATES=0.1,0.25 PRESETS=mobile,paper scripts/bench_sampling_grid.py build/rtsim out/heldout ship,sprng"""
@@ -20,15 +21,18 @@ presets = os.environ.get("PRESETS", "mobile,desktop").split(",")
 rates = os.environ.get("RATES", "0.1,0.25").split(",")
 seeds = range(1, int(os.environ.get("SEEDS", "4")) + 1)
 fid = os.environ.get("FID", "at")
+workloads = os.environ.get("WORKLOADS", "pt").split(",")
 os.makedirs(out, exist_ok=True)
 def run(key, args):
     return (key,) + run_stats(rtsim, f"{out}/{key}.json", args)
 jobs = []
-for sc, n, pre in itertools.product(scenes, sizes, presets):
-    base = f"{SC[sc]} --width {n} --height {n} --config {pre} --fidelity {fid}"
-    jobs.append((f"{sc}_{n}_{pre}_full", base))
+def cell(sc, wl):  # a run's name: the scene, and the workload where it is not path tracing
+    return sc if wl == "pt" else f"{sc}-{wl}"
+for sc, wl, n, pre in itertools.product(scenes, workloads, sizes, presets):
+    base = f"{SC[sc]} --workload {wl} --width {n} --height {n} --config {pre} --fidelity {fid}"
+    jobs.append((f"{cell(sc, wl)}_{n}_{pre}_full", base))
     for r, s in itertools.product(rates, seeds):
-        jobs.append((f"{sc}_{n}_{pre}_{r}_{s}", base + f" --sample {r} --sample-seed {s} --threads 1"))
+        jobs.append((f"{cell(sc, wl)}_{n}_{pre}_{r}_{s}", base + f" --sample {r} --sample-seed {s} --threads 1"))
 fails = {}
 with cf.ThreadPoolExecutor(2) as ex:
     for key, rc, err in ex.map(lambda j: run(*j), jobs):
@@ -36,7 +40,7 @@ with cf.ThreadPoolExecutor(2) as ex:
 # analyse
 rows = []
 cov = n = narrow_miss = refused = 0; errs = []
-for sc, sz, pre in itertools.product(scenes, sizes, presets):
+for sc, sz, pre in itertools.product([cell(sc, wl) for sc in scenes for wl in workloads], sizes, presets):
     try: truth = json.load(open(f"{out}/{sc}_{sz}_{pre}_full.json"))["cycles"]
     except Exception: continue
     for r in rates:
@@ -51,7 +55,7 @@ for sc, sz, pre in itertools.product(scenes, sizes, presets):
             hw = (ci[1] - ci[0]) / 2 / est
             if not c and hw < 0.10: narrow_miss += 1
             line.append(f"{100*e:+.1f}{'' if c else '!'}±{100*hw:.0f}")
-        print(f"{sc:7s} {sz:4d} {pre:8s} r={r:5s} strata={sm.get('strata', '?')} rate_sim={sm.get('rate_simulated', 0):.3f}  " + "  ".join(line))
+        print(f"{sc:13s} {sz:4d} {pre:8s} r={r:5s} strata={sm.get('strata', '?')} rate_sim={sm.get('rate_simulated', 0):.3f}  " + "  ".join(line))
 errs.sort()
 print(f"coverage {cov}/{n} intervals, narrow(<10%) misses {narrow_miss}, refused {refused}, mean|err| {100*sum(errs)/max(1,len(errs)):.2f}%, worst {100*max(errs or [0]):.1f}%")
 for k, v in fails.items(): print("FAIL", k, v[0], v[1][:200])

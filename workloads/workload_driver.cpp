@@ -150,7 +150,20 @@ WorkloadDriver::WorkloadDriver(Workload& workload, uint32_t sms, uint32_t warp_s
         auto simulated_here = [&](size_t i) { return design.segments() == 1 || design.segment_of(i) == sampling.segment; };
         // The caches are warmed, when a simulated cluster starts, with the last node fetches of
         // the clusters skipped before it (a segment's first cluster: of every warp before it).
-        if (traced) warm_ = warming_fetches(Frame(warps_), sampling, design, *workloads);
+        if (traced) {
+            // Each SM's L1 is warmed when that SM takes its first trace of the cluster: the SMs go
+            // through their warps at their own pace (all are ready at cycle 0), and one of cheap
+            // warps may start a cluster long before an SM of costly warps does; warming the
+            // lagging SM then would fill its L1 before it has finished its previous cluster. With
+            // a limit of resident warps a warp's SM is decided only as it starts, so the first SM
+            // to start the cluster warms them all.
+            std::vector<std::vector<WarmFetch>> fetches = warming_fetches(Frame(warps_), sampling, design, *workloads);
+            warm_.assign(fetches.size(), std::vector<std::vector<WarmFetch>>(resident_warps ? 1 : sms));
+            for (size_t i = 0; i < fetches.size(); ++i) {
+                for (const WarmFetch& f : fetches[i]) warm_[i][resident_warps ? 0 : f.sm].push_back(f);
+                std::vector<WarmFetch>().swap(fetches[i]);
+            }
+        }
         std::vector<ShaderWarp> kept;
         std::vector<WarpRecord> kept_records;
         if (design.segments() > 1) segment_ends_.assign(design.segments(), 0);
@@ -236,9 +249,12 @@ std::optional<std::vector<WarpRay>> WorkloadDriver::next_trace(uint32_t sm, uint
         const uint32_t wi = q.begin()->second;
         q.erase(q.begin());
         ShaderWarp& sw = warps_[wi];
-        if (sw.cluster < warm_.size() && !warm_[sw.cluster].empty()) {  // the first trace of a simulated cluster
-            if (on_warm) on_warm(warm_[sw.cluster]);
-            std::vector<WarmFetch>().swap(warm_[sw.cluster]);
+        if (sw.cluster < warm_.size()) {
+            std::vector<WarmFetch>& mine = warm_[sw.cluster][warm_[sw.cluster].size() == 1 ? 0 : sm];
+            if (!mine.empty()) {  // this SM's first trace of a simulated cluster
+                if (on_warm) on_warm(mine);
+                std::vector<WarmFetch>().swap(mine);
+            }
         }
         std::vector<WarpRay> rays;
         std::vector<RetiredRay> invalid;

@@ -108,7 +108,7 @@ private:
     std::vector<std::set<std::pair<uint64_t, uint32_t>>> ready_;  // per SM: (ready cycle, warp)
     std::vector<Record> records_;
     std::vector<uint64_t> free_records_;
-    std::vector<std::vector<WarmFetch>> warm_;  // per simulated cluster, until it starts
+    std::vector<std::vector<std::vector<WarmFetch>>> warm_;  // per simulated cluster and SM, until that SM starts it
     bool keep_rays_ = true;
     uint64_t issued_ = 0;
     RaySummary summary_;
