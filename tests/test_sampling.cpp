@@ -239,7 +239,7 @@ TEST(SampleWarming, EachSmIsWarmedWhenItStartsTheCluster) {
         while (driver.next_trace(caller, 0)) ++traces[caller];
     EXPECT_GT(traces[0], 0u);
     EXPECT_EQ(traces[0], traces[1]);
-    // Every simulated cluster but the first (nothing before it) warms each SM once.
+    // Each simulated cluster with skipped warps before it warms each SM once (the first has none).
     ASSERT_GT(calls[0].size(), 3u);
     EXPECT_EQ(calls[0].size(), calls[1].size());
     for (uint32_t sm = 0; sm < 2; ++sm)
