@@ -112,8 +112,8 @@ GpuPlatform::GpuPlatform(const HwConfig& cfg, const BvhImage& image, Workload& w
     : impl_(new Impl(cfg, image, workload, opt)) {
     Impl& m = *impl_;
     m.driver.keep_rays(opt.keep_rays);
-    // Sampled run: when a simulated cluster starts, the caches are warmed with the node fetches
-    // of the clusters skipped before it (L1 of the SM that made them, then L2 on an L1 miss).
+    // Sampled run: when an SM starts a simulated cluster, its caches are warmed with its node
+    // fetches of the clusters skipped before it (its L1, then L2 on an L1 miss).
     m.driver.on_warm = [impl = impl_.get(), sector = cfg.l1.sector](const std::vector<WarmFetch>& fetches) {
         for (const WarmFetch& f : fetches)
             for (uint32_t o = 0; o < f.bytes; o += sector)

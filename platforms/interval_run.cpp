@@ -11,8 +11,8 @@ TimingResult run_interval(const HwConfig& cfg, const BvhImage& image, Workload& 
     IntervalGpu gpu(cfg, image, opt.order);
     WorkloadDriver driver(workload, cfg.sms, cfg.warp_size, cfg.shade_latency, cfg.resident_warps, sampling_options(cfg, image, opt, nullptr));
     driver.keep_rays(opt.keep_rays);
-    // Sampled run: when a simulated cluster starts, the caches are warmed with the node fetches
-    // of the clusters skipped before it.
+    // Sampled run: when an SM starts a simulated cluster, its caches are warmed with its node
+    // fetches of the clusters skipped before it (its L1, then L2 on an L1 miss).
     driver.on_warm = [&gpu, sector = cfg.l1.sector](const std::vector<WarmFetch>& fetches) {
         for (const WarmFetch& f : fetches)
             for (uint32_t o = 0; o < f.bytes; o += sector) gpu.warm(f.sm, f.addr + o);

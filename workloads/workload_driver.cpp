@@ -148,8 +148,8 @@ WorkloadDriver::WorkloadDriver(Workload& workload, uint32_t sms, uint32_t warp_s
         }
         // A cluster this run simulates: every one, or those of its segment.
         auto simulated_here = [&](size_t i) { return design.segments() == 1 || design.segment_of(i) == sampling.segment; };
-        // The caches are warmed, when a simulated cluster starts, with the last node fetches of
-        // the clusters skipped before it (a segment's first cluster: of every warp before it).
+        // The caches are warmed with the last node fetches of the clusters skipped before a
+        // simulated cluster (a segment's first cluster: of every warp before it).
         if (traced) {
             // Each SM's L1 is warmed when that SM takes its first trace of the cluster: the SMs go
             // through their warps at their own pace (all are ready at cycle 0), and one of cheap

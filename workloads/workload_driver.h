@@ -74,8 +74,9 @@ public:
     // order), checked against this sample's design. Only on a driver drawn with
     // SamplingOptions::kNoSegment (the merge's).
     Estimate merge(const std::vector<std::vector<WarpRecord>>& segments) const;
-    // Sampled runs with the pre-pass: called when a simulated cluster starts, with the last node
-    // fetches of the clusters skipped before it, in order.
+    // Sampled runs with the pre-pass: called when an SM takes its first trace of a simulated
+    // cluster, with that SM's share of the last node fetches of the clusters skipped before it,
+    // in order (with a limit of resident warps: the first SM to start the cluster, with all).
     std::function<void(const std::vector<WarmFetch>&)> on_warm;
 
 private:
