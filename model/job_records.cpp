@@ -17,7 +17,7 @@ JobSpec job_of_descriptor(const rtu_job_desc& d) {
 }
 
 JobFieldError check_job_fields(const JobSpec& j) {
-    if (j.flags & ~RTU_JOB_IRQ_ON_DONE) return {RTU_ERR_BAD_FLAGS, 0};
+    if (j.flags & ~(RTU_JOB_IRQ_ON_DONE | RTU_JOB_CHECK_BVH)) return {RTU_ERR_BAD_FLAGS, 0};
     if (j.bvh_base % 64) return {RTU_ERR_BAD_ALIGN, j.bvh_base};
     if (j.ray_base % 16) return {RTU_ERR_BAD_ALIGN, j.ray_base};
     if (j.hit_base % 16) return {RTU_ERR_BAD_ALIGN, j.hit_base};
@@ -83,11 +83,11 @@ uint64_t max_node_visits(const BvhImage& image) {
     return blocks + half * blocks;
 }
 
-rtu_hit trace_record(const BvhImage& image, const rtu_ray& r, TraversalOrder order) {
+rtu_hit trace_record(const BvhImage& image, const rtu_ray& r, TraversalOrder order, std::vector<StackEntry>* fetched) {
     bool valid = false;
     const Ray ray = ray_of_record(r, valid);
     if (!valid) return hit_record(Hit{}, 0, true, r.user);
-    const TraceResult t = trace_ray(image, ray, order, nullptr, nullptr, false, max_node_visits(image));
+    const TraceResult t = trace_ray(image, ray, order, nullptr, fetched, false, max_node_visits(image));
     return hit_record(t.hit, t.nodes_visited, false, r.user);
 }
 

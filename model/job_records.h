@@ -21,7 +21,8 @@ rtu_hit hit_record(const Hit& h, uint32_t nodes_visited, bool invalid_ray, uint3
 // large two-level image takes long to find, but is found.
 uint64_t max_node_visits(const BvhImage& image);
 // One record traced functionally (throws as trace_ray does on a broken image).
-rtu_hit trace_record(const BvhImage& image, const rtu_ray& r, TraversalOrder order);
+// `fetched`, when given, receives every node the traversal reads (as trace_ray).
+rtu_hit trace_record(const BvhImage& image, const rtu_ray& r, TraversalOrder order, std::vector<StackEntry>* fetched = nullptr);
 
 // A job as software gave it (the registers, or a descriptor).
 struct JobSpec {

@@ -6,12 +6,14 @@
 #include <algorithm>
 #include <cstdio>
 #include <cstring>
+#include <map>
 #include <stdexcept>
 #include <utility>
 
 #include "interval_run.h"
 #include "job_feeder.h"
 #include "model/interval_gpu.h"
+#include "model/node_format.h"
 #include "model/config.h"
 #include "model/job_records.h"
 #include "model/prefetcher.h"
@@ -30,9 +32,9 @@ void PeripheralConfig::set(const std::string& kv) {
     if (k == "fidelity") fidelity = v;
     else if (k == "traversal") traversal = v;
     else if (k == "config") config = v;
-    else if (k == "use_dmi") {
-        if (v != "0" && v != "1" && v != "true" && v != "false") throw std::invalid_argument("peripheral option use_dmi='" + v + "': 0, 1, true or false");
-        use_dmi = v == "1" || v == "true";
+    else if (k == "use_dmi" || k == "check_bvh") {
+        if (v != "0" && v != "1" && v != "true" && v != "false") throw std::invalid_argument("peripheral option " + k + "='" + v + "': 0, 1, true or false");
+        (k == "use_dmi" ? use_dmi : check_bvh) = v == "1" || v == "true";
     }
     else if (k == "reg_latency_ns") {
         size_t used = 0;
@@ -388,10 +390,12 @@ void check_job(const Job& j) {
 JobResult JobRun::run(const Job& j) {
     check_job(j);
     JobResult r;
+    const bool check_bvh = (j.flags & RTU_JOB_CHECK_BVH) || m_.pc.check_bvh;
     // The image in place where DMI grants it (software must not change it during the job, the
-    // contract of a GPU's acceleration structure), else a copy.
+    // contract of a GPU's acceleration structure), else a copy. CHECK_BVH compares memory with
+    // what the job traced, so it always takes a copy.
     try {
-        if (const uint8_t* in_place = dma_.direct_read(j.bvh_base, j.bvh_size)) {
+        if (const uint8_t* in_place = check_bvh ? nullptr : dma_.direct_read(j.bvh_base, j.bvh_size)) {
             m_.image = BvhImage::view(in_place, j.bvh_size);
         } else {
             std::vector<uint8_t> bytes(j.bvh_size);
@@ -411,8 +415,14 @@ JobResult JobRun::run(const Job& j) {
     // a cycle) before the timing model runs into it, and its hits are the ones the timing model
     // must reproduce.
     std::vector<rtu_hit> hits(j.ray_count);
+    std::map<uint64_t, uint32_t> read_nodes;  // CHECK_BVH: every node the job reads (image offset, bytes)
+    std::vector<StackEntry> fetched;
     try {
-        for (uint32_t i = 0; i < j.ray_count; ++i) hits[i] = trace_record(m_.image, rays[i], m_.order);
+        for (uint32_t i = 0; i < j.ray_count; ++i) {
+            fetched.clear();
+            hits[i] = trace_record(m_.image, rays[i], m_.order, check_bvh ? &fetched : nullptr);
+            for (const StackEntry& e : fetched) read_nodes.emplace(e.addr, node_bytes(e.type));
+        }
     } catch (const std::out_of_range&) {
         throw JobError{RTU_ERR_BVH_OUT_OF_RANGE, j.bvh_base};
     } catch (const std::exception&) {
@@ -471,6 +481,18 @@ JobResult JobRun::run(const Job& j) {
             throw std::logic_error("ray " + std::to_string(t.path) + ": the timing model's hit differs from the functional model's");
     }
     if (m_.abort_requested) return r;
+    // CHECK_BVH: every node the job read, read again through `mem` once the rays are traced and
+    // compared with the copy they were traced on. A difference means software changed the image
+    // during the job; the job ends with BVH_CHANGED at the node's address and writes no hit. A
+    // change before the node was traversed or after, it is caught either way; a node no ray read
+    // is not checked. One extra read per node: a checking mode, not a model of hardware.
+    std::vector<uint8_t> now;
+    for (const auto& [offset, bytes] : read_nodes) {
+        if (m_.abort_requested) return r;
+        now.resize(bytes);
+        dma_.read(j.bvh_base + offset, now.data(), bytes);
+        if (std::memcmp(now.data(), m_.image.data() + offset, bytes) != 0) throw JobError{RTU_ERR_BVH_CHANGED, j.bvh_base + offset};
+    }
     if (j.hit_stride == sizeof(rtu_hit)) {
         dma_.write(j.hit_base, reinterpret_cast<const uint8_t*>(hits.data()), uint64_t(j.ray_count) * sizeof(rtu_hit));
     } else {

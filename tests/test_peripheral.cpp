@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstring>
 #include <functional>
+#include <set>
 
 #include <nlohmann/json.hpp>
 #include <systemc>
@@ -20,6 +21,7 @@
 #include <rtunit/peripheral.h>
 #include <rtunit/rtu_regs.h>
 
+#include "model/job_records.h"
 #include "model/node_format.h"
 #include "platforms/soc_vp.h"
 #include "test_util.h"
@@ -533,6 +535,141 @@ TEST(Peripheral, AbortStopsTheJobWithoutWritingHits) {
     EXPECT_EQ(int_status, RTU_INT_ABORTED);
     EXPECT_EQ(writes_at_end, 0u);
     EXPECT_EQ(b.ram.writes, 0u);
+    const std::vector<uint8_t> untouched(in.rays.size() * sizeof(rtu_hit), 0xA5);
+    EXPECT_EQ(std::memcmp(b.ram.at(in.hit_at(kBvhAt)), untouched.data(), untouched.size()), 0);
+}
+
+// T12 (CHECK_BVH, private path): a byte of the image's root node flipped in RAM while the rays
+// are traced. With CHECK_BVH (the job flag, or the check_bvh option) the job ends with BVH_CHANGED
+// at the root node's system address and writes no hit; without it, the job traces the copy taken
+// at START and answers as before. A job with CHECK_BVH and an unchanged image gives the reference
+// hits and reads each node it traversed once more. A job flag beyond the two defined ones is still
+// BAD_FLAGS. One platform per process: the flag and the option are two tests.
+namespace {
+
+void check_bvh_case(bool by_option) {
+    FsResolution res;
+    PeripheralConfig option = config_for("lt");
+    option.set("check_bvh=1");
+    {
+        Bench b(by_option ? option : config_for("lt"));
+        const Inputs in;
+        in.load(b.ram, kBvhAt);
+        const std::vector<rtu_hit> want = in.reference();
+        // The nodes the job reads, and the root among them (every valid ray reads it first).
+        std::set<uint64_t> nodes;
+        uint64_t node_bytes_read = 0;
+        for (const rtu_ray& r : in.rays) {
+            std::vector<StackEntry> fetched;
+            (void)trace_record(in.image, r, TraversalOrder::DFS, &fetched);
+            for (const StackEntry& e : fetched)
+                if (nodes.insert(e.addr).second) node_bytes_read += node_bytes(e.type);
+        }
+        std::vector<StackEntry> first;
+        (void)trace_record(in.image, in.rays[0], TraversalOrder::DFS, &first);
+        ASSERT_FALSE(first.empty());
+        const uint64_t root = first.front().addr;
+        const uint32_t flags = by_option ? 0u : RTU_JOB_CHECK_BVH;
+        struct Seen {
+            uint32_t status, code;
+            uint64_t addr, bytes_read;
+        };
+        std::vector<Seen> seen;
+        b.cpu.script = [&] {
+            Cpu& c = b.cpu;
+            auto done = [&](uint64_t read_before) {
+                EXPECT_TRUE(c.wait_irq());
+                seen.push_back({c.rd(RTU_STATUS), c.rd(RTU_ERR_CODE), c.rd64(RTU_ERR_ADDR_LO), b.ram.bytes_read - read_before});
+                c.wr(RTU_INT_STATUS, c.rd(RTU_INT_STATUS));
+                wait(SC_ZERO_TIME);
+            };
+            // Unchanged: the reference hits, and each node read once more.
+            uint64_t before = b.ram.bytes_read;
+            c.wr(RTU_JOB_FLAGS, flags);
+            start_and_wait_for_tracing(b, in);
+            done(before);
+            EXPECT_EQ(differing_hits(b.ram, in.hit_at(kBvhAt), want), 0u);
+            // The root changed while the rays are traced: BVH_CHANGED, no hit written.
+            std::memset(b.ram.at(in.hit_at(kBvhAt)), 0xA5, in.rays.size() * sizeof(rtu_hit));
+            before = b.ram.bytes_read;
+            c.wr(RTU_JOB_FLAGS, flags);
+            start_and_wait_for_tracing(b, in);
+            b.ram.at(kBvhAt + root)[20] ^= 0x10;
+            done(before);
+            b.ram.at(kBvhAt + root)[20] ^= 0x10;
+            const std::vector<uint8_t> untouched(in.rays.size() * sizeof(rtu_hit), 0xA5);
+            EXPECT_EQ(std::memcmp(b.ram.at(in.hit_at(kBvhAt)), untouched.data(), untouched.size()), 0) << "the failed job wrote hits";
+            // Without the check (only the job flag can be left out), the same change is not seen.
+            if (!by_option) {
+                before = b.ram.bytes_read;
+                c.wr(RTU_JOB_FLAGS, 0);
+                start_and_wait_for_tracing(b, in);
+                b.ram.at(kBvhAt + root)[20] ^= 0x10;
+                done(before);
+                b.ram.at(kBvhAt + root)[20] ^= 0x10;
+                EXPECT_EQ(differing_hits(b.ram, in.hit_at(kBvhAt), want), 0u);
+            }
+            // A flag bit no version defines.
+            program_job(c, in, kBvhAt);
+            c.wr(RTU_JOB_FLAGS, 1u << 2);
+            c.wr(RTU_CTRL, RTU_CTRL_START);
+            done(b.ram.bytes_read);
+        };
+        sc_start();
+        ASSERT_TRUE(b.cpu.finished);
+        ASSERT_EQ(seen.size(), by_option ? 3u : 4u);
+        const uint64_t inputs = in.image.size() + in.rays.size() * sizeof(rtu_ray);
+        EXPECT_EQ(seen[0].status & 0xFFu, RTU_STATUS_DONE);
+        EXPECT_EQ(seen[0].code, 0u);
+        EXPECT_EQ(seen[0].bytes_read, inputs + node_bytes_read);
+        EXPECT_EQ(seen[1].status & 0xFFu, RTU_STATUS_ERROR);
+        EXPECT_EQ(seen[1].code, RTU_ERR_BVH_CHANGED);
+        EXPECT_EQ(seen[1].addr, kBvhAt + root);
+        if (!by_option) {
+            EXPECT_EQ(seen[2].status & 0xFFu, RTU_STATUS_DONE);
+            EXPECT_EQ(seen[2].bytes_read, inputs);  // no node read again
+        }
+        EXPECT_EQ(seen.back().code, RTU_ERR_BAD_FLAGS);
+    }
+}
+
+}  // namespace
+
+TEST(Peripheral, CheckBvhFlagFindsANodeChangedDuringTheJob) { check_bvh_case(false); }
+TEST(Peripheral, CheckBvhOptionFindsANodeChangedDuringTheJob) { check_bvh_case(true); }
+
+// CHECK_BVH where the RAM grants DMI: without the check the image would be used in place (a view
+// of the live memory, which no comparison could catch changing); with it the job takes a copy, so
+// the root changed 200 ns after START (the image is read by then) is still BVH_CHANGED.
+TEST(Peripheral, CheckBvhWithDmiComparesAgainstACopy) {
+    FsResolution res;
+    PeripheralConfig cfg = config_for("lt");
+    cfg.set("check_bvh=true");
+    Bench b(cfg, /*dmi=*/true);
+    const Inputs in;
+    in.load(b.ram, kBvhAt);
+    std::vector<StackEntry> first;
+    (void)trace_record(in.image, in.rays[0], TraversalOrder::DFS, &first);
+    ASSERT_FALSE(first.empty());
+    const uint64_t root = first.front().addr;
+    uint32_t code = 0;
+    uint64_t addr = 0;
+    b.cpu.script = [&] {
+        Cpu& c = b.cpu;
+        c.wr(RTU_INT_ENABLE, RTU_INT_ALL);
+        program_job(c, in, kBvhAt);
+        c.wr(RTU_CTRL, RTU_CTRL_START);
+        wait(200, SC_NS);
+        b.ram.at(kBvhAt + root)[20] ^= 0x10;
+        EXPECT_TRUE(c.wait_irq());
+        code = c.rd(RTU_ERR_CODE);
+        addr = c.rd64(RTU_ERR_ADDR_LO);
+    };
+    sc_start();
+    ASSERT_TRUE(b.cpu.finished);
+    EXPECT_GE(b.ram.dmi_grants, 1u);
+    EXPECT_EQ(code, RTU_ERR_BVH_CHANGED);
+    EXPECT_EQ(addr, kBvhAt + root);
     const std::vector<uint8_t> untouched(in.rays.size() * sizeof(rtu_hit), 0xA5);
     EXPECT_EQ(std::memcmp(b.ram.at(in.hit_at(kBvhAt)), untouched.data(), untouched.size()), 0);
 }

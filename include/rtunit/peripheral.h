@@ -38,8 +38,11 @@ struct RTUNIT_API PeripheralConfig {
     // Direct memory access on `mem` where the target grants it: ray and hit records copied, the BVH
     // image used in place. Host speed only: hits and traversal cycles are the same without.
     bool use_dmi = true;
+    // Every job checks its BVH image as if its flags had RTU_JOB_CHECK_BVH (a checking mode: one
+    // extra read per node the job read).
+    bool check_bvh = false;
     // By name, for platforms that configure modules from strings (QBox, VCML, Lua):
-    // fidelity=, traversal=, config=, reg_latency_ns=, use_dmi=; any other key=value is a configuration key
+    // fidelity=, traversal=, config=, reg_latency_ns=, use_dmi=, check_bvh=; any other key=value is a configuration key
     // (l1.size_kb=64, prefetch.kind=ttp, ...). Checked when the peripheral is built.
     void set(const std::string& key_value);
 };

@@ -93,7 +93,7 @@
 #define RTU_ERR_BAD_BVH 2u          /* header magic or version, size < 64, or a node past the image */
 #define RTU_ERR_BAD_ALIGN 3u        /* a base not aligned, or a stride < 48 or not a multiple of 16 */
 #define RTU_ERR_MEM_FAULT 4u        /* a non-OK response on the memory socket (ERR_ADDR) */
-#define RTU_ERR_BVH_CHANGED 5u      /* reserved: CHECK_BVH is not implemented */
+#define RTU_ERR_BVH_CHANGED 5u      /* CHECK_BVH: a node the job read differs in memory from the image it traced (ERR_ADDR) */
 #define RTU_ERR_BVH_OUT_OF_RANGE 6u /* traversal read past BVH_SIZE */
 #define RTU_ERR_CHAIN_LOOP 7u       /* more than MAX_CHAIN descriptors */
 #define RTU_ERR_BAD_FLAGS 8u        /* reserved flag bits set in JOB_FLAGS or a descriptor */
@@ -120,7 +120,7 @@
  * bytes; the unit writes the completion half, `status` last. */
 #define RTU_DESC_MAGIC 0x314A5452u /* "RTJ1" */
 #define RTU_JOB_IRQ_ON_DONE (1u << 0)
-#define RTU_JOB_CHECK_BVH (1u << 1) /* reserved: not implemented (a set bit is RTU_ERR_BAD_FLAGS) */
+#define RTU_JOB_CHECK_BVH (1u << 1) /* after tracing, every node read is read again and compared (RTU_ERR_BVH_CHANGED) */
 #define RTU_DESC_STATUS_DONE (1u << 31)
 #define RTU_DESC_STATUS_ERROR (1u << 30)
 #define RTU_DESC_STATUS_ABORTED (1u << 29)
