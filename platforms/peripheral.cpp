@@ -13,9 +13,9 @@
 #include "interval_run.h"
 #include "job_feeder.h"
 #include "model/interval_gpu.h"
-#include "model/node_format.h"
 #include "model/config.h"
 #include "model/job_records.h"
+#include "model/node_format.h"
 #include "model/prefetcher.h"
 #include "tlm/rt_complex.h"
 #include "tlm/rtu_registers.h"
@@ -484,7 +484,7 @@ JobResult JobRun::run(const Job& j) {
     // CHECK_BVH: every node the job read, read again through `mem` once the rays are traced and
     // compared with the copy they were traced on. A difference means software changed the image
     // during the job; the job ends with BVH_CHANGED at the node's address and writes no hit. A
-    // change before the node was traversed or after, it is caught either way; a node no ray read
+    // change is caught whether it came before the node was traversed or after; a node no ray read
     // is not checked. One extra read per node: a checking mode, not a model of hardware.
     std::vector<uint8_t> now;
     for (const auto& [offset, bytes] : read_nodes) {
