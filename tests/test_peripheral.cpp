@@ -121,7 +121,19 @@ struct Inputs {
     void load(Ram& ram, uint64_t bvh_at) const {
         std::memcpy(ram.at(bvh_at), image.data(), image.size());
         std::memcpy(ram.at(ray_at(bvh_at)), rays.data(), rays.size() * sizeof(rtu_ray));
-        std::memset(ram.at(hit_at(bvh_at)), 0xA5, rays.size() * sizeof(rtu_hit));
+        clear_hits(ram, bvh_at);
+    }
+    void clear_hits(Ram& ram, uint64_t bvh_at) const { std::memset(ram.at(hit_at(bvh_at)), 0xA5, rays.size() * sizeof(rtu_hit)); }
+    // Whether the hit buffer still holds what load() or clear_hits() left: no hit was written.
+    bool hits_untouched(Ram& ram, uint64_t bvh_at) const {
+        const std::vector<uint8_t> untouched(rays.size() * sizeof(rtu_hit), 0xA5);
+        return std::memcmp(ram.at(hit_at(bvh_at)), untouched.data(), untouched.size()) == 0;
+    }
+    // The image offset of the node every valid ray reads first (the root).
+    uint64_t root_node() const {
+        std::vector<StackEntry> fetched;
+        (void)trace_record(image, rays.at(0), TraversalOrder::DFS, &fetched);
+        return fetched.at(0).addr;
     }
 };
 
@@ -481,7 +493,7 @@ TEST(Peripheral, BadJobsGiveErrorCodesAndTheNextJobRuns) {
         c.wr(RTU_RAY_COUNT, 0xFFFFFFFFu);
         run(RTU_CTRL_START);
         // A good job, with a second START while it runs.
-        std::memset(b.ram.at(in.hit_at(kBvhAt)), 0xA5, in.rays.size() * sizeof(rtu_hit));
+        in.clear_hits(b.ram, kBvhAt);
         program_job(c, in, kBvhAt);
         c.wr(RTU_CTRL, RTU_CTRL_START);
         c.wr(RTU_CTRL, RTU_CTRL_START);
@@ -535,8 +547,7 @@ TEST(Peripheral, AbortStopsTheJobWithoutWritingHits) {
     EXPECT_EQ(int_status, RTU_INT_ABORTED);
     EXPECT_EQ(writes_at_end, 0u);
     EXPECT_EQ(b.ram.writes, 0u);
-    const std::vector<uint8_t> untouched(in.rays.size() * sizeof(rtu_hit), 0xA5);
-    EXPECT_EQ(std::memcmp(b.ram.at(in.hit_at(kBvhAt)), untouched.data(), untouched.size()), 0);
+    EXPECT_TRUE(in.hits_untouched(b.ram, kBvhAt));
 }
 
 // T12 (CHECK_BVH, private path): a byte of the image's root node flipped in RAM while the rays
@@ -549,88 +560,82 @@ namespace {
 
 void check_bvh_case(bool by_option) {
     FsResolution res;
-    PeripheralConfig option = config_for("lt");
-    option.set("check_bvh=1");
-    {
-        Bench b(by_option ? option : config_for("lt"));
-        const Inputs in;
-        in.load(b.ram, kBvhAt);
-        const std::vector<rtu_hit> want = in.reference();
-        // The nodes the job reads, and the root among them (every valid ray reads it first).
-        std::set<uint64_t> nodes;
-        uint64_t node_bytes_read = 0;
-        for (const rtu_ray& r : in.rays) {
-            std::vector<StackEntry> fetched;
-            (void)trace_record(in.image, r, TraversalOrder::DFS, &fetched);
-            for (const StackEntry& e : fetched)
-                if (nodes.insert(e.addr).second) node_bytes_read += node_bytes(e.type);
-        }
-        std::vector<StackEntry> first;
-        (void)trace_record(in.image, in.rays[0], TraversalOrder::DFS, &first);
-        ASSERT_FALSE(first.empty());
-        const uint64_t root = first.front().addr;
-        const uint32_t flags = by_option ? 0u : RTU_JOB_CHECK_BVH;
-        struct Seen {
-            uint32_t status, code;
-            uint64_t addr, bytes_read;
-        };
-        std::vector<Seen> seen;
-        b.cpu.script = [&] {
-            Cpu& c = b.cpu;
-            auto done = [&](uint64_t read_before) {
-                EXPECT_TRUE(c.wait_irq());
-                seen.push_back({c.rd(RTU_STATUS), c.rd(RTU_ERR_CODE), c.rd64(RTU_ERR_ADDR_LO), b.ram.bytes_read - read_before});
-                c.wr(RTU_INT_STATUS, c.rd(RTU_INT_STATUS));
-                wait(SC_ZERO_TIME);
-            };
-            // Unchanged: the reference hits, and each node read once more.
-            uint64_t before = b.ram.bytes_read;
-            c.wr(RTU_JOB_FLAGS, flags);
-            start_and_wait_for_tracing(b, in);
-            done(before);
-            EXPECT_EQ(differing_hits(b.ram, in.hit_at(kBvhAt), want), 0u);
-            // The root changed while the rays are traced: BVH_CHANGED, no hit written.
-            std::memset(b.ram.at(in.hit_at(kBvhAt)), 0xA5, in.rays.size() * sizeof(rtu_hit));
-            before = b.ram.bytes_read;
-            c.wr(RTU_JOB_FLAGS, flags);
-            start_and_wait_for_tracing(b, in);
-            b.ram.at(kBvhAt + root)[20] ^= 0x10;
-            done(before);
-            b.ram.at(kBvhAt + root)[20] ^= 0x10;
-            const std::vector<uint8_t> untouched(in.rays.size() * sizeof(rtu_hit), 0xA5);
-            EXPECT_EQ(std::memcmp(b.ram.at(in.hit_at(kBvhAt)), untouched.data(), untouched.size()), 0) << "the failed job wrote hits";
-            // Without the check (only the job flag can be left out), the same change is not seen.
-            if (!by_option) {
-                before = b.ram.bytes_read;
-                c.wr(RTU_JOB_FLAGS, 0);
-                start_and_wait_for_tracing(b, in);
-                b.ram.at(kBvhAt + root)[20] ^= 0x10;
-                done(before);
-                b.ram.at(kBvhAt + root)[20] ^= 0x10;
-                EXPECT_EQ(differing_hits(b.ram, in.hit_at(kBvhAt), want), 0u);
-            }
-            // A flag bit no version defines.
-            program_job(c, in, kBvhAt);
-            c.wr(RTU_JOB_FLAGS, 1u << 2);
-            c.wr(RTU_CTRL, RTU_CTRL_START);
-            done(b.ram.bytes_read);
-        };
-        sc_start();
-        ASSERT_TRUE(b.cpu.finished);
-        ASSERT_EQ(seen.size(), by_option ? 3u : 4u);
-        const uint64_t inputs = in.image.size() + in.rays.size() * sizeof(rtu_ray);
-        EXPECT_EQ(seen[0].status & 0xFFu, RTU_STATUS_DONE);
-        EXPECT_EQ(seen[0].code, 0u);
-        EXPECT_EQ(seen[0].bytes_read, inputs + node_bytes_read);
-        EXPECT_EQ(seen[1].status & 0xFFu, RTU_STATUS_ERROR);
-        EXPECT_EQ(seen[1].code, RTU_ERR_BVH_CHANGED);
-        EXPECT_EQ(seen[1].addr, kBvhAt + root);
-        if (!by_option) {
-            EXPECT_EQ(seen[2].status & 0xFFu, RTU_STATUS_DONE);
-            EXPECT_EQ(seen[2].bytes_read, inputs);  // no node read again
-        }
-        EXPECT_EQ(seen.back().code, RTU_ERR_BAD_FLAGS);
+    PeripheralConfig cfg = config_for("lt");
+    if (by_option) cfg.set("check_bvh=1");
+    Bench b(cfg);
+    const Inputs in;
+    in.load(b.ram, kBvhAt);
+    const std::vector<rtu_hit> want = in.reference();
+    // The nodes the job reads.
+    std::set<uint64_t> nodes;
+    uint64_t node_bytes_read = 0;
+    for (const rtu_ray& r : in.rays) {
+        std::vector<StackEntry> fetched;
+        (void)trace_record(in.image, r, TraversalOrder::DFS, &fetched);
+        for (const StackEntry& e : fetched)
+            if (nodes.insert(e.addr).second) node_bytes_read += node_bytes(e.type);
     }
+    const uint64_t root = in.root_node();
+    const uint32_t flags = by_option ? 0u : RTU_JOB_CHECK_BVH;
+    struct Seen {
+        uint32_t status, code;
+        uint64_t addr, bytes_read;
+    };
+    std::vector<Seen> seen;
+    b.cpu.script = [&] {
+        Cpu& c = b.cpu;
+        auto done = [&](uint64_t read_before) {
+            EXPECT_TRUE(c.wait_irq());
+            seen.push_back({c.rd(RTU_STATUS), c.rd(RTU_ERR_CODE), c.rd64(RTU_ERR_ADDR_LO), b.ram.bytes_read - read_before});
+            c.wr(RTU_INT_STATUS, c.rd(RTU_INT_STATUS));
+            wait(SC_ZERO_TIME);
+        };
+        // Unchanged: the reference hits, and each node read once more.
+        uint64_t before = b.ram.bytes_read;
+        c.wr(RTU_JOB_FLAGS, flags);
+        start_and_wait_for_tracing(b, in);
+        done(before);
+        EXPECT_EQ(differing_hits(b.ram, in.hit_at(kBvhAt), want), 0u);
+        // The root changed while the rays are traced: BVH_CHANGED, no hit written.
+        in.clear_hits(b.ram, kBvhAt);
+        before = b.ram.bytes_read;
+        c.wr(RTU_JOB_FLAGS, flags);
+        start_and_wait_for_tracing(b, in);
+        b.ram.at(kBvhAt + root)[20] ^= 0x10;
+        done(before);
+        b.ram.at(kBvhAt + root)[20] ^= 0x10;
+        EXPECT_TRUE(in.hits_untouched(b.ram, kBvhAt)) << "the failed job wrote hits";
+        // Without the check (only the job flag can be left out), the same change is not seen.
+        if (!by_option) {
+            before = b.ram.bytes_read;
+            c.wr(RTU_JOB_FLAGS, 0);
+            start_and_wait_for_tracing(b, in);
+            b.ram.at(kBvhAt + root)[20] ^= 0x10;
+            done(before);
+            b.ram.at(kBvhAt + root)[20] ^= 0x10;
+            EXPECT_EQ(differing_hits(b.ram, in.hit_at(kBvhAt), want), 0u);
+        }
+        // A flag bit no version defines.
+        program_job(c, in, kBvhAt);
+        c.wr(RTU_JOB_FLAGS, 1u << 2);
+        c.wr(RTU_CTRL, RTU_CTRL_START);
+        done(b.ram.bytes_read);
+    };
+    sc_start();
+    ASSERT_TRUE(b.cpu.finished);
+    ASSERT_EQ(seen.size(), by_option ? 3u : 4u);
+    const uint64_t inputs = in.image.size() + in.rays.size() * sizeof(rtu_ray);
+    EXPECT_EQ(seen[0].status & 0xFFu, RTU_STATUS_DONE);
+    EXPECT_EQ(seen[0].code, 0u);
+    EXPECT_EQ(seen[0].bytes_read, inputs + node_bytes_read);
+    EXPECT_EQ(seen[1].status & 0xFFu, RTU_STATUS_ERROR);
+    EXPECT_EQ(seen[1].code, RTU_ERR_BVH_CHANGED);
+    EXPECT_EQ(seen[1].addr, kBvhAt + root);
+    if (!by_option) {
+        EXPECT_EQ(seen[2].status & 0xFFu, RTU_STATUS_DONE);
+        EXPECT_EQ(seen[2].bytes_read, inputs);  // no node read again
+    }
+    EXPECT_EQ(seen.back().code, RTU_ERR_BAD_FLAGS);
 }
 
 }  // namespace
@@ -648,10 +653,7 @@ TEST(Peripheral, CheckBvhWithDmiComparesAgainstACopy) {
     Bench b(cfg, /*dmi=*/true);
     const Inputs in;
     in.load(b.ram, kBvhAt);
-    std::vector<StackEntry> first;
-    (void)trace_record(in.image, in.rays[0], TraversalOrder::DFS, &first);
-    ASSERT_FALSE(first.empty());
-    const uint64_t root = first.front().addr;
+    const uint64_t root = in.root_node();
     uint32_t code = 0;
     uint64_t addr = 0;
     b.cpu.script = [&] {
@@ -670,8 +672,7 @@ TEST(Peripheral, CheckBvhWithDmiComparesAgainstACopy) {
     EXPECT_GE(b.ram.dmi_grants, 1u);
     EXPECT_EQ(code, RTU_ERR_BVH_CHANGED);
     EXPECT_EQ(addr, kBvhAt + root);
-    const std::vector<uint8_t> untouched(in.rays.size() * sizeof(rtu_hit), 0xA5);
-    EXPECT_EQ(std::memcmp(b.ram.at(in.hit_at(kBvhAt)), untouched.data(), untouched.size()), 0);
+    EXPECT_TRUE(in.hits_untouched(b.ram, kBvhAt));
 }
 
 // Two CPUs and two units on one router (registers at two apertures) and one RAM (granting DMI).
