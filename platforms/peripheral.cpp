@@ -32,6 +32,7 @@ void PeripheralConfig::set(const std::string& kv) {
     if (k == "fidelity") fidelity = v;
     else if (k == "traversal") traversal = v;
     else if (k == "config") config = v;
+    else if (k == "memory") memory = v;
     else if (k == "use_dmi" || k == "check_bvh") {
         if (v != "0" && v != "1" && v != "true" && v != "false") throw std::invalid_argument("peripheral option " + k + "='" + v + "': 0, 1, true or false");
         (k == "use_dmi" ? use_dmi : check_bvh) = v == "1" || v == "true";
@@ -111,6 +112,11 @@ JobResult complex_totals(const RtComplex& gpu) {
     for (const auto& u : gpu.rt_units()) rt.push_back(u->core().stats());
     for (const auto& c : gpu.l1()) l1.push_back(c->tags().counts());
     for (const auto& c : gpu.l2()) l2.push_back(c->tags().counts());
+    if (const MemBridge* b = gpu.bridge()) {  // the shared path: its reads on `mem` are the DRAM's
+        JobResult r = totals(rt, l1, l2, {});
+        r.dram_reads = b->reads();
+        return r;
+    }
     return totals(rt, l1, l2, gpu.dram().stats());
 }
 
@@ -144,6 +150,16 @@ Fidelity parse_peripheral_fidelity(const std::string& f) {
     throw std::invalid_argument("peripheral fidelity '" + f + "': allowed are functional, interval, lt, at");
 }
 
+// Whether the memory path is shared (L2 misses on `mem`); checked against the fidelity.
+bool parse_memory_path(const std::string& m, Fidelity f) {
+    if (m != "private" && m != "shared") throw std::invalid_argument("peripheral memory '" + m + "': allowed are private, shared");
+    if (m == "shared" && f != Fidelity::LT && f != Fidelity::AT)
+        throw std::invalid_argument(std::string("peripheral memory=shared needs fidelity lt or at: ") +
+                                    (f == Fidelity::Functional ? "the functional fidelity has no memory system"
+                                                               : "the interval fidelity runs a job without the SystemC kernel, so its misses cannot wait for the SoC's memory"));
+    return m == "shared";
+}
+
 uint32_t fidelity_code(Fidelity f) {
     switch (f) {
         case Fidelity::Functional: return RTU_FIDELITY_FUNCTIONAL;
@@ -156,14 +172,76 @@ uint32_t fidelity_code(Fidelity f) {
 
 }  // namespace
 
+// The shared memory path's reads (tlm/mem_bridge.h): an L2 miss at image offset `offset` becomes
+// a read on `mem` at the job's BVH base plus the offset, clipped to the image (a line may run past
+// its end; those bytes are not the job's to read). A non-OK response or, with CHECK_BVH, bytes
+// that differ from the image the job traverses are the job's error, reported when its rays are
+// traced. Called from the RT complex's processes: the LT thread, or the bridge's thread in AT.
+class SharedMemory : public LineReader {
+public:
+    SharedMemory(tlm_utils::simple_initiator_socket<RtUnitPeripheral, 32>& socket, RtuRegisters& regs) : socket_(socket), regs_(regs) {}
+    // The job whose image the RT complex traverses from now on; its first error is cleared.
+    void begin_job(uint64_t bvh_base, const BvhImage& image, bool check_bvh) {
+        base_ = bvh_base;
+        image_ = &image;
+        check_ = check_bvh;
+        error_code_ = 0;
+        error_addr_ = 0;
+    }
+    uint32_t error_code() const { return error_code_; }
+    uint64_t error_addr() const { return error_addr_; }
+
+    uint32_t read_line(uint64_t offset, uint32_t bytes, sc_time& delay) override {
+        if (!image_ || offset >= image_->size()) return 0;  // nothing of the image there: no read
+        const uint32_t n = uint32_t(std::min<uint64_t>(bytes, image_->size() - offset));
+        buf_.resize(n);
+        tlm::tlm_generic_payload t;
+        t.set_command(tlm::TLM_READ_COMMAND);
+        t.set_address(base_ + offset);
+        t.set_data_ptr(buf_.data());
+        t.set_data_length(n);
+        t.set_streaming_width(n);
+        t.set_byte_enable_ptr(nullptr);
+        t.set_dmi_allowed(false);
+        t.set_response_status(tlm::TLM_INCOMPLETE_RESPONSE);
+        socket_->b_transport(t, delay);
+        regs_.count(RTU_PERF_MEM_BYTES_RD, n);
+        if (error_code_) return n;  // the job's first error stands
+        if (!t.is_response_ok()) {
+            error_code_ = RTU_ERR_MEM_FAULT;
+            error_addr_ = base_ + offset;
+        } else if (check_) {
+            for (uint32_t i = 0; i < n; ++i)
+                if (buf_[i] != image_->data()[offset + i]) {  // the 64 B block of the first changed byte: a node's address
+                    error_code_ = RTU_ERR_BVH_CHANGED;
+                    error_addr_ = base_ + ((offset + i) & ~uint64_t(63));
+                    break;
+                }
+        }
+        return n;
+    }
+
+private:
+    tlm_utils::simple_initiator_socket<RtUnitPeripheral, 32>& socket_;
+    RtuRegisters& regs_;
+    uint64_t base_ = 0;
+    const BvhImage* image_ = nullptr;
+    bool check_ = false;
+    uint32_t error_code_ = 0;
+    uint64_t error_addr_ = 0;
+    std::vector<uint8_t> buf_;
+};
+
 struct RtUnitPeripheral::Impl {
     PeripheralConfig pc;
     TraversalOrder order;
     HwConfig hw;
     Fidelity fidelity;
+    bool shared;  // the shared memory path
     RtuRegisters regs;
     BvhImage image;  // the current job's snapshot; the RT complex reads it by reference
     JobFeeder feeder;
+    std::unique_ptr<SharedMemory> shared_memory;  // the shared path's reads on `mem`
     std::unique_ptr<RtComplex> gpu;  // LT, AT
     ClockDomain core;                // functional: the clock the counters count in
     sc_event start, irq_update, abort;
@@ -182,10 +260,10 @@ struct RtUnitPeripheral::Impl {
         abort.notify(delay);
     }
 
-    Impl(const PeripheralConfig& c, TraversalOrder o, const HwConfig& h, Fidelity f)
-        : pc(c), order(o), hw(h), fidelity(f),
+    Impl(const PeripheralConfig& c, TraversalOrder o, const HwConfig& h, Fidelity f, bool sh)
+        : pc(c), order(o), hw(h), fidelity(f), shared(sh),
           regs(std::min<uint32_t>(h.sms, 255) | std::min<uint32_t>(h.warp_size, 255) << 8 | std::min<uint32_t>(h.warp_buffer, 255) << 16 |
-                   fidelity_code(f) << 24 | RTU_MEMORY_PRIVATE << 28,
+                   fidelity_code(f) << 24 | (sh ? RTU_MEMORY_SHARED : RTU_MEMORY_PRIVATE) << 28,
                uint32_t(o == TraversalOrder::BFS) | uint32_t(h.prefetch.kind) << 4 | uint32_t(h.core_mhz) << 8),
           core(h.core_mhz) {}
 };
@@ -194,12 +272,16 @@ RtUnitPeripheral::RtUnitPeripheral(sc_module_name name, const PeripheralConfig& 
     : sc_module(name), regs("regs"), mem("mem"), irq("irq"), rst("rst") {
     const TraversalOrder order = parse_order(cfg.traversal);
     const Fidelity fidelity = parse_peripheral_fidelity(cfg.fidelity);
-    impl_.reset(new Impl(cfg, order, resolve_config(cfg, order), fidelity));
+    const bool shared = parse_memory_path(cfg.memory, fidelity);
+    impl_.reset(new Impl(cfg, order, resolve_config(cfg, order), fidelity, shared));
     Impl& m = *impl_;
     if (fidelity == Fidelity::Interval) IntervalGpu(m.hw, m.image, order);  // throws for what the fidelity does not model
     if (fidelity == Fidelity::LT || fidelity == Fidelity::AT) {
-        m.gpu.reset(new RtComplex("rt_complex", m.hw, m.image, order, m.feeder, fidelity));
-        m.gpu->use_own_quantum_only();  // the private path: cycles independent of the platform's quantum
+        if (shared) m.shared_memory.reset(new SharedMemory(mem, m.regs));
+        m.gpu.reset(new RtComplex("rt_complex", m.hw, m.image, order, m.feeder, fidelity, nullptr, false, m.shared_memory.get()));
+        // The private path: nothing outside sees the complex's work before the job's end, so its
+        // cycles need not depend on the platform's quantum. The shared path's reads are seen.
+        if (!shared) m.gpu->use_own_quantum_only();
         m.feeder.set_clock(m.gpu->core_clock());
     }
     mem.register_invalidate_direct_mem_ptr(this, &RtUnitPeripheral::invalidate_direct_mem_ptr);
@@ -415,12 +497,12 @@ JobResult JobRun::run(const Job& j) {
     // a cycle) before the timing model runs into it, and its hits are the ones the timing model
     // must reproduce.
     std::vector<rtu_hit> hits(j.ray_count);
-    std::map<uint64_t, uint32_t> read_nodes;  // CHECK_BVH: every node the job reads (image offset, bytes)
+    std::map<uint64_t, uint32_t> read_nodes;  // CHECK_BVH, private path: every node the job reads (image offset, bytes)
     std::vector<StackEntry> fetched;
     try {
         for (uint32_t i = 0; i < j.ray_count; ++i) {
             fetched.clear();
-            hits[i] = trace_record(m_.image, rays[i], m_.order, check_bvh ? &fetched : nullptr);
+            hits[i] = trace_record(m_.image, rays[i], m_.order, check_bvh && !m_.shared ? &fetched : nullptr);
             for (const StackEntry& e : fetched) read_nodes.emplace(e.addr, node_bytes(e.type));
         }
     } catch (const std::out_of_range&) {
@@ -462,6 +544,7 @@ JobResult JobRun::run(const Job& j) {
         // job starts when they are in.
         while (!m_.gpu->idle()) wait(m_.gpu->core_clock().period() * 16.0);
         const JobResult before = complex_totals(*m_.gpu);
+        if (m_.shared_memory) m_.shared_memory->begin_job(j.bvh_base, m_.image, check_bvh);
         m_.feeder.start(std::move(driver));
         m_.gpu->start_job();
         const uint64_t first = m_.gpu->core_clock().cycle_at_or_after(sc_time_stamp());
@@ -472,6 +555,8 @@ JobResult JobRun::run(const Job& j) {
         const JobResult after = complex_totals(*m_.gpu);
         for (uint64_t JobResult::*f : kModelCounters) r.*f = after.*f - before.*f;
         if (m_.feeder.aborted()) return r;
+        if (m_.shared_memory && m_.shared_memory->error_code())
+            throw JobError{m_.shared_memory->error_code(), m_.shared_memory->error_addr()};
     }
     // The timing models traverse with the same code as the functional one: their answers must
     // be the same, bit for bit.
@@ -485,7 +570,9 @@ JobResult JobRun::run(const Job& j) {
     // compared with the copy they were traced on. A difference means software changed the image
     // during the job; the job ends with BVH_CHANGED at the node's address and writes no hit. A
     // change is caught whether it came before the node was traversed or after; a node no ray read
-    // is not checked. One extra read per node: a checking mode, not a model of hardware.
+    // is not checked. One extra read per node: a checking mode, not a model of hardware. (On the
+    // shared path every line the L2 read from `mem` was compared as it came, SharedMemory above:
+    // a change is caught where a line is read after it, and no node is read twice.)
     std::vector<uint8_t> now;
     for (const auto& [offset, bytes] : read_nodes) {
         if (m_.abort_requested) return r;

@@ -10,7 +10,8 @@
 // hit record bit for bit against the functional reference (and against golden hits when given),
 // checks an error path, and prints "N passed, M failed" (exit status 1 if any failed).
 //
-// usage: rtu-soc-vp [--fidelity functional|interval|lt|at] [--data PREFIX]
+// usage: rtu-soc-vp [--fidelity functional|interval|lt|at] [--memory private|shared] [--data PREFIX]
+//   --memory shared  the unit's L2 misses are reads on this platform's RAM (lt and at only)
 //   --data PREFIX  PREFIX.rtubvh, PREFIX.rays and PREFIX.hits, as rtsim --dump-bvh, --dump-rays and
 //                  --dump-hits write them (default: cornell's, 16x16 camera rays, made at build
 //                  time or installed with the package). The platform adds an any-hit copy of
@@ -100,12 +101,13 @@ size_t differing(const uint8_t* got, const std::vector<rtu_hit>& want) {
 }  // namespace
 
 int sc_main(int argc, char** argv) {
-    std::string fidelity = "lt", data = RTU_SOC_VP_DATA;
+    std::string fidelity = "lt", memory = "private", data = RTU_SOC_VP_DATA;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
-        if ((a == "--fidelity" || a == "--data") && i + 1 < argc) (a == "--fidelity" ? fidelity : data) = argv[++i];
+        if ((a == "--fidelity" || a == "--memory" || a == "--data") && i + 1 < argc)
+            (a == "--fidelity" ? fidelity : a == "--memory" ? memory : data) = argv[++i];
         else {
-            std::cerr << "usage: rtu-soc-vp [--fidelity functional|interval|lt|at] [--data PREFIX]\n";
+            std::cerr << "usage: rtu-soc-vp [--fidelity functional|interval|lt|at] [--memory private|shared] [--data PREFIX]\n";
             return 2;
         }
     }
@@ -130,6 +132,7 @@ int sc_main(int argc, char** argv) {
     std::unique_ptr<RtUnitPeripheral> rtu_ptr;
     try {
         cfg.set("fidelity=" + fidelity);
+        cfg.set("memory=" + memory);
         rtu_ptr = std::make_unique<RtUnitPeripheral>("rtu", cfg);
     } catch (const std::invalid_argument& e) {
         std::cerr << "error: " << e.what() << "\n";

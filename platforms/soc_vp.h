@@ -43,6 +43,7 @@ public:
     bool dmi = true;
     uint64_t writes = 0, bytes_read = 0, transactions = 0, dmi_grants = 0, violations = 0;
     sc_core::sc_time last_write_done;  // when the latest write's annotated delay ends
+    std::function<void(const tlm::tlm_generic_payload&)> observe;  // if set, sees every blocking transport (a test's view)
 
     Ram(sc_core::sc_module_name n, uint64_t base, uint64_t size, sc_core::sc_time latency = sc_core::sc_time(50, sc_core::SC_NS),
         double bytes_per_ns = 16.0)
@@ -67,6 +68,7 @@ private:
     void b_transport(tlm::tlm_generic_payload& t, sc_core::sc_time& d) {
         const uint64_t a = t.get_address(), n = t.get_data_length();
         ++transactions;
+        if (observe) observe(t);
         // What an initiator must give a blocking transport (IEEE 1666-2011, 14.17-14.19).
         if (n == 0 || t.get_streaming_width() != n || t.get_response_status() != tlm::TLM_INCOMPLETE_RESPONSE ||
             t.get_command() == tlm::TLM_IGNORE_COMMAND || !t.get_data_ptr())

@@ -11,7 +11,7 @@ namespace rtu {
 using namespace sc_core;
 
 RtComplex::RtComplex(sc_module_name name, const HwConfig& cfg, const BvhImage& image, TraversalOrder order, TraceSource& source,
-                     Fidelity fidelity, const Treelets* treelets, bool check_protocol)
+                     Fidelity fidelity, const Treelets* treelets, bool check_protocol, LineReader* shared_memory)
     : sc_module(name), core_(cfg.core_mhz), mem_(cfg.memory_mhz), quantum_(core_.period() * double(cfg.quantum)) {
     // Binds initiator to target, through a protocol checker when asked for (AT only: LT's
     // blocking transport has no phases to check).
@@ -36,12 +36,14 @@ RtComplex::RtComplex(sc_module_name name, const HwConfig& cfg, const BvhImage& i
     }
     xbar_.reset(new Crossbar("crossbar", cfg.address_map(), cfg.l2_slices, cfg.xbar_latency, core_, fidelity));
     for (uint32_t s = 0; s < cfg.sms; ++s) link(l1_[s]->out, xbar_->in, "l1_" + std::to_string(s) + "_crossbar");
-    dram_.reset(new Dram("dram", cfg.dram, cfg.address_map(), mem_, core_.period(), fidelity));
+    if (shared_memory) bridge_.reset(new MemBridge("mem_bridge", *shared_memory, mem_, fidelity));
+    else dram_.reset(new Dram("dram", cfg.dram, cfg.address_map(), mem_, core_.period(), fidelity));
     for (uint32_t s = 0; s < cfg.l2_slices; ++s) {
         const std::string id = std::to_string(s);
         l2_.emplace_back(new Cache(("l2_" + id).c_str(), CacheRole::L2, cfg.l2, cfg.l2.latency, pool_, core_, fidelity));
         link(xbar_->out, l2_[s]->in, "crossbar_l2_" + id);
-        link(l2_[s]->out, dram_->in, "l2_" + id + "_dram");
+        if (bridge_) link(l2_[s]->out, bridge_->in, "l2_" + id + "_mem_bridge");
+        else link(l2_[s]->out, dram_->in, "l2_" + id + "_dram");
     }
     if (fidelity == Fidelity::LT) SC_THREAD(lt_schedule);
 }

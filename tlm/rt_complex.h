@@ -1,7 +1,7 @@
 // The RT complex: the RT units of the SMs, their L1s, the crossbar, the L2 slices and the DRAM,
 // as child modules of one module, wired
 //   TraceSource -> RtUnit[sm] -> L1[sm] -> Crossbar -> L2[slice] -> Dram
-// and timed by its own core and memory clocks. rtsim's platform (platforms/gpu_platform.h) builds
+// (or, on a shared memory path, -> MemBridge -> the platform's memory: tlm/mem_bridge.h) and timed by its own core and memory clocks. rtsim's platform (platforms/gpu_platform.h) builds
 // one; an SoC peripheral would build another around its own trace source. It has no process-wide
 // side effects: it sets no global quantum, no report actions, and never stops or starts the
 // simulation, so several may live in one simulation.
@@ -23,6 +23,7 @@
 #include "clock.h"
 #include "crossbar.h"
 #include "dram.h"
+#include "mem_bridge.h"
 #include "model/fidelity.h"
 #include "model/trace_source.h"
 #include "payload.h"
@@ -37,8 +38,10 @@ class RtComplex : public sc_core::sc_module {
 public:
     // `treelets`: with treelet traversal, the treelets the RT units traverse by (and the image's
     // placement of them); else null. `check_protocol` (AT): a base-protocol checker on every link.
+    // `shared_memory`: the L2 misses go to it through a MemBridge instead of to the complex's own
+    // DRAM (null: the DRAM).
     RtComplex(sc_core::sc_module_name name, const HwConfig& cfg, const BvhImage& image, TraversalOrder order, TraceSource& source,
-              Fidelity fidelity, const Treelets* treelets = nullptr, bool check_protocol = false);
+              Fidelity fidelity, const Treelets* treelets = nullptr, bool check_protocol = false, LineReader* shared_memory = nullptr);
     ~RtComplex() override;
     SC_HAS_PROCESS(RtComplex);
 
@@ -47,7 +50,8 @@ public:
     const std::vector<std::unique_ptr<RtUnit>>& rt_units() const { return rt_; }
     const std::vector<std::unique_ptr<Cache>>& l1() const { return l1_; }
     const std::vector<std::unique_ptr<Cache>>& l2() const { return l2_; }
-    const Dram& dram() const { return *dram_; }
+    const Dram& dram() const { return *dram_; }  // not on a shared memory path
+    const MemBridge* bridge() const { return bridge_.get(); }  // on a shared memory path, else null
     const PayloadPool& pool() const { return pool_; }
     const std::vector<std::unique_ptr<ProtocolChecker>>& checkers() const { return checkers_; }
     // A job's traces are ready at the trace source (an SoC peripheral's): the RT units look for
@@ -79,6 +83,7 @@ private:
     std::vector<std::unique_ptr<Cache>> l1_, l2_;
     std::unique_ptr<Crossbar> xbar_;
     std::unique_ptr<Dram> dram_;
+    std::unique_ptr<MemBridge> bridge_;
     std::vector<std::unique_ptr<ProtocolChecker>> checkers_;
 };
 

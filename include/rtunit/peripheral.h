@@ -12,8 +12,8 @@
 // Software writes a job (BVH image, rays, hit buffer) into the JOB registers or a chain of
 // descriptors, then CTRL.START. The unit reads the image and the rays, traces them with the
 // configured fidelity, writes one hit record per ray and raises JOB_DONE. Functional, interval, LT and AT
-// fidelities; the memory path is private (the RT complex's own caches and DRAM, so its cycles do
-// not depend on the SoC). No process-wide side effects: no global quantum, no report actions, no
+// fidelities; the memory path is private by default (the RT complex's own caches and DRAM, so its
+// cycles do not depend on the SoC) or shared (its L2 misses read on `mem`). No process-wide side effects: no global quantum, no report actions, no
 // sc_stop; any number of instances per simulation.
 #pragma once
 #include <memory>
@@ -34,15 +34,20 @@ struct RTUNIT_API PeripheralConfig {
     std::vector<std::string> sets;  // key=value overrides of the configuration, as rtsim --set
     std::string fidelity = "lt";    // functional, interval, lt or at
     std::string traversal = "dfs";  // dfs or bfs
+    // private: the RT complex's own L2 and DRAM (cycles independent of the SoC, equal to rtsim
+    // --rays); shared: its L2 misses become reads on `mem` at the BVH's system address, so the
+    // SoC's memory times them (lt and at only).
+    std::string memory = "private";
     sc_core::sc_time reg_latency = sc_core::sc_time(10, sc_core::SC_NS);  // added to every register access
     // Direct memory access on `mem` where the target grants it: ray and hit records copied, the BVH
     // image used in place. Host speed only: hits and traversal cycles are the same without.
     bool use_dmi = true;
-    // Every job checks its BVH image as if its flags had RTU_JOB_CHECK_BVH (a checking mode: one
-    // extra read per node the job read).
+    // Every job checks its BVH image as if its flags had RTU_JOB_CHECK_BVH (a checking mode: on
+    // the private path one extra read per node the job read; on the shared path each sector read
+    // is compared).
     bool check_bvh = false;
     // By name, for platforms that configure modules from strings (QBox, VCML, Lua):
-    // fidelity=, traversal=, config=, reg_latency_ns=, use_dmi=, check_bvh=; any other key=value is a configuration key
+    // fidelity=, traversal=, memory=, config=, reg_latency_ns=, use_dmi=, check_bvh=; any other key=value is a configuration key
     // (l1.size_kb=64, prefetch.kind=ttp, ...). Checked when the peripheral is built.
     void set(const std::string& key_value);
 };

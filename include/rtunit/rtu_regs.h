@@ -120,7 +120,7 @@
  * bytes; the unit writes the completion half, `status` last. */
 #define RTU_DESC_MAGIC 0x314A5452u /* "RTJ1" */
 #define RTU_JOB_IRQ_ON_DONE (1u << 0)
-#define RTU_JOB_CHECK_BVH (1u << 1) /* after tracing, every node read is read again and compared (RTU_ERR_BVH_CHANGED) */
+#define RTU_JOB_CHECK_BVH (1u << 1) /* private memory path: after tracing, every node read is read again and compared; shared: each sector read is compared (RTU_ERR_BVH_CHANGED) */
 #define RTU_DESC_STATUS_DONE (1u << 31)
 #define RTU_DESC_STATUS_ERROR (1u << 30)
 #define RTU_DESC_STATUS_ABORTED (1u << 29)
