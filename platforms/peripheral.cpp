@@ -237,11 +237,10 @@ struct RtUnitPeripheral::Impl {
     TraversalOrder order;
     HwConfig hw;
     Fidelity fidelity;
-    bool shared;  // the shared memory path
     RtuRegisters regs;
     BvhImage image;  // the current job's snapshot; the RT complex reads it by reference
     JobFeeder feeder;
-    std::unique_ptr<SharedMemory> shared_memory;  // the shared path's reads on `mem`
+    std::unique_ptr<SharedMemory> shared_memory;  // the shared path's reads on `mem` (null: the private path)
     std::unique_ptr<RtComplex> gpu;  // LT, AT
     ClockDomain core;                // functional: the clock the counters count in
     sc_event start, irq_update, abort;
@@ -261,7 +260,7 @@ struct RtUnitPeripheral::Impl {
     }
 
     Impl(const PeripheralConfig& c, TraversalOrder o, const HwConfig& h, Fidelity f, bool sh)
-        : pc(c), order(o), hw(h), fidelity(f), shared(sh),
+        : pc(c), order(o), hw(h), fidelity(f),
           regs(std::min<uint32_t>(h.sms, 255) | std::min<uint32_t>(h.warp_size, 255) << 8 | std::min<uint32_t>(h.warp_buffer, 255) << 16 |
                    fidelity_code(f) << 24 | (sh ? RTU_MEMORY_SHARED : RTU_MEMORY_PRIVATE) << 28,
                uint32_t(o == TraversalOrder::BFS) | uint32_t(h.prefetch.kind) << 4 | uint32_t(h.core_mhz) << 8),
@@ -502,7 +501,7 @@ JobResult JobRun::run(const Job& j) {
     try {
         for (uint32_t i = 0; i < j.ray_count; ++i) {
             fetched.clear();
-            hits[i] = trace_record(m_.image, rays[i], m_.order, check_bvh && !m_.shared ? &fetched : nullptr);
+            hits[i] = trace_record(m_.image, rays[i], m_.order, check_bvh && !m_.shared_memory ? &fetched : nullptr);
             for (const StackEntry& e : fetched) read_nodes.emplace(e.addr, node_bytes(e.type));
         }
     } catch (const std::out_of_range&) {

@@ -20,10 +20,7 @@ MemBridge::MemBridge(sc_module_name name, LineReader& reader, const ClockDomain&
 }
 
 void MemBridge::read(tlm::tlm_generic_payload& t, sc_time& d) {
-    if (const uint32_t n = reader_.read_line(t.get_address(), t.get_data_length(), d)) {
-        ++reads_;
-        bytes_ += n;
-    }
+    if (reader_.read_line(t.get_address(), t.get_data_length(), d) > 0) ++reads_;
     // The answer on the memory clock's edge, as the DRAM's: the caches count in cycles.
     d = clock_.time_of(clock_.cycle_at_or_after(sc_time_stamp() + d)) - sc_time_stamp();
     t.set_response_status(tlm::TLM_OK_RESPONSE);

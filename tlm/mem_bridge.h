@@ -42,8 +42,7 @@ public:
     MemBridge(sc_core::sc_module_name name, LineReader& reader, const ClockDomain& clock, Fidelity fidelity);
     SC_HAS_PROCESS(MemBridge);
 
-    uint64_t reads() const { return reads_; }       // reads on the platform's memory
-    uint64_t bytes_read() const { return bytes_; }
+    uint64_t reads() const { return reads_; }  // reads on the platform's memory
 
 private:
     tlm::tlm_sync_enum nb_transport_fw(int id, tlm::tlm_generic_payload& t, tlm::tlm_phase& ph, sc_core::sc_time& d);
@@ -59,7 +58,7 @@ private:
     std::deque<tlm::tlm_generic_payload*> requests_;  // AT: accepted, not yet read
     sc_core::sc_event request_;
     tlm_utils::peq_with_get<tlm::tlm_generic_payload> resp_peq_;
-    uint64_t reads_ = 0, bytes_ = 0;
+    uint64_t reads_ = 0;
     bool warned_wait_ = false;
 };
 
