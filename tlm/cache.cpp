@@ -5,20 +5,15 @@ namespace rtu {
 using namespace sc_core;
 
 Cache::Cache(sc_module_name name, CacheRole role, const CacheConfig& cfg, uint32_t hit_latency, PayloadPool& pool,
-             const ClockDomain& clock, Fidelity fidelity)
+             const ClockDomain& clock, Fidelity fidelity, OrderedEvents& events)
     : sc_module(name), in("in"), out("out"), role_(role), cfg_(cfg), hit_latency_(hit_latency),
       // LT: the L1 takes its RT unit's requests, one per cycle, in order; an L2 slice books its lookups.
       lt_(cfg, hit_latency, role == CacheRole::L2), tags_(lt_.tags()), pool_(pool),
-      clock_(clock), fidelity_(fidelity), resp_due_("resp_due"), hit_peq_(resp_due_, resp_seq_), fill_peq_(resp_due_, resp_seq_) {
+      clock_(clock), fidelity_(fidelity), respond_(events, [this] { send_responses(); }), miss_event_(events, [this] { send_misses(); }),
+      hit_peq_(respond_, resp_seq_), fill_peq_(respond_, resp_seq_) {
     if (fidelity == Fidelity::AT) {
         in.register_nb_transport_fw(this, &Cache::nb_transport_fw);
         out.register_nb_transport_bw(this, &Cache::nb_transport_bw);
-        SC_METHOD(send_responses);
-        sensitive << resp_due_ << resp_event_;
-        dont_initialize();
-        SC_METHOD(send_misses);
-        sensitive << miss_event_;
-        dont_initialize();
     } else {
         in.register_b_transport(this, &Cache::b_transport);
     }
@@ -79,7 +74,7 @@ tlm::tlm_sync_enum Cache::nb_transport_fw(tlm::tlm_generic_payload& t, tlm::tlm_
         if (&t != resp_open_) SC_REPORT_FATAL(name(), "END_RESP for a response not held");
         resp_open_ = nullptr;
         t.release();
-        if (!resp_queue_.empty()) resp_event_.notify(SC_ZERO_TIME);
+        if (!resp_queue_.empty()) respond_.notify(SC_ZERO_TIME);
         return tlm::TLM_COMPLETED;
     }
     SC_REPORT_FATAL(name(), "unexpected phase on the forward path");
@@ -91,7 +86,7 @@ void Cache::send_responses() {
     if (resp_queue_.empty() || resp_open_) return;  // none, or the last one not ended yet
     const uint64_t c = clock_.cycle_at_or_after(sc_time_stamp());
     if (c == last_resp_cycle_ || clock_.time_of(c) != sc_time_stamp()) {
-        resp_event_.notify(clock_.time_of(c == last_resp_cycle_ ? c + 1 : c) - sc_time_stamp());
+        respond_.notify(clock_.time_of(c == last_resp_cycle_ ? c + 1 : c) - sc_time_stamp());
         return;
     }
     last_resp_cycle_ = c;
@@ -107,7 +102,7 @@ void Cache::send_responses() {
     }
     if (r != tlm::TLM_COMPLETED) SC_REPORT_FATAL(name(), "unexpected reply to BEGIN_RESP");
     t->release();
-    if (!resp_queue_.empty()) resp_event_.notify(clock_.period());
+    if (!resp_queue_.empty()) respond_.notify(clock_.period());
 }
 
 void Cache::send_misses() {

@@ -1,7 +1,8 @@
 // A sector cache (L1 of an SM, or one L2 slice) as a SystemC module: SectorCache (model/) behind
 // a TLM-2.0 target socket (from the RT unit or the crossbar) and an initiator socket (towards
 // L2 or DRAM). AT: one lookup per cycle; a reservation fail holds END_REQ until an MSHR frees,
-// which stops the requester (base-protocol backpressure). LT: b_transport, timed by
+// which stops the requester (base-protocol backpressure); its handlers run on the RT complex's
+// event queue (tlm/ordered_events.h). LT: b_transport, timed by
 // CacheBookings (model/cache_bookings.h, as the interval fidelity's caches are).
 #pragma once
 #include <deque>
@@ -30,8 +31,7 @@ public:
     // An L1 marks responses as L1 misses when not hits; an L2 slice marks them as DRAM-served
     // when they came from below.
     Cache(sc_core::sc_module_name name, CacheRole role, const CacheConfig& cfg, uint32_t hit_latency, PayloadPool& pool,
-          const ClockDomain& clock, Fidelity fidelity);
-    SC_HAS_PROCESS(Cache);
+          const ClockDomain& clock, Fidelity fidelity, OrderedEvents& events);
 
     const SectorCache& tags() const { return lt_.tags(); }
     // Functional warming before a sampled run (SectorCache::warm); returns whether it hit.
@@ -46,8 +46,8 @@ private:
     tlm::tlm_sync_enum nb_transport_bw(tlm::tlm_generic_payload& t, tlm::tlm_phase& ph, sc_core::sc_time& d);
     bool lookup(tlm::tlm_generic_payload& t);  // false: reservation fail
     void respond_later(tlm::tlm_generic_payload& t, bool hit);
-    void send_responses();  // SC_METHOD: one response per cycle
-    void send_misses();     // SC_METHOD: one miss per cycle downstream
+    void send_responses();  // on respond_: one response per cycle
+    void send_misses();     // on miss_event_: one miss per cycle downstream
     // LT
     void b_transport(tlm::tlm_generic_payload& t, sc_core::sc_time& d);
 
@@ -65,12 +65,12 @@ private:
     tlm::tlm_generic_payload* blocked_ = nullptr;                      // held by a reservation fail
     // Responses on their way to the response port: hits after the hit latency, fills at once.
     // Each queue is in due order; together they hand out as one payload event queue would.
-    sc_core::sc_event resp_due_;
+    // respond_ runs send_responses, for a response due or for the port's next cycle.
+    OrderedEvent respond_, miss_event_;
     uint64_t resp_seq_ = 0;
     FifoPeq<tlm::tlm_generic_payload> hit_peq_, fill_peq_;
     std::deque<tlm::tlm_generic_payload*> resp_queue_;
     tlm::tlm_generic_payload* resp_open_ = nullptr;  // a response whose END_RESP the requester withholds
-    sc_core::sc_event resp_event_, miss_event_;
     uint64_t last_resp_cycle_ = ~0ull, last_miss_cycle_ = ~0ull;
     std::deque<std::pair<uint64_t, tlm::tlm_generic_payload*>> miss_queue_;  // (cycle it may leave, request)
     bool down_waiting_end_req_ = false;

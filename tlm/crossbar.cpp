@@ -5,18 +5,13 @@ namespace rtu {
 using namespace sc_core;
 
 Crossbar::Crossbar(sc_module_name name, const AddressMap& map, uint32_t slices, uint32_t latency, const ClockDomain& clock,
-                   Fidelity fidelity)
-    : sc_module(name), in("from_l1"), out("to_l2"), map_(map), latency_(latency), clock_(clock),
-      outputs_(slices), req_peq_("req_peq"), resp_peq_("resp_peq") {
+                   Fidelity fidelity, OrderedEvents& events)
+    : sc_module(name), in("from_l1"), out("to_l2"), map_(map), latency_(latency), clock_(clock), outputs_(slices),
+      req_due_(events, [this] { forward_requests(); }), resp_due_(events, [this] { forward_responses(); }), req_peq_(req_due_),
+      resp_peq_(resp_due_) {
     if (fidelity == Fidelity::AT) {
         in.register_nb_transport_fw(this, &Crossbar::nb_transport_fw);
         out.register_nb_transport_bw(this, &Crossbar::nb_transport_bw);
-        SC_METHOD(forward_requests);
-        sensitive << req_peq_.get_event();
-        dont_initialize();
-        SC_METHOD(forward_responses);
-        sensitive << resp_peq_.get_event();
-        dont_initialize();
     } else {
         in.register_b_transport(this, &Crossbar::b_transport);
     }

@@ -24,9 +24,9 @@ public:
     tlm_utils::multi_passthrough_target_socket<Crossbar> in;      // from L1s
     tlm_utils::multi_passthrough_initiator_socket<Crossbar> out;  // to L2 slices
 
+    // `events`: the RT complex's event queue (tlm/ordered_events.h), on which AT's handlers run.
     Crossbar(sc_core::sc_module_name name, const AddressMap& map, uint32_t slices, uint32_t latency, const ClockDomain& clock,
-             Fidelity fidelity);
-    SC_HAS_PROCESS(Crossbar);
+             Fidelity fidelity, OrderedEvents& events);
     uint32_t slice_of(uint64_t addr) const { return map_.slice(addr); }
 
 private:
@@ -45,6 +45,7 @@ private:
         bool waiting_end_req = false;
     };
     std::vector<Output> outputs_;
+    OrderedEvent req_due_, resp_due_;  // run forward_requests, forward_responses
     FifoPeq<tlm::tlm_generic_payload> req_peq_, resp_peq_;  // fixed latency: due in queue order
 };
 

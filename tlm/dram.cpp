@@ -7,22 +7,14 @@ namespace rtu {
 using namespace sc_core;
 
 Dram::Dram(sc_module_name name, const DramConfig& cfg, const AddressMap& map, const ClockDomain& clock, const sc_time& core_period,
-           Fidelity fidelity)
+           Fidelity fidelity, OrderedEvents& events)
     : sc_module(name), in("from_l2"), cfg_(cfg), map_(map), clock_(clock), blocked_(cfg.channels),
-      frontend_(core_period * double(cfg.frontend_latency)), frontend_peq_("frontend_peq"), waiting_(cfg.channels),
-      resp_peq_("resp_peq"), lt_(cfg, map) {
+      frontend_(core_period * double(cfg.frontend_latency)), wake_(events, [this] { schedule(); }),
+      frontend_due_(events, [this] { leave_frontend(); }), resp_due_(events, [this] { respond(); }), frontend_peq_(frontend_due_),
+      waiting_(cfg.channels), resp_peq_(resp_due_), lt_(cfg, map) {
     for (uint32_t c = 0; c < cfg.channels; ++c) channels_.emplace_back(cfg);
     if (fidelity == Fidelity::AT) {
         in.register_nb_transport_fw(this, &Dram::nb_transport_fw);
-        SC_METHOD(schedule);
-        sensitive << wake_;
-        dont_initialize();
-        SC_METHOD(respond);
-        sensitive << resp_peq_.get_event();
-        dont_initialize();
-        SC_METHOD(leave_frontend);
-        sensitive << frontend_peq_.get_event();
-        dont_initialize();
     } else {
         in.register_b_transport(this, &Dram::b_transport);
     }

@@ -6,14 +6,11 @@ namespace rtu {
 
 using namespace sc_core;
 
-MemBridge::MemBridge(sc_module_name name, LineReader& reader, const ClockDomain& clock, Fidelity fidelity)
-    : sc_module(name), in("from_l2"), reader_(reader), clock_(clock), resp_peq_("resp_peq") {
+MemBridge::MemBridge(sc_module_name name, LineReader& reader, const ClockDomain& clock, Fidelity fidelity, OrderedEvents& events)
+    : sc_module(name), in("from_l2"), reader_(reader), clock_(clock), resp_due_(events, [this] { respond(); }), resp_peq_(resp_due_) {
     if (fidelity == Fidelity::AT) {
         in.register_nb_transport_fw(this, &MemBridge::nb_transport_fw);
         SC_THREAD(read_requests);
-        SC_METHOD(respond);
-        sensitive << resp_peq_.get_event();
-        dont_initialize();
     } else {
         in.register_b_transport(this, &MemBridge::b_transport);
     }

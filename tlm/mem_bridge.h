@@ -16,9 +16,9 @@
 #include <systemc>
 #include <tlm>
 #include <tlm_utils/multi_passthrough_target_socket.h>
-#include <tlm_utils/peq_with_get.h>
 
 #include "clock.h"
+#include "fifo_peq.h"
 #include "model/fidelity.h"
 
 namespace rtu {
@@ -38,8 +38,9 @@ class MemBridge : public sc_core::sc_module {
 public:
     tlm_utils::multi_passthrough_target_socket<MemBridge> in;
 
-    // `clock`: the memory clock, whose edges the answers come on.
-    MemBridge(sc_core::sc_module_name name, LineReader& reader, const ClockDomain& clock, Fidelity fidelity);
+    // `clock`: the memory clock, whose edges the answers come on. `events`: the RT complex's event
+    // queue (tlm/ordered_events.h), on which the answers are delivered in AT.
+    MemBridge(sc_core::sc_module_name name, LineReader& reader, const ClockDomain& clock, Fidelity fidelity, OrderedEvents& events);
     SC_HAS_PROCESS(MemBridge);
 
     uint64_t reads() const { return reads_; }  // reads on the platform's memory
@@ -48,7 +49,7 @@ private:
     tlm::tlm_sync_enum nb_transport_fw(int id, tlm::tlm_generic_payload& t, tlm::tlm_phase& ph, sc_core::sc_time& d);
     void b_transport(int id, tlm::tlm_generic_payload& t, sc_core::sc_time& d);
     void read_requests();  // SC_THREAD (AT)
-    void respond();        // SC_METHOD on the response queue (AT)
+    void respond();        // on the response queue's event (AT)
     // The line of `t` read through the reader, from `now` + `d`; `d` becomes the time from now
     // to the memory-clock edge of its answer.
     void read(tlm::tlm_generic_payload& t, sc_core::sc_time& d);
@@ -57,7 +58,8 @@ private:
     const ClockDomain& clock_;
     std::deque<tlm::tlm_generic_payload*> requests_;  // AT: accepted, not yet read
     sc_core::sc_event request_;
-    tlm_utils::peq_with_get<tlm::tlm_generic_payload> resp_peq_;
+    OrderedEvent resp_due_;
+    TimedPeq<tlm::tlm_generic_payload> resp_peq_;
     uint64_t reads_ = 0;
     bool warned_wait_ = false;
 };

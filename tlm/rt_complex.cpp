@@ -12,7 +12,7 @@ using namespace sc_core;
 
 RtComplex::RtComplex(sc_module_name name, const HwConfig& cfg, const BvhImage& image, TraversalOrder order, TraceSource& source,
                      Fidelity fidelity, const Treelets* treelets, bool check_protocol, LineReader* shared_memory)
-    : sc_module(name), core_(cfg.core_mhz), mem_(cfg.memory_mhz), quantum_(core_.period() * double(cfg.quantum)) {
+    : sc_module(name), core_(cfg.core_mhz), mem_(cfg.memory_mhz), events_("events"), quantum_(core_.period() * double(cfg.quantum)) {
     // Binds initiator to target, through a protocol checker when asked for (AT only: LT's
     // blocking transport has no phases to check).
     const bool check = check_protocol && fidelity == Fidelity::AT;
@@ -26,21 +26,20 @@ RtComplex::RtComplex(sc_module_name name, const HwConfig& cfg, const BvhImage& i
         checkers_.back()->out.bind(target);
     };
     // The children are made in this order (RT unit and L1 per SM, the crossbar, the DRAM, then
-    // the L2 slices): the kernel runs same-time processes in the order they were made, and the
-    // statistics are bit-identical to those of the platform this module was factored out of.
+    // the L2 slices); the RT units' first handlers (time 0) run in it.
     for (uint32_t s = 0; s < cfg.sms; ++s) {
         const std::string id = std::to_string(s);
-        rt_.emplace_back(new RtUnit(("rt_unit_" + id).c_str(), s, cfg, image, order, source, pool_, core_, fidelity, treelets));
-        l1_.emplace_back(new Cache(("l1_" + id).c_str(), CacheRole::L1, cfg.l1, cfg.l1_hit_latency, pool_, core_, fidelity));
+        rt_.emplace_back(new RtUnit(("rt_unit_" + id).c_str(), s, cfg, image, order, source, pool_, core_, fidelity, events_, treelets));
+        l1_.emplace_back(new Cache(("l1_" + id).c_str(), CacheRole::L1, cfg.l1, cfg.l1_hit_latency, pool_, core_, fidelity, events_));
         link(rt_[s]->socket, l1_[s]->in, "rt_unit_" + id + "_l1_" + id);
     }
-    xbar_.reset(new Crossbar("crossbar", cfg.address_map(), cfg.l2_slices, cfg.xbar_latency, core_, fidelity));
+    xbar_.reset(new Crossbar("crossbar", cfg.address_map(), cfg.l2_slices, cfg.xbar_latency, core_, fidelity, events_));
     for (uint32_t s = 0; s < cfg.sms; ++s) link(l1_[s]->out, xbar_->in, "l1_" + std::to_string(s) + "_crossbar");
-    if (shared_memory) bridge_.reset(new MemBridge("mem_bridge", *shared_memory, mem_, fidelity));
-    else dram_.reset(new Dram("dram", cfg.dram, cfg.address_map(), mem_, core_.period(), fidelity));
+    if (shared_memory) bridge_.reset(new MemBridge("mem_bridge", *shared_memory, mem_, fidelity, events_));
+    else dram_.reset(new Dram("dram", cfg.dram, cfg.address_map(), mem_, core_.period(), fidelity, events_));
     for (uint32_t s = 0; s < cfg.l2_slices; ++s) {
         const std::string id = std::to_string(s);
-        l2_.emplace_back(new Cache(("l2_" + id).c_str(), CacheRole::L2, cfg.l2, cfg.l2.latency, pool_, core_, fidelity));
+        l2_.emplace_back(new Cache(("l2_" + id).c_str(), CacheRole::L2, cfg.l2, cfg.l2.latency, pool_, core_, fidelity, events_));
         link(xbar_->out, l2_[s]->in, "crossbar_l2_" + id);
         if (bridge_) link(l2_[s]->out, bridge_->in, "l2_" + id + "_mem_bridge");
         else link(l2_[s]->out, dram_->in, "l2_" + id + "_dram");

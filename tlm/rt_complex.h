@@ -5,6 +5,9 @@
 // one; an SoC peripheral would build another around its own trace source. It has no process-wide
 // side effects: it sets no global quantum, no report actions, and never stops or starts the
 // simulation, so several may live in one simulation.
+// AT: the children have no processes of their own; their handlers run on one event queue
+// (tlm/ordered_events.h) in the order they were notified, so the kernel's order of same-time
+// processes, which any other process in the simulation changes, decides nothing inside the complex.
 // LT: one thread (lt_schedule) runs the RT units' cycles quantum by quantum, ahead of simulated
 // time, then waits for the next quantum with work. Within a quantum it steps the units cycle by
 // cycle (each cycle's first unit rotating: the unit of SM c mod n first in cycle c), so that the
@@ -25,6 +28,7 @@
 #include "dram.h"
 #include "mem_bridge.h"
 #include "model/fidelity.h"
+#include "ordered_events.h"
 #include "model/trace_source.h"
 #include "payload.h"
 #include "protocol_checker.h"
@@ -74,6 +78,7 @@ private:
     void lt_schedule();  // LT
 
     ClockDomain core_, mem_;
+    OrderedEvents events_;   // AT: every child's handlers, in an order of the complex's own
     bool started_ = false;   // start_job has set the epoch
     sc_core::sc_event work_;  // LT: a job started
     bool follow_global_quantum_ = true;

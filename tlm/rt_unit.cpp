@@ -8,14 +8,21 @@ namespace rtu {
 using namespace sc_core;
 
 RtUnit::RtUnit(sc_module_name name, uint32_t sm, const HwConfig& cfg, const BvhImage& image, TraversalOrder order,
-               TraceSource& source, PayloadPool& pool, const ClockDomain& clock, Fidelity fidelity, const Treelets* treelets)
+               TraceSource& source, PayloadPool& pool, const ClockDomain& clock, Fidelity fidelity, OrderedEvents& events,
+               const Treelets* treelets)
     : sc_module(name), socket("to_l1"), sm_(sm), core_(cfg, image, order, treelets), image_(image), source_(source), pool_(pool),
-      clock_(clock) {
-    if (fidelity == Fidelity::AT) {
+      clock_(clock), at_(fidelity == Fidelity::AT),
+      // After the memory side's handlers of the same time (its deliveries first), and among the RT
+      // units as LT steps them: SM c mod n first in cycle c (tlm/ordered_events.h).
+      wake_(events, [this] { tick(); },
+            [this, n = cfg.sms](uint64_t t) {
+                const uint64_t c = clock_.cycle_at_or_after(sc_time::from_value(t));
+                return uint32_t(1 + (sm_ + n - c % n) % n);
+            }) {
+    if (at_) {
         socket.register_nb_transport_bw(this, &RtUnit::nb_transport_bw);
-        SC_METHOD(tick);
-        sensitive << wake_;  // runs once at time 0, then only when woken
-    }  // LT: no process of its own; the RT complex steps it (lt_run)
+        wake_.notify(SC_ZERO_TIME);  // runs once at time 0, then only when woken
+    }  // LT: the RT complex steps it (lt_run)
 }
 
 void RtUnit::wake_at(uint64_t cycle) {
@@ -27,7 +34,7 @@ void RtUnit::wake(bool new_epoch) {
     const uint64_t c = clock_.cycle_at_or_after(sc_time_stamp());
     if (new_epoch) last_cycle_ = ~0ull;  // the cycle numbers restarted: cycle 0 is yet to run
     lt_.next = std::min(lt_.next, c);
-    wake_at(c);
+    if (at_) wake_at(c);
 }
 
 tlm::tlm_generic_payload* RtUnit::make_payload(const ChunkRequest& r) {

@@ -1,6 +1,6 @@
 // The RT unit of one SM as a SystemC module: RtUnitCore (model/) behind one TLM-2.0 initiator
-// socket to the SM's L1. AT: non-blocking transport, one 32 B request per cycle, an SC_METHOD that
-// sleeps until its next event. LT: blocking transport; the unit has no process of its own: the RT
+// socket to the SM's L1. AT: non-blocking transport, one 32 B request per cycle, a handler on the
+// RT complex's event queue (tlm/ordered_events.h) that sleeps until its next event. LT: blocking transport; the unit has no process of its own: the RT
 // complex (tlm/rt_complex.h) runs each unit's cycles of a quantum in turn, ahead of simulated time. Its traces come from a TraceSource (model/trace_source.h).
 #pragma once
 #include <functional>
@@ -15,6 +15,7 @@
 #include "model/fidelity.h"
 #include "model/rt_unit_core.h"
 #include "model/trace_source.h"
+#include "ordered_events.h"
 #include "payload.h"
 
 namespace rtu {
@@ -23,10 +24,10 @@ class RtUnit : public sc_core::sc_module {
 public:
     tlm_utils::simple_initiator_socket<RtUnit> socket;
 
+    // `events`: the RT complex's event queue, on which AT's handler runs.
     RtUnit(sc_core::sc_module_name name, uint32_t sm, const HwConfig& cfg, const BvhImage& image, TraversalOrder order,
-           TraceSource& source, PayloadPool& pool, const ClockDomain& clock, Fidelity fidelity,
+           TraceSource& source, PayloadPool& pool, const ClockDomain& clock, Fidelity fidelity, OrderedEvents& events,
            const Treelets* treelets = nullptr);
-    SC_HAS_PROCESS(RtUnit);
 
     RtUnitCore& core() { return core_; }
     // LT: the next cycle the unit has work in (~0: none, and none will come), and running its
@@ -72,7 +73,8 @@ private:
         uint64_t next = 0;       // the next cycle with work
     } lt_;
     uint64_t last_cycle_ = ~0ull;
-    sc_core::sc_event wake_;
+    bool at_;
+    OrderedEvent wake_;  // AT: runs tick
 };
 
 }  // namespace rtu
