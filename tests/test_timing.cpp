@@ -522,6 +522,62 @@ TEST(FifoPeq, SameDeliveriesAsPeqWithGet) {
     EXPECT_TRUE(bench.refused);
 }
 
+// OrderedEvents (tlm/ordered_events.h): handlers due at one time run by rank, then in the order
+// they were notified; one notified for the current time runs after those of its rank or below
+// already due, before those of a higher rank; a pending notification keeps the earlier of two
+// times; and a process of the kernel's woken at the same times changes none of it. Worked by hand.
+namespace {
+struct OrderBench : sc_core::sc_module {
+    OrderedEvents events{"events"};
+    std::vector<std::string> log;
+    std::vector<double> at;
+    OrderedEvent a{events, [this] { note("a"); }}, b{events, [this] { note("b"); }, [](uint64_t) { return 2u; }},
+        c{events, [this] { note("c"); }, [](uint64_t) { return 1u; }},
+        d{events, [this] {
+              note("d");
+              e.notify(sc_core::SC_ZERO_TIME);  // rank 0, now: before c (rank 1) and b (rank 2)
+              a.notify(sc_core::sc_time(5, sc_core::SC_NS));
+          }},
+        e{events, [this] { note("e"); }};
+    int ticks = 0;
+    SC_HAS_PROCESS(OrderBench);
+    explicit OrderBench(sc_core::sc_module_name n) : sc_module(n) {
+        SC_THREAD(feed);
+        SC_METHOD(foreign);  // the kernel's own timed events at the same times
+    }
+    void note(const char* what) {
+        log.push_back(what);
+        at.push_back(sc_core::sc_time_stamp().to_seconds() * 1e9);
+    }
+    void foreign() {
+        if (++ticks < 40) next_trigger(sc_core::sc_time(1, sc_core::SC_NS));
+    }
+    void feed() {
+        using sc_core::SC_NS;
+        b.notify(sc_core::sc_time(10, SC_NS));
+        c.notify(sc_core::sc_time(10, SC_NS));
+        a.notify(sc_core::sc_time(10, SC_NS));
+        c.notify(sc_core::sc_time(20, SC_NS));  // later than pending: dropped
+        d.notify(sc_core::sc_time(12, SC_NS));
+        d.notify(sc_core::sc_time(10, SC_NS));  // earlier: replaces 12
+    }
+};
+}  // namespace
+
+TEST(OrderedEvents, SameTimeHandlersRunByRankThenNotification) {
+    FsResolution resolution;
+    OrderBench bench("bench");
+    sc_core::sc_start();
+    // At 10: rank 0 in notification order (a, d), d's zero-delay e (rank 0) before c (rank 1) and
+    // b (rank 2); at 15: a again. Nothing at 12 or 20.
+    const std::vector<std::string> want{"a", "d", "e", "c", "b", "a"};
+    EXPECT_EQ(bench.log, want);
+    const std::vector<double> want_at{10, 10, 10, 10, 10, 15};
+    ASSERT_EQ(bench.at.size(), want_at.size());
+    for (size_t i = 0; i < want_at.size(); ++i) EXPECT_NEAR(bench.at[i], want_at[i], 1e-6) << i;
+    EXPECT_TRUE(bench.events.empty());
+}
+
 namespace {
 // The ray of the hand-worked test above with rt.leaf_descriptor_read: the leaf is read in two
 // dependent steps. Worked by hand (mobile latencies, memory clock = core clock):

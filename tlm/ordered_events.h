@@ -20,9 +20,11 @@
 // An OrderedEvent keeps sc_event's rule for a notification already pending: the earlier one wins
 // (a later notification is dropped, an earlier one replaces it).
 #pragma once
+#include <algorithm>
 #include <cstdint>
 #include <functional>
-#include <queue>
+#include <map>
+#include <memory>
 #include <utility>
 #include <vector>
 
@@ -59,53 +61,101 @@ public:
         SC_METHOD(run);  // also at initialization: handlers notified during elaboration run at time 0
         sensitive << wake_;
     }
-    bool empty() const { return due_.empty(); }
+    bool empty() const { return times_.empty(); }
 
 private:
     friend class OrderedEvent;
     struct Entry {
-        uint64_t at;
-        uint32_t rank;
-        uint64_t seq;
         OrderedEvent* event;
         uint64_t generation;
-        bool operator>(const Entry& o) const {
-            if (at != o.at) return at > o.at;
-            return rank != o.rank ? rank > o.rank : seq > o.seq;
+    };
+    // The handlers notified for one time: a FIFO per rank. Appending keeps each FIFO in
+    // notification order, so taking the lowest rank's front each time runs them in the order
+    // (rank, notification). Buckets are reused, their vectors keeping their capacity.
+    struct Bucket {
+        std::vector<std::vector<Entry>> by_rank;
+        std::vector<size_t> head;
+        uint32_t lowest = ~0u;
+        void add(uint32_t rank, const Entry& e) {
+            if (rank >= by_rank.size()) {
+                by_rank.resize(rank + 1);
+                head.resize(rank + 1);
+            }
+            by_rank[rank].push_back(e);
+            lowest = std::min(lowest, rank);
+        }
+        // The next entry in order, or null when none is left (then the bucket is empty again).
+        const Entry* next() {
+            for (; lowest < by_rank.size(); ++lowest) {
+                if (head[lowest] < by_rank[lowest].size()) return &by_rank[lowest][head[lowest]++];
+                by_rank[lowest].clear();
+                head[lowest] = 0;
+            }
+            lowest = ~0u;
+            return nullptr;
         }
     };
 
+    // Most notifications are for the current time (a zero delay) or the next core clock edge, so
+    // the last bucket used is kept at hand.
+    Bucket& bucket(uint64_t at) {
+        if (last_ && at == last_at_) return *last_;
+        auto it = times_.find(at);
+        if (it == times_.end()) {
+            Bucket* b;
+            if (free_.empty()) {
+                buckets_.emplace_back(new Bucket);
+                b = buckets_.back().get();
+            } else {
+                b = free_.back();
+                free_.pop_back();
+            }
+            it = times_.emplace(at, b).first;
+        }
+        last_at_ = at;
+        last_ = it->second;
+        return *last_;
+    }
     void push(OrderedEvent& e, uint64_t at) {
-        due_.push({at, e.rank_ ? e.rank_(at) : 0u, seq_++, &e, e.generation_});
+        bucket(at).add(e.rank_ ? e.rank_(at) : 0u, {&e, e.generation_});
         // Inside run() the loop takes it (or re-arms for it); during elaboration run() comes at
         // initialization. Otherwise (a call from another process) the kernel keeps the earliest
         // notification of wake_.
         if (!running_ && sc_core::sc_is_running()) arm();
     }
     void arm() {
-        if (due_.empty()) return;
+        if (times_.empty()) return;
         const uint64_t now = sc_core::sc_time_stamp().value();
-        const uint64_t at = due_.top().at;
+        const uint64_t at = times_.begin()->first;
         wake_.notify(at > now ? sc_core::sc_time::from_value(at - now) : sc_core::SC_ZERO_TIME);
     }
     void run() {
         const uint64_t now = sc_core::sc_time_stamp().value();
         running_ = true;
-        while (!due_.empty() && due_.top().at <= now) {
-            const Entry e = due_.top();
-            due_.pop();
-            OrderedEvent& ev = *e.event;
-            if (!ev.pending_ || ev.generation_ != e.generation) continue;  // replaced by an earlier notification
-            ev.pending_ = false;
-            ev.handler_();
+        // Handlers of this time notified while it runs join its bucket, which stays in the map
+        // until it is empty.
+        while (!times_.empty() && times_.begin()->first <= now) {
+            Bucket* b = times_.begin()->second;
+            while (const Entry* e = b->next()) {
+                OrderedEvent& ev = *e->event;
+                if (!ev.pending_ || ev.generation_ != e->generation) continue;  // replaced by an earlier notification
+                ev.pending_ = false;
+                ev.handler_();
+            }
+            if (last_ == b) last_ = nullptr;
+            times_.erase(times_.begin());
+            free_.push_back(b);
         }
         running_ = false;
         arm();
     }
 
     sc_core::sc_event wake_;
-    std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> due_;
-    uint64_t seq_ = 0;
+    std::map<uint64_t, Bucket*> times_;  // kernel time -> its handlers
+    std::vector<std::unique_ptr<Bucket>> buckets_;
+    std::vector<Bucket*> free_;
+    uint64_t last_at_ = 0;
+    Bucket* last_ = nullptr;
     bool running_ = false;
 };
 
