@@ -90,8 +90,9 @@ struct GpuPlatform::Impl {
     uint64_t dram_prev_busy = 0;
     std::vector<int> stack_depth;
     // The windowed values (caches, DRAM) are sampled by the first RT unit to tick at or after a
-    // window's end, so that tracing adds no event of its own: an extra timed event at the same
-    // time as the model's would reorder the kernel's same-time processes and change the results.
+    // window's end, so that tracing adds no event of its own. (Until 2026-11-26 an extra timed
+    // event at the same time as the model's reordered the kernel's same-time processes and changed
+    // the results; the RT complex now orders its own, tlm/ordered_events.h.)
     std::function<void(uint64_t)> sample_windows;
     uint64_t last_sample = 0, next_sample = 0;
 
