@@ -4,7 +4,8 @@
 # builds the installed example platform out of tree with only CMAKE_PREFIX_PATH (as C++17, C++20
 # and C++14, and with Embree, absl and assimp hidden from find_package), and through pkg-config,
 # runs each and expects "N passed, 0 failed"; checks that a newer version than installed is
-# refused; configures the source tree as another project's subproject. Prints "N passed, M failed";
+# refused; configures the source tree as another project's subproject; makes the Debian package
+# (cpack -G DEB) and builds the example against its contents. Prints "N passed, M failed";
 # exit 1 on a failure.
 # Usage: tests/package/run.sh BUILD_DIR
 set -uo pipefail
@@ -87,5 +88,24 @@ super() {
     cmake --build "$tmp/super/b" -j2 --target rtu_model >> "$tmp/super.log" 2>&1 || { tail -20 "$tmp/super.log"; return 1; }
 }
 check "as a subproject (add_subdirectory): configures, and the model library builds" super
+# P7: the Debian package (cpack -G DEB): it depends on libsystemc-dev and the runtime libraries,
+# holds the same files under /usr, and the installed example builds against its contents alone.
+deb() {
+  (cd "$build" && cpack -G DEB -B "$tmp/deb" > "$tmp/deb.log" 2>&1) || { tail -20 "$tmp/deb.log"; return 1; }
+  local pkg; pkg=$(ls "$tmp"/deb/rtunit-dev_*_*.deb) || return 1
+  dpkg-deb -f "$pkg" Depends | tee "$tmp/deb-depends.txt" | grep -q 'libsystemc-dev (>= 2.3.4)' || { cat "$tmp/deb-depends.txt"; return 1; }
+  grep -q 'libabsl' "$tmp/deb-depends.txt" || return 1
+  dpkg-deb -x "$pkg" "$tmp/debroot" || return 1
+  for f in usr/lib/librtunit.so.0 usr/include/rtunit/peripheral.h usr/lib/cmake/rtunit/rtunitConfig.cmake usr/lib/pkgconfig/rtunit.pc \
+           usr/share/rtunit/examples/soc_vp/soc_vp.cpp usr/share/rtunit/data/cornell.rtubvh usr/bin/rtsim; do
+    [ -e "$tmp/debroot/$f" ] || { echo "missing in the package: $f"; return 1; }
+  done
+  local b="$tmp/vp-build-deb"
+  cp -r "$tmp/debroot/usr/share/rtunit/examples/soc_vp" "$tmp/vp-deb" &&
+    cmake -S "$tmp/vp-deb" -B "$b" -DCMAKE_PREFIX_PATH="$tmp/debroot/usr" -DCMAKE_BUILD_TYPE=Release > "$b.log" 2>&1 &&
+    cmake --build "$b" -j2 >> "$b.log" 2>&1 && LD_LIBRARY_PATH="$tmp/debroot/usr/lib" "$b/soc_vp" | tee -a "$b.log" | grep -q ' passed, 0 failed' ||
+    { tail -20 "$b.log"; return 1; }
+}
+check "Debian package (cpack -G DEB): dependencies, files, the example built against it" deb
 echo "$passed passed, $failed failed"
 [ "$failed" -eq 0 ]
