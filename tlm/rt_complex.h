@@ -6,8 +6,9 @@
 // side effects: it sets no global quantum, no report actions, and never stops or starts the
 // simulation, so several may live in one simulation.
 // AT: the children have no processes of their own; their handlers run on one event queue
-// (tlm/ordered_events.h) in the order they were notified, so the kernel's order of same-time
-// processes, which any other process in the simulation changes, decides nothing inside the complex.
+// (tlm/ordered_events.h) in the order (time, rank, notification), so the kernel's order of
+// same-time processes, which any other process in the simulation changes, decides nothing inside
+// the complex.
 // LT: one thread (lt_schedule) runs the RT units' cycles quantum by quantum, ahead of simulated
 // time, then waits for the next quantum with work. Within a quantum it steps the units cycle by
 // cycle (each cycle's first unit rotating: the unit of SM c mod n first in cycle c), so that the
@@ -28,8 +29,8 @@
 #include "dram.h"
 #include "mem_bridge.h"
 #include "model/fidelity.h"
-#include "ordered_events.h"
 #include "model/trace_source.h"
+#include "ordered_events.h"
 #include "payload.h"
 #include "protocol_checker.h"
 #include "rt_unit.h"

@@ -1,7 +1,9 @@
 // The RT unit of one SM as a SystemC module: RtUnitCore (model/) behind one TLM-2.0 initiator
 // socket to the SM's L1. AT: non-blocking transport, one 32 B request per cycle, a handler on the
-// RT complex's event queue (tlm/ordered_events.h) that sleeps until its next event. LT: blocking transport; the unit has no process of its own: the RT
-// complex (tlm/rt_complex.h) runs each unit's cycles of a quantum in turn, ahead of simulated time. Its traces come from a TraceSource (model/trace_source.h).
+// RT complex's event queue (tlm/ordered_events.h) that sleeps until its next event. LT: blocking
+// transport; the unit has no process of its own: the RT complex (tlm/rt_complex.h) steps the
+// units cycle by cycle, ahead of simulated time. Its traces come from a TraceSource
+// (model/trace_source.h).
 #pragma once
 #include <functional>
 #include <queue>
