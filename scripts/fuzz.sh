@@ -11,7 +11,7 @@ cd "$(dirname "$0")/.."
 seconds=${1:-60}
 shift || true
 harnesses=("$@")
-[ ${#harnesses[@]} -gt 0 ] || harnesses=(mesh assimp rays camera config image descriptor segment)
+[ ${#harnesses[@]} -gt 0 ] || harnesses=(mesh assimp importer rays camera config image descriptor segment)
 scripts/setup.sh --fuzz
 CC=clang CXX=clang++ cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DBUILD_TESTING=OFF -DRTU_FUZZ=ON \
   -DRTU_SANITIZE=address,undefined,fuzzer-no-link >/dev/null

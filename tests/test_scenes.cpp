@@ -2,8 +2,10 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <csignal>
 
 #include <algorithm>
+#include <limits>
 #include <set>
 
 #include <sys/resource.h>
@@ -310,6 +312,105 @@ TEST(MeshFiles, ImporterThatSpinsStopsWithinItsCpuLimit) {
     // comes late and the wall limit ends it, plus the time to reap the importer (16.1 s once with
     // six jobs on two cores): within the promise of 30 s for an input under 1 MB.
     EXPECT_LT(seconds, 20.0) << err;
+}
+
+// The importer's CPU limit is kept to the microsecond (fuzz_assimp runs it at 0.25 s): the spin
+// above ends on the CPU timer, not on the wall-time limit (twice the CPU limit plus 5 s) that
+// would be all a whole-second RLIMIT_CPU of at least 1 s left to a busy machine.
+TEST(MeshFiles, ImporterCpuLimitBelowASecondEndsTheSpin) {
+    TempDir dir;
+    const unsigned char bytes[] = {'p', 'l', 'y', '\n', 'f', 'o', 'r', 'm', 'a', 't', ' ', 'b', 'i', 'n', 'a', 'r', 'y', '_', 'l', 'i', 't', 't', 'l',
+                                   'O', 'F', 'F', 'e', '_', 'e', 'n', 'd', 'i', ' ', 0, 0, 0, 0x80, 0x3f, 0, 0, 0, 0, 3, 0, 0, 0, 0, 1, 0, 0,
+                                   0, 2, 0, 0, 0, 'm', 'a', 't', ' ', 'b', 'i', 'n', 'a', 'r', 'y', '_', 'l', 'i', 't', 't', 'l', 'e', '_',
+                                   'e', 'n', 'd', 'i', 'a', 'n', ' ', '1', '.', '0', '\n', 'e', 'l', 'e'};
+    const std::string path = write_text(dir.file("spin.gltf"), std::string(reinterpret_cast<const char*>(bytes), sizeof bytes));
+    Scene s;
+    try {
+        load_mesh_file(s, path, ImporterLimits{0.2, 0.0});
+        FAIL() << "the spin was read as a mesh";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("spin.gltf: the mesh importer (Assimp) died on this file: signal " + std::to_string(SIGPROF) +
+                                             " (more CPU time than its limit for this file)"),
+                  std::string::npos)
+            << e.what();
+    }
+    EXPECT_THROW(load_mesh_file(s, path, ImporterLimits{0.0, 1.0}), std::invalid_argument);
+}
+
+namespace {
+// An answer as the importer's child writes it (mesh_io.cpp, import_in_child): 'M', the
+// materials, then vertices, triangles and per-triangle materials, each a count and its items.
+struct Answer {
+    std::string bytes = "M";
+    template <class T>
+    Answer& put(const T& v) {
+        bytes.append(reinterpret_cast<const char*>(&v), sizeof v);
+        return *this;
+    }
+    Answer& material(Material::Kind kind, float albedo) {
+        return put(kind).put(glm::vec3(albedo)).put(0.0f).put(1.5f).put(glm::vec3(0.0f));
+    }
+};
+Answer quad_answer(uint32_t index_of_last = 3, uint32_t material_of_last = 1, float last_x = 1.0f) {
+    Answer a;
+    a.put(uint64_t(2)).material(Material::Kind::Diffuse, 0.5f).material(Material::Kind::Emitter, 0.25f);
+    a.put(uint64_t(4)).put(glm::vec3(0, 0, 0)).put(glm::vec3(1, 0, 0)).put(glm::vec3(0, 1, 0)).put(glm::vec3(last_x, 1, 0));
+    a.put(uint64_t(2)).put(glm::uvec3(0, 1, 2)).put(glm::uvec3(1, index_of_last, 2));
+    a.put(uint64_t(2)).put(uint32_t(0)).put(material_of_last);
+    return a;
+}
+// The InputError's message, or "(accepted)"; the scene must be untouched when refused.
+std::string answer_error(const std::string& answer, int status = 0) {
+    Scene s;
+    add_material(s, Material{});
+    Mesh m;
+    try {
+        read_importer_answer(s, m, "x.glb", answer, status);
+    } catch (const InputError& e) {
+        EXPECT_EQ(s.materials.size(), 1u) << "a refused answer added materials";
+        EXPECT_TRUE(m.vertices.empty() && m.triangles.empty()) << "a refused answer left a mesh";
+        return e.what();
+    }
+    return "(accepted)";
+}
+}  // namespace
+
+// The child ran Assimp on a hostile file, so its answer is checked as any input is: a mesh that
+// holds together (counts that agree, indices in range, finite numbers, nothing after its end,
+// from a child that exited 0) or bad input, and the scene takes nothing from a refused answer.
+// Before, a triangle index or material index out of range went through (the scene's check found
+// the first later; the second was never checked), and 'M' from a child that exited 1 was read.
+TEST(MeshFiles, ImporterAnswerIsCheckedBeforeTheSceneTakesIt) {
+    {
+        Scene s;
+        add_material(s, Material{});
+        Mesh m;
+        read_importer_answer(s, m, "x.glb", quad_answer().bytes, 0);
+        ASSERT_EQ(s.materials.size(), 3u);
+        EXPECT_EQ(s.materials[2].kind, Material::Kind::Emitter);
+        EXPECT_EQ(s.materials[2].albedo, glm::vec3(0.25f));
+        ASSERT_EQ(m.triangles.size(), 2u);
+        EXPECT_EQ(m.triangles[1], glm::uvec3(1, 3, 2));
+        EXPECT_EQ(m.material, (std::vector<uint32_t>{1, 2}));  // after the scene's one material
+    }
+    const std::string broken = "x.glb: the mesh importer (Assimp) sent back a broken answer (";
+    EXPECT_EQ(answer_error(quad_answer(4).bytes), broken + "a triangle's vertex index out of range)");
+    EXPECT_EQ(answer_error(quad_answer(3, 2).bytes), broken + "a triangle's material index out of range)");
+    EXPECT_EQ(answer_error(quad_answer(3, 1, std::numeric_limits<float>::infinity()).bytes), broken + "vertex 3 is not finite)");
+    EXPECT_EQ(answer_error(quad_answer().bytes + "z"), broken + "1 bytes after its end)");
+    EXPECT_EQ(answer_error(quad_answer().bytes.substr(0, 60)), broken + "short message)");
+    Answer fewer_materials;
+    fewer_materials.put(uint64_t(1)).material(Material::Kind::Diffuse, 0.5f);
+    fewer_materials.put(uint64_t(3)).put(glm::vec3(0)).put(glm::vec3(1, 0, 0)).put(glm::vec3(0, 1, 0));
+    fewer_materials.put(uint64_t(1)).put(glm::uvec3(0, 1, 2)).put(uint64_t(0));
+    EXPECT_EQ(answer_error(fewer_materials.bytes), broken + "1 triangles but 0 materials)");
+    Answer bad_kind;
+    bad_kind.put(uint64_t(1)).put(uint8_t(7));
+    EXPECT_EQ(answer_error(bad_kind.bytes), broken + "material kind 7)");
+    EXPECT_EQ(answer_error(quad_answer().bytes, 1 << 8), "x.glb: the mesh importer (Assimp) ended without an answer (exit status 1)");
+    EXPECT_EQ(answer_error("Ex.glb: cannot read mesh: no reader"), "x.glb: cannot read mesh: no reader");
+    EXPECT_EQ(answer_error("", SIGABRT), "x.glb: the mesh importer (Assimp) died on this file: signal 6 (an assertion inside Assimp)");
+    EXPECT_EQ(answer_error("", 0), "x.glb: the mesh importer (Assimp) ended without an answer (exit status 0)");
 }
 
 // Found by fuzz/fuzz_mesh: an OFF body in a .glb file reaches Assimp's OFF reader (it sniffs the

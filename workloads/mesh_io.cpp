@@ -18,6 +18,7 @@
 #include <assimp/scene.h>
 #include <signal.h>
 #include <sys/resource.h>
+#include <sys/time.h>
 #include <sys/wait.h>
 #include <unistd.h>
 #include <zlib.h>
@@ -529,9 +530,10 @@ void load_assimp(Scene& scene, Mesh& mesh, const std::string& path) {
 // forked child with limits on its address space (what the process had at the fork plus 2 GiB plus
 // 16 bytes per byte of the file) and CPU time (5 s plus 1 s per MB: an 88-byte ".gltf" holding a
 // broken PLY kept Assimp's PLY reader busy until the old limit of 30 s, so a 1 MB input could take
-// over 30 s; Assimp reads a real 1 MB glTF in well under a second); the child sends the mesh
-// back through a pipe, and any failure there (an exception, running out of memory, an abort, a
-// crash, the CPU limit, twice that in wall time) is an InputError naming the file. Under
+// over 30 s; Assimp reads a real 1 MB glTF in well under a second; ImporterLimits, mesh_io.h);
+// the child sends the mesh back through a pipe, and any failure there (an exception, running out
+// of memory, an abort, a crash, the CPU limit, twice that in wall time) is an InputError naming
+// the file, as is an answer that does not hold together (read_importer_answer). Under
 // AddressSanitizer, whose shadow memory takes terabytes of address space, the address-space limit
 // is left out.
 
@@ -624,9 +626,21 @@ std::string import_in_child(const std::string& path) {
     return out;
 }
 
-void load_assimp_isolated(Scene& scene, Mesh& mesh, const std::string& path) {
+// A time in seconds as setitimer takes it.
+itimerval one_shot(double seconds) {
+    itimerval t{};
+    t.it_value.tv_sec = time_t(seconds);
+    t.it_value.tv_usec = suseconds_t((seconds - double(t.it_value.tv_sec)) * 1e6);
+    if (t.it_value.tv_sec == 0 && t.it_value.tv_usec == 0) t.it_value.tv_usec = 1;  // zero would disarm it
+    return t;
+}
+
+void load_assimp_isolated(Scene& scene, Mesh& mesh, const std::string& path, const ImporterLimits& limits) {
+    if (!(limits.cpu_s > 0.0) || !(limits.cpu_s_per_mb >= 0.0) || limits.cpu_s > 1e6 || limits.cpu_s_per_mb > 1e6)
+        throw std::invalid_argument("ImporterLimits: cpu_s must be in (0, 1e6], cpu_s_per_mb in [0, 1e6]");
     std::error_code ec;
     const uint64_t file_bytes = fs::file_size(path, ec);
+    const double cpu = limits.cpu_s + limits.cpu_s_per_mb * double(ec ? 0 : file_bytes) / double(1 << 20);
     int fd[2];
     if (pipe(fd) != 0) throw input_error(path, 0, std::string("cannot start the mesh importer: ") + std::strerror(errno));
     std::fflush(nullptr);
@@ -640,17 +654,23 @@ void load_assimp_isolated(Scene& scene, Mesh& mesh, const std::string& path) {
         close(fd[0]);
         // Die plainly on a fault: a handler inherited from the parent (a fuzzer's or a
         // sanitizer's crash report) would otherwise treat the child's fault as the parent's.
-        for (const int sig : {SIGABRT, SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGXCPU, SIGALRM}) signal(sig, SIG_DFL);
+        for (const int sig : {SIGABRT, SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGXCPU, SIGALRM, SIGPROF}) signal(sig, SIG_DFL);
         if (&__sanitizer_set_death_callback) __sanitizer_set_death_callback(nullptr);  // likewise a fuzzer's death report
 #ifndef RTU_ADDRESS_SANITIZER
         const rlim_t as = rlim_t(address_space_now() + kImporterExtraBytes + 16 * (ec ? 0 : file_bytes));
         const rlimit as_limit{as, as};
         setrlimit(RLIMIT_AS, &as_limit);
 #endif
-        const rlim_t cpu = rlim_t(5 + (ec ? 0 : file_bytes >> 20));
-        const rlimit cpu_limit{cpu, cpu + 1};
+        // CPU time: SIGPROF at `cpu` seconds (ITIMER_PROF counts user and system time, to the
+        // microsecond), with RLIMIT_CPU a whole second behind it should the timer be lost; wall
+        // time: SIGALRM at twice that plus 5 s, should the importer block (on a FIFO it names, say).
+        // Timers are not inherited across fork, so the parent's (a fuzzer's -timeout) are untouched.
+        const itimerval prof = one_shot(cpu), wall = one_shot(2 * cpu + 5);
+        setitimer(ITIMER_PROF, &prof, nullptr);
+        const rlim_t cpu_backstop = rlim_t(std::ceil(cpu)) + 1;
+        const rlimit cpu_limit{cpu_backstop, cpu_backstop + 1};
         setrlimit(RLIMIT_CPU, &cpu_limit);
-        alarm(unsigned(2 * cpu + 5));  // and in wall time, should it block (on a FIFO it names, say)
+        setitimer(ITIMER_REAL, &wall, nullptr);
         const std::string out = import_in_child(path);
         for (size_t done = 0; done < out.size();) {
             const ssize_t n = write(fd[1], out.data() + done, out.size() - done);
@@ -673,42 +693,73 @@ void load_assimp_isolated(Scene& scene, Mesh& mesh, const std::string& path) {
     int status = 0;
     while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
     }
+    read_importer_answer(scene, mesh, path, in, status);
+}
+
+}  // namespace
+
+void read_importer_answer(Scene& scene, Mesh& mesh, const std::string& path, const std::string& in, int status) {
     if (WIFSIGNALED(status)) {
         const int sig = WTERMSIG(status);
-        const char* why = sig == SIGABRT   ? " (an assertion inside Assimp)"
-                          : sig == SIGXCPU || sig == SIGKILL ? " (more CPU time than its limit for this file)"
-                          : sig == SIGALRM   ? " (more wall time than its limit for this file)"
-                          : sig == SIGSEGV   ? " (a crash inside Assimp, or its memory limit)"
-                                             : "";
+        const char* why = sig == SIGABRT                                     ? " (an assertion inside Assimp)"
+                          : sig == SIGXCPU || sig == SIGPROF || sig == SIGKILL ? " (more CPU time than its limit for this file)"
+                          : sig == SIGALRM                                   ? " (more wall time than its limit for this file)"
+                          : sig == SIGSEGV                                   ? " (a crash inside Assimp, or its memory limit)"
+                                                                             : "";
         throw input_error(path, 0, "the mesh importer (Assimp) died on this file: signal " + std::to_string(sig) + why);
     }
-    if (in.empty() || (in[0] != 'M' && in[0] != 'E'))
+    // The child writes its whole answer and then exits 0; anything else is an answer cut short.
+    if (!WIFEXITED(status) || WEXITSTATUS(status) != 0 || in.empty() || (in[0] != 'M' && in[0] != 'E'))
         throw input_error(path, 0, "the mesh importer (Assimp) ended without an answer (exit status " +
                                        std::to_string(WIFEXITED(status) ? WEXITSTATUS(status) : -1) + ")");
     if (in[0] == 'E') throw InputError(in.substr(1));
+    const auto broken = [&path](const std::string& what) {
+        return input_error(path, 0, "the mesh importer (Assimp) sent back a broken answer (" + what + ")");
+    };
+    const auto finite3 = [](const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); };
+    Mesh got;
+    std::vector<Material> materials;
     try {
         Reader r{in};
-        const uint32_t base = uint32_t(scene.materials.size());
-        const uint64_t materials = r.get<uint64_t>();
-        for (uint64_t i = 0; i < materials; ++i) {
+        const uint64_t n_materials = r.get<uint64_t>();
+        for (uint64_t i = 0; i < n_materials; ++i) {  // each one reads bytes, so a huge count ends as a short message
             Material m;
-            m.kind = r.get<Material::Kind>();
+            const auto kind = r.get<uint8_t>();
+            if (kind > uint8_t(Material::Kind::Emitter)) throw broken("material kind " + std::to_string(kind));
+            m.kind = Material::Kind(kind);
             m.albedo = r.get<glm::vec3>();
             m.fuzz = r.get<float>();
             m.ior = r.get<float>();
             m.emission = r.get<glm::vec3>();
-            add_material(scene, m);
+            if (!finite3(m.albedo) || !finite3(m.emission) || !std::isfinite(m.fuzz) || !std::isfinite(m.ior))
+                throw broken("a material's number is not finite");
+            materials.push_back(m);
         }
-        r.get_vector(mesh.vertices);
-        r.get_vector(mesh.triangles);
-        r.get_vector(mesh.material);
-        for (uint32_t& m : mesh.material) m += base;
-    } catch (const std::runtime_error&) {
-        throw input_error(path, 0, "the mesh importer (Assimp) sent back a broken answer");
+        r.get_vector(got.vertices);
+        r.get_vector(got.triangles);
+        r.get_vector(got.material);
+        if (r.pos != in.size()) throw broken(std::to_string(in.size() - r.pos) + " bytes after its end");
+    } catch (const std::runtime_error& e) {
+        if (dynamic_cast<const InputError*>(&e)) throw;
+        throw broken(e.what());
     }
+    for (size_t v = 0; v < got.vertices.size(); ++v)
+        if (!finite3(got.vertices[v])) throw broken("vertex " + std::to_string(v) + " is not finite");
+    if (got.material.size() != got.triangles.size())
+        throw broken(std::to_string(got.triangles.size()) + " triangles but " + std::to_string(got.material.size()) + " materials");
+    for (const glm::uvec3& t : got.triangles)
+        if (t.x >= got.vertices.size() || t.y >= got.vertices.size() || t.z >= got.vertices.size())
+            throw broken("a triangle's vertex index out of range");
+    for (const uint32_t m : got.material)
+        if (m >= materials.size()) throw broken("a triangle's material index out of range");
+    // Accepted whole: only now does anything reach the caller's scene.
+    const uint32_t base = uint32_t(scene.materials.size());
+    for (Material& m : materials) add_material(scene, std::move(m));
+    for (uint32_t& m : got.material) m += base;
+    mesh.vertices = std::move(got.vertices);
+    mesh.triangles = std::move(got.triangles);
+    mesh.material = std::move(got.material);
 }
-
-}  // namespace
 
 std::string read_file_maybe_gz(const std::string& path) {
     std::error_code ec;
@@ -754,7 +805,7 @@ bool is_mesh_file(const std::string& path) {
     return imp.IsExtensionSupported("." + ext);
 }
 
-uint32_t load_mesh_file(Scene& scene, const std::string& path) {
+uint32_t load_mesh_file(Scene& scene, const std::string& path, const ImporterLimits& limits) {
     std::error_code ec;
     if (!fs::exists(path, ec)) throw input_error(path, 0, "file not found");
     // A FIFO, socket or device would block the reader (Assimp waits forever on a FIFO) or never end.
@@ -774,7 +825,7 @@ uint32_t load_mesh_file(Scene& scene, const std::string& path) {
     } else if (ext == "off") {
         load_off(mesh, add_material(scene, Material{}), path);
     } else {
-        load_assimp_isolated(scene, mesh, path);
+        load_assimp_isolated(scene, mesh, path, limits);
     }
     scene.meshes.push_back(std::move(mesh));
     return uint32_t(scene.meshes.size() - 1);
