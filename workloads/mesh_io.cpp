@@ -654,7 +654,14 @@ void load_assimp_isolated(Scene& scene, Mesh& mesh, const std::string& path, con
         close(fd[0]);
         // Die plainly on a fault: a handler inherited from the parent (a fuzzer's or a
         // sanitizer's crash report) would otherwise treat the child's fault as the parent's.
-        for (const int sig : {SIGABRT, SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGXCPU, SIGALRM, SIGPROF}) signal(sig, SIG_DFL);
+        // The limits' signals are unblocked too, whatever mask the forking thread had.
+        sigset_t limits_signals;
+        sigemptyset(&limits_signals);
+        for (const int sig : {SIGABRT, SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGXCPU, SIGALRM, SIGPROF}) {
+            signal(sig, SIG_DFL);
+            sigaddset(&limits_signals, sig);
+        }
+        sigprocmask(SIG_UNBLOCK, &limits_signals, nullptr);
         if (&__sanitizer_set_death_callback) __sanitizer_set_death_callback(nullptr);  // likewise a fuzzer's death report
 #ifndef RTU_ADDRESS_SANITIZER
         const rlim_t as = rlim_t(address_space_now() + kImporterExtraBytes + 16 * (ec ? 0 : file_bytes));
