@@ -294,16 +294,24 @@ TEST(MeshFiles, ImporterBombStaysInItsLimits) {
     EXPECT_LT(children.ru_maxrss, 2560L << 10) << "KiB taken by the importer's process";
 }
 
+namespace {
+// Found by fuzz/fuzz_mesh: 88 bytes named .gltf holding a broken binary PLY, which keeps Assimp's
+// PLY reader busy until the importer's CPU limit.
+std::string write_spin_gltf(const TempDir& dir) {
+    const unsigned char bytes[] = {'p', 'l', 'y', '\n', 'f', 'o', 'r', 'm', 'a', 't', ' ', 'b', 'i', 'n', 'a', 'r', 'y', '_', 'l', 'i', 't', 't', 'l',
+                                   'O', 'F', 'F', 'e', '_', 'e', 'n', 'd', 'i', ' ', 0, 0, 0, 0x80, 0x3f, 0, 0, 0, 0, 3, 0, 0, 0, 0, 1, 0, 0,
+                                   0, 2, 0, 0, 0, 'm', 'a', 't', ' ', 'b', 'i', 'n', 'a', 'r', 'y', '_', 'l', 'i', 't', 't', 'l', 'e', '_',
+                                   'e', 'n', 'd', 'i', 'a', 'n', ' ', '1', '.', '0', '\n', 'e', 'l', 'e'};
+    return write_text(dir.file("spin.gltf"), std::string(reinterpret_cast<const char*>(bytes), sizeof bytes));
+}
+}  // namespace
+
 // Found by fuzz/fuzz_mesh: 88 bytes named .gltf holding a broken binary PLY kept Assimp's PLY
 // reader busy until the importer's CPU limit, then 30 s: longer than any input under 1 MB may
 // take. The limit is now 5 s + 1 s/MB: bad input within that.
 TEST(MeshFiles, ImporterThatSpinsStopsWithinItsCpuLimit) {
     TempDir dir;
-    const unsigned char bytes[] = {'p', 'l', 'y', '\n', 'f', 'o', 'r', 'm', 'a', 't', ' ', 'b', 'i', 'n', 'a', 'r', 'y', '_', 'l', 'i', 't', 't', 'l',
-                                   'O', 'F', 'F', 'e', '_', 'e', 'n', 'd', 'i', ' ', 0, 0, 0, 0x80, 0x3f, 0, 0, 0, 0, 3, 0, 0, 0, 0, 1, 0, 0,
-                                   0, 2, 0, 0, 0, 'm', 'a', 't', ' ', 'b', 'i', 'n', 'a', 'r', 'y', '_', 'l', 'i', 't', 't', 'l', 'e', '_',
-                                   'e', 'n', 'd', 'i', 'a', 'n', ' ', '1', '.', '0', '\n', 'e', 'l', 'e'};
-    const std::string path = write_text(dir.file("spin.gltf"), std::string(reinterpret_cast<const char*>(bytes), sizeof bytes));
+    const std::string path = write_spin_gltf(dir);
     const auto t0 = std::chrono::steady_clock::now();
     const std::string err = load_error(path);
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -319,11 +327,7 @@ TEST(MeshFiles, ImporterThatSpinsStopsWithinItsCpuLimit) {
 // would be all a whole-second RLIMIT_CPU of at least 1 s left to a busy machine.
 TEST(MeshFiles, ImporterCpuLimitBelowASecondEndsTheSpin) {
     TempDir dir;
-    const unsigned char bytes[] = {'p', 'l', 'y', '\n', 'f', 'o', 'r', 'm', 'a', 't', ' ', 'b', 'i', 'n', 'a', 'r', 'y', '_', 'l', 'i', 't', 't', 'l',
-                                   'O', 'F', 'F', 'e', '_', 'e', 'n', 'd', 'i', ' ', 0, 0, 0, 0x80, 0x3f, 0, 0, 0, 0, 3, 0, 0, 0, 0, 1, 0, 0,
-                                   0, 2, 0, 0, 0, 'm', 'a', 't', ' ', 'b', 'i', 'n', 'a', 'r', 'y', '_', 'l', 'i', 't', 't', 'l', 'e', '_',
-                                   'e', 'n', 'd', 'i', 'a', 'n', ' ', '1', '.', '0', '\n', 'e', 'l', 'e'};
-    const std::string path = write_text(dir.file("spin.gltf"), std::string(reinterpret_cast<const char*>(bytes), sizeof bytes));
+    const std::string path = write_spin_gltf(dir);
     Scene s;
     try {
         load_mesh_file(s, path, ImporterLimits{0.2, 0.0});
