@@ -746,9 +746,10 @@ void read_importer_answer(Scene& scene, Mesh& mesh, const std::string& path, con
         r.get_vector(got.triangles);
         r.get_vector(got.material);
         if (r.pos != in.size()) throw broken(std::to_string(in.size() - r.pos) + " bytes after its end");
+    } catch (const InputError&) {
+        throw;  // broken(...) above
     } catch (const std::runtime_error& e) {
-        if (dynamic_cast<const InputError*>(&e)) throw;
-        throw broken(e.what());
+        throw broken(e.what());  // the Reader's "short message"
     }
     for (size_t v = 0; v < got.vertices.size(); ++v)
         if (!finite3(got.vertices[v])) throw broken("vertex " + std::to_string(v) + " is not finite");
