@@ -249,3 +249,68 @@ TEST(SampleWarming, EachSmIsWarmedWhenItStartsTheCluster) {
             EXPECT_GT(by_sm.begin()->second, 0u);
         }
 }
+
+// With every warp ready at cycle 0 an SM takes the first traces of all its warps before any
+// second trace: the frame runs in rounds. A simulated cluster's first traces therefore run where
+// the other warps have run their first traces only, and warming them with the skipped warps' every
+// trace put bounces' nodes in the L1 of camera rays and gave the cluster's bounces' first touches
+// to the skipped warps (docs/sampling.md, "Warming the first traces apart"). Here the driver is run
+// in rounds by hand (path tracing, each trace retired at the next cycle): the warmings taken in the
+// first round hold the skipped warps' first traces only, the later ones their later traces only,
+// each SM's own, one of each per cluster and SM at most.
+TEST(SampleWarming, FirstTracesWarmTheFirstRoundLaterTracesTheLater) {
+    const Scene scene = load_scene("cornell", "");
+    const BvhImage img = build_bvh_image(scene);
+    WorkloadParams p;
+    p.width = 64;
+    p.height = 48;
+    p.spp = 1;  // 96 shader warps, 24 clusters of 2 SMs x 2 slots
+    auto make = [&] { return make_scene_workload(WorkloadKind::PathTrace, scene, p); };
+    const std::unique_ptr<Workload> workload = make();
+    SamplingOptions s;
+    s.rate = 0.5;
+    s.seed = 1;
+    s.capacity = 4;
+    s.threads = 1;
+    s.warm_window = 1u << 20;
+    s.make_workload = make;
+    s.trace = [&](const Ray& r, std::vector<StackEntry>* fetched) { return trace_ray(img, r, TraversalOrder::DFS, nullptr, fetched); };
+    WorkloadDriver driver(*workload, 2, 32, 0, 0, s);
+    ASSERT_TRUE(driver.sampled());
+    uint64_t now = 0;
+    uint32_t caller = 0;
+    size_t first_warmings[2] = {0, 0}, later_warmings[2] = {0, 0};
+    driver.on_warm = [&](const std::vector<WarmFetch>& fetches) {
+        ASSERT_FALSE(fetches.empty());
+        for (const WarmFetch& f : fetches) {
+            ASSERT_EQ(f.sm, caller);
+            if (now == 0)
+                ASSERT_EQ(f.trace, 0u) << "a warming of the first round holds a fetch of a skipped warp's trace " << f.trace;
+            else
+                ASSERT_GT(f.trace, 0u) << "a warming at cycle " << now << " holds a fetch of a skipped warp's first trace";
+        }
+        ++(now == 0 ? first_warmings : later_warmings)[caller];
+    };
+    size_t rounds = 0;
+    for (; !driver.finished() && now < 1000; ++now) {
+        bool any = false;
+        for (caller = 0; caller < 2; ++caller)
+            while (auto trace = driver.next_trace(caller, now)) {
+                any = true;
+                std::vector<RetiredRay> done;
+                for (const WarpRay& w : *trace) {
+                    const TraceResult r = trace_ray(img, w.ray, TraversalOrder::DFS, nullptr, nullptr);
+                    done.push_back({w.key, r.hit, r.nodes_visited});
+                }
+                driver.retire(caller, done, now + 1);
+            }
+        rounds += any;
+    }
+    ASSERT_TRUE(driver.finished());
+    EXPECT_GT(rounds, 2u);  // bounces: traces after the first
+    for (uint32_t sm = 0; sm < 2; ++sm) {
+        EXPECT_GT(first_warmings[sm], 3u) << "SM " << sm;
+        EXPECT_GT(later_warmings[sm], 0u) << "SM " << sm;
+        EXPECT_LE(later_warmings[sm], first_warmings[sm]) << "SM " << sm;
+    }
+}

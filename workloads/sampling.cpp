@@ -115,7 +115,7 @@ struct WarpTracer {
     void trace(Workload& workload, size_t wi, std::vector<uint32_t>& trace_nodes, std::vector<WarmFetch>* rec) {
         const uint32_t sm = frame.sm(wi);
         frame.threads(wi, paths, pending);
-        for (;;) {
+        for (uint32_t k = 0;; ++k) {
             uint32_t longest = 0;
             bool any = false;
             for (size_t i = 0; i < paths.size(); ++i) {
@@ -128,7 +128,7 @@ struct WarpTracer {
                 fetched.clear();
                 if (is_valid_ray(w.ray)) r = opt.trace(w.ray, rec ? &fetched : nullptr);  // invalid rays never reach the RT unit: a miss
                 if (rec)
-                    for (const StackEntry& e : fetched) rec->push_back({sm, e.addr, node_bytes(e.type)});
+                    for (const StackEntry& e : fetched) rec->push_back({sm, e.addr, node_bytes(e.type), k});
                 longest = std::max(longest, r.nodes_visited);
                 follow.clear();
                 workload.complete(w, r.hit, follow);

@@ -85,6 +85,7 @@ struct WarmFetch {
     uint32_t sm;
     uint64_t addr;
     uint32_t bytes;
+    uint32_t trace = 0;  // which trace of its warp fetched it (0: the first)
 };
 
 // One simulated cluster of a sample.

@@ -157,10 +157,20 @@ WorkloadDriver::WorkloadDriver(Workload& workload, uint32_t sms, uint32_t warp_s
             // lagging SM then would fill its L1 before it has finished its previous cluster. With
             // a limit of resident warps a warp's SM is decided only as it starts, so the first SM
             // to start the cluster warms them all.
+            // Without that limit the frame runs in rounds, and the skipped warps' first traces are
+            // replayed apart from their later ones (Warming): replaying every trace of the skipped
+            // warps at the cluster's start gave its camera rays an L1 that the frame's bounces had
+            // filled (ship, path tracing 256x256: 0.133 of node fetches missed L1 in the sample,
+            // 0.117 in the frame) and handed the first touches of the cluster's bounces to the
+            // uncounted skipped warps (wknd: 0.0018 against 0.0050); docs/sampling.md, "Warming
+            // the first traces apart".
             std::vector<std::vector<WarmFetch>> fetches = warming_fetches(Frame(warps_), sampling, design, *workloads);
-            warm_.assign(fetches.size(), std::vector<std::vector<WarmFetch>>(resident_warps ? 1 : sms));
+            warm_.assign(fetches.size(), std::vector<Warming>(resident_warps ? 1 : sms));
             for (size_t i = 0; i < fetches.size(); ++i) {
-                for (const WarmFetch& f : fetches[i]) warm_[i][resident_warps ? 0 : f.sm].push_back(f);
+                for (const WarmFetch& f : fetches[i]) {
+                    Warming& w = warm_[i][resident_warps ? 0 : f.sm];
+                    (resident_warps || f.trace == 0 ? w.first : w.later).push_back(f);
+                }
                 std::vector<WarmFetch>().swap(fetches[i]);
             }
         }
@@ -250,12 +260,15 @@ std::optional<std::vector<WarpRay>> WorkloadDriver::next_trace(uint32_t sm, uint
         q.erase(q.begin());
         ShaderWarp& sw = warps_[wi];
         if (sw.cluster < warm_.size()) {
-            std::vector<WarmFetch>& mine = warm_[sw.cluster][warm_[sw.cluster].size() == 1 ? 0 : sm];
-            if (!mine.empty()) {  // this SM's first trace of a simulated cluster
+            Warming& w = warm_[sw.cluster][warm_[sw.cluster].size() == 1 ? 0 : sm];
+            // This SM's first trace of a simulated cluster, or (in rounds) its first later trace.
+            std::vector<WarmFetch>& mine = sw.traces == 0 ? w.first : w.later;
+            if (!mine.empty()) {
                 if (on_warm) on_warm(mine);
                 std::vector<WarmFetch>().swap(mine);
             }
         }
+        ++sw.traces;
         std::vector<WarpRay> rays;
         std::vector<RetiredRay> invalid;
         for (Thread& t : sw.threads) {

@@ -77,6 +77,9 @@ public:
     // Sampled runs with the pre-pass: called when an SM takes its first trace of a simulated
     // cluster, with that SM's share of the last node fetches of the clusters skipped before it,
     // in order (with a limit of resident warps: the first SM to start the cluster, with all).
+    // With every warp resident (no limit) the frame runs in rounds, and the skipped warps' first
+    // traces warm the SM at its first trace of the cluster, their later traces at its first later
+    // trace of the cluster (Warming).
     std::function<void(const std::vector<WarmFetch>&)> on_warm;
 
 private:
@@ -91,6 +94,17 @@ private:
         uint32_t in_flight = 0;  // rays of the current trace not yet retired
         uint64_t issued_at = 0;
         uint32_t cluster = ~0u;  // sampled: its simulated cluster (index into warm_)
+        uint32_t traces = 0;     // traces it has issued so far
+    };
+    // What warms one SM for one simulated cluster: the skipped warps' fetches of their first
+    // traces and of their later ones, each replayed once, in frame order, then let go. With every
+    // warp ready at cycle 0 an SM takes the first traces of all its warps (in frame order) before
+    // any second trace, so a cluster's first traces run where the frame's other warps have run
+    // their first traces only; its later traces run in an order set by when the traces before
+    // them ended, which mixes the frame. (With a limit of resident warps there are no rounds:
+    // everything is in `first`.)
+    struct Warming {
+        std::vector<WarmFetch> first, later;
     };
     struct Record {
         TracedRay r;
@@ -109,7 +123,7 @@ private:
     std::vector<std::set<std::pair<uint64_t, uint32_t>>> ready_;  // per SM: (ready cycle, warp)
     std::vector<Record> records_;
     std::vector<uint64_t> free_records_;
-    std::vector<std::vector<std::vector<WarmFetch>>> warm_;  // per simulated cluster and SM, until that SM starts it
+    std::vector<std::vector<Warming>> warm_;  // per simulated cluster and SM (one for all SMs with a limit of resident warps)
     bool keep_rays_ = true;
     uint64_t issued_ = 0;
     RaySummary summary_;
