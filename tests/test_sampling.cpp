@@ -201,6 +201,32 @@ TEST(SamplePlan, RoundTripsAndRefusesBadFiles) {
     refused(huge);
 }
 
+// The hand-driven warming tests' frame: cornell at 64x48 and 1 spp (3072 paths: 96 shader warps,
+// 24 clusters of 2 SMs x 2 slots), half of it sampled with the pre-pass and functional warming.
+struct WarmingFrame {
+    explicit WarmingFrame(WorkloadKind kind) : scene(load_scene("cornell", "")), img(build_bvh_image(scene)) {
+        p.width = 64;
+        p.height = 48;
+        p.spp = 1;
+        s.rate = 0.5;
+        s.seed = 1;
+        s.capacity = 4;
+        s.threads = 1;
+        s.warm_window = 1u << 20;
+        s.make_workload = [this, kind] { return make_scene_workload(kind, scene, p); };
+        s.trace = [this](const Ray& r, std::vector<StackEntry>* fetched) { return trace_ray(img, r, TraversalOrder::DFS, nullptr, fetched); };
+        workload = s.make_workload();
+        driver = std::make_unique<WorkloadDriver>(*workload, 2, 32, 0, 0, s);  // 2 SMs, no shading latency, every warp resident
+    }
+    WarmingFrame(const WarmingFrame&) = delete;
+    const Scene scene;
+    const BvhImage img;
+    WorkloadParams p;
+    SamplingOptions s;
+    std::unique_ptr<Workload> workload;
+    std::unique_ptr<WorkloadDriver> driver;
+};
+
 // Functional warming follows each SM's own pace: an SM's L1 is warmed with its fetches of the
 // skipped clusters when that SM takes its first trace of a simulated cluster, not when the first
 // SM does. Every shader warp is ready at cycle 0, so an SM of cheap warps may reach a cluster long
@@ -209,23 +235,8 @@ TEST(SamplePlan, RoundTripsAndRefusesBadFiles) {
 // at 512x512) came out 26-56 % high (docs/sampling.md). Here SM 0 takes every one of its traces
 // before SM 1 takes any: SM 0's warmings hold only SM 0's fetches, and SM 1's come with SM 1.
 TEST(SampleWarming, EachSmIsWarmedWhenItStartsTheCluster) {
-    const Scene scene = load_scene("cornell", "");
-    const BvhImage img = build_bvh_image(scene);
-    WorkloadParams p;
-    p.width = 64;
-    p.height = 48;
-    p.spp = 1;  // 3072 paths: 96 shader warps, 24 clusters of 2 SMs x 2 slots
-    auto make = [&] { return make_scene_workload(WorkloadKind::Primary, scene, p); };
-    const std::unique_ptr<Workload> workload = make();
-    SamplingOptions s;
-    s.rate = 0.5;
-    s.seed = 1;
-    s.capacity = 4;
-    s.threads = 1;
-    s.warm_window = 1u << 20;
-    s.make_workload = make;
-    s.trace = [&](const Ray& r, std::vector<StackEntry>* fetched) { return trace_ray(img, r, TraversalOrder::DFS, nullptr, fetched); };
-    WorkloadDriver driver(*workload, 2, 32, 0, 0, s);
+    WarmingFrame frame(WorkloadKind::Primary);
+    WorkloadDriver& driver = *frame.driver;
     ASSERT_TRUE(driver.sampled());
     uint32_t caller = 0;
     std::vector<std::map<uint32_t, size_t>> calls[2];  // per SM taking traces: each warming's fetches per SM
@@ -259,23 +270,8 @@ TEST(SampleWarming, EachSmIsWarmedWhenItStartsTheCluster) {
 // first round hold the skipped warps' first traces only, the later ones their later traces only,
 // each SM's own, one of each per cluster and SM at most.
 TEST(SampleWarming, FirstTracesWarmTheFirstRoundLaterTracesTheLater) {
-    const Scene scene = load_scene("cornell", "");
-    const BvhImage img = build_bvh_image(scene);
-    WorkloadParams p;
-    p.width = 64;
-    p.height = 48;
-    p.spp = 1;  // 96 shader warps, 24 clusters of 2 SMs x 2 slots
-    auto make = [&] { return make_scene_workload(WorkloadKind::PathTrace, scene, p); };
-    const std::unique_ptr<Workload> workload = make();
-    SamplingOptions s;
-    s.rate = 0.5;
-    s.seed = 1;
-    s.capacity = 4;
-    s.threads = 1;
-    s.warm_window = 1u << 20;
-    s.make_workload = make;
-    s.trace = [&](const Ray& r, std::vector<StackEntry>* fetched) { return trace_ray(img, r, TraversalOrder::DFS, nullptr, fetched); };
-    WorkloadDriver driver(*workload, 2, 32, 0, 0, s);
+    WarmingFrame frame(WorkloadKind::PathTrace);
+    WorkloadDriver& driver = *frame.driver;
     ASSERT_TRUE(driver.sampled());
     uint64_t now = 0;
     uint32_t caller = 0;
@@ -299,7 +295,7 @@ TEST(SampleWarming, FirstTracesWarmTheFirstRoundLaterTracesTheLater) {
                 any = true;
                 std::vector<RetiredRay> done;
                 for (const WarpRay& w : *trace) {
-                    const TraceResult r = trace_ray(img, w.ray, TraversalOrder::DFS, nullptr, nullptr);
+                    const TraceResult r = trace_ray(frame.img, w.ray, TraversalOrder::DFS, nullptr, nullptr);
                     done.push_back({w.key, r.hit, r.nodes_visited});
                 }
                 driver.retire(caller, done, now + 1);
