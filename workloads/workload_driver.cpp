@@ -160,10 +160,10 @@ WorkloadDriver::WorkloadDriver(Workload& workload, uint32_t sms, uint32_t warp_s
             // Without that limit the frame runs in rounds, and the skipped warps' first traces are
             // replayed apart from their later ones (Warming): replaying every trace of the skipped
             // warps at the cluster's start gave its camera rays an L1 that the frame's bounces had
-            // filled (ship, path tracing 256x256: 0.133 of node fetches missed L1 in the sample,
-            // 0.117 in the frame) and handed the first touches of the cluster's bounces to the
-            // uncounted skipped warps (wknd: 0.0018 against 0.0050); docs/sampling.md, "Warming
-            // the first traces apart".
+            // filled (ship, path tracing 256x256: 0.139 of node fetches missed L1 in the sample
+            // on average, 0.117 in the frame) and handed the first touches of the cluster's bounces
+            // to the uncounted skipped warps (wknd: 0.0024 against 0.0050); docs/sampling.md,
+            // "Warming the first traces apart".
             std::vector<std::vector<WarmFetch>> fetches = warming_fetches(Frame(warps_), sampling, design, *workloads);
             warm_.assign(fetches.size(), std::vector<Warming>(resident_warps ? 1 : sms));
             for (size_t i = 0; i < fetches.size(); ++i) {
