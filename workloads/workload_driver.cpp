@@ -261,14 +261,15 @@ std::optional<std::vector<WarpRay>> WorkloadDriver::next_trace(uint32_t sm, uint
         ShaderWarp& sw = warps_[wi];
         if (sw.cluster < warm_.size()) {
             Warming& w = warm_[sw.cluster][warm_[sw.cluster].size() == 1 ? 0 : sm];
-            // This SM's first trace of a simulated cluster, or (in rounds) its first later trace.
-            std::vector<WarmFetch>& mine = sw.traces == 0 ? w.first : w.later;
+            // This SM's first trace of a simulated cluster, or (in rounds) its first later trace. A
+            // warp issues its next trace only once the last has retired, so its traces so far are
+            // its record's traces_done.
+            std::vector<WarmFetch>& mine = records_of_warps_[wi].traces_done == 0 ? w.first : w.later;
             if (!mine.empty()) {
                 if (on_warm) on_warm(mine);
                 std::vector<WarmFetch>().swap(mine);
             }
         }
-        ++sw.traces;
         std::vector<WarpRay> rays;
         std::vector<RetiredRay> invalid;
         for (Thread& t : sw.threads) {

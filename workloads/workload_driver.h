@@ -94,7 +94,6 @@ private:
         uint32_t in_flight = 0;  // rays of the current trace not yet retired
         uint64_t issued_at = 0;
         uint32_t cluster = ~0u;  // sampled: its simulated cluster (index into warm_)
-        uint32_t traces = 0;     // traces it has issued so far
     };
     // What warms one SM for one simulated cluster: the skipped warps' fetches of their first
     // traces and of their later ones, each replayed once, in frame order, then let go. With every
