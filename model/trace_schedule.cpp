@@ -12,7 +12,7 @@ namespace {
 
 // With a limit of resident warps per SM: an event-driven run, since a finished warp's place on
 // its SM goes to the next warp of the frame.
-double schedule_resident(const std::vector<std::vector<double>>& traces, const ScheduleShape& shape) {
+std::vector<double> schedule_resident(const std::vector<std::vector<double>>& traces, const ScheduleShape& shape) {
     struct Event {
         double at;
         int kind;  // 0: a trace ends (its slot frees first), 1: a warp's next trace is ready
@@ -31,7 +31,7 @@ double schedule_resident(const std::vector<std::vector<double>>& traces, const S
         if (launched < traces.size()) events.push({at, 1, sm, launched++});
     };
     for (uint64_t k = 0; k < uint64_t(shape.sms) * shape.resident; ++k) launch(uint32_t(k % shape.sms), 0.0);
-    double end = 0;
+    std::vector<double> end(shape.sms, 0.0);
     while (!events.empty()) {
         const Event e = events.top();
         events.pop();
@@ -50,7 +50,7 @@ double schedule_resident(const std::vector<std::vector<double>>& traces, const S
             ready[e.sm].pop();
             --free_slots[e.sm];
             const double done = e.at + traces[w][next[w]++];
-            end = std::max(end, done);
+            end[e.sm] = std::max(end[e.sm], done);
             events.push({done, 0, e.sm, w});
         }
     }
@@ -59,10 +59,10 @@ double schedule_resident(const std::vector<std::vector<double>>& traces, const S
 
 }  // namespace
 
-double schedule_cycles(const std::vector<std::vector<double>>& traces, const ScheduleShape& shape) {
+std::vector<double> schedule_sm_ends(const std::vector<std::vector<double>>& traces, const ScheduleShape& shape) {
     if (shape.sms == 0 || shape.slots == 0) throw std::invalid_argument("schedule_cycles: no RT unit or no slot");
     if (shape.resident > 0) return schedule_resident(traces, shape);
-    double end = 0;
+    std::vector<double> end(shape.sms, 0.0);
     using Ready = std::pair<double, size_t>;  // (ready cycle, warp)
     for (uint32_t sm = 0; sm < shape.sms; ++sm) {
         std::priority_queue<Ready, std::vector<Ready>, std::greater<Ready>> ready;
@@ -78,11 +78,16 @@ double schedule_cycles(const std::vector<std::vector<double>>& traces, const Sch
             free_at.pop();
             const double done = start + traces[w][next[w]];
             free_at.push(done);
-            end = std::max(end, done);
+            end[sm] = std::max(end[sm], done);
             if (++next[w] < traces[w].size()) ready.push({done + double(shape.shade), w});
         }
     }
     return end;
+}
+
+double schedule_cycles(const std::vector<std::vector<double>>& traces, const ScheduleShape& shape) {
+    const std::vector<double> end = schedule_sm_ends(traces, shape);
+    return *std::max_element(end.begin(), end.end());
 }
 
 }  // namespace rtu

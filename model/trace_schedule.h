@@ -22,5 +22,7 @@ struct ScheduleShape {
 // `traces[w]`: the durations, in cycles, of shader warp w's traces in order. Returns the cycle
 // the last trace leaves its RT unit (0 for no traces).
 double schedule_cycles(const std::vector<std::vector<double>>& traces, const ScheduleShape& shape);
+// The same run: per RT unit, the cycle its last trace leaves (0 for an RT unit without traces).
+std::vector<double> schedule_sm_ends(const std::vector<std::vector<double>>& traces, const ScheduleShape& shape);
 
 }  // namespace rtu

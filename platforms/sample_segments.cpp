@@ -70,9 +70,11 @@ void write_segment(StatsOut& out, const TimingResult& r, uint32_t index, uint32_
     // reads back bit for bit. The rest (stratum, weight, critical paths) the merge draws again.
     nlohmann::ordered_json warps = nlohmann::ordered_json::array();
     for (const WarpRecord& w : r.segment_records)
-        warps.push_back({w.frame_warp, w.nodes, w.l1_miss_nodes, w.dram_nodes, w.residences});
+        warps.push_back({w.frame_warp, w.nodes, w.l1_miss_nodes, w.dram_nodes, w.residences, w.sm, w.last_done});
     o.json()["warps"] = std::move(warps);
-    o.note("warps", "", "per simulated warp: [frame warp, node reads, of them L1 misses, of them DRAM reads, [each trace's residence in cycles]]");
+    o.note("warps", "",
+           "per simulated warp: [frame warp, node reads, of them L1 misses, of them DRAM reads, [each trace's residence in cycles], "
+           "its SM, the cycle its last trace left]");
 }
 
 std::string plan_identity(const std::vector<IdentityKey>& identity) {
@@ -194,6 +196,16 @@ SegmentRun read_segment(const std::string& file) {
                     throw InputError("shader warp " + std::to_string(rec.frame_warp) + ": a residence of " + r.dump() + " cycles (whole cycles expected)");
                 rec.residences.push_back(d);
                 rec.work += d;  // as on_trace_done sums them
+            }
+            // Its SM and when its last trace left (the per-SM misfit of the schedule model): absent
+            // in the files of older versions, which then give none.
+            if (w.size() >= 7) {
+                rec.sm = uint32_t(whole(w.at(5), UINT32_MAX));
+                const double at = real(w.at(6));
+                if (!(at >= -1 && at <= 1e15 && at == std::floor(at)))
+                    throw InputError("shader warp " + std::to_string(rec.frame_warp) + ": its last trace left at cycle " + w.at(6).dump() +
+                                     " (a whole cycle expected, or -1 for none)");
+                rec.last_done = at;
             }
             s.warps.push_back(std::move(rec));
         }

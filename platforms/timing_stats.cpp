@@ -200,6 +200,10 @@ void write_sampling(StatsOut& out, const SampleEstimate& est, double rate, uint6
         sh.value("ci95", nlohmann::ordered_json{share->lo, share->hi}, "ratio", "its 95 % interval [low, high]");
     }
     s.value("schedule_model_misfit", est.model_misfit(double(cycles_simulated)), "ratio", "|simulated cycles / schedule model of the sample - 1|");
+    s.value("schedule_model_misfit_per_sm", nlohmann::ordered_json(est.misfit_per_sm), "ratio",
+            "per SM: the cycle its last simulated trace left / the same in the schedule model of the sample - 1");
+    s.value("schedule_model_error", est.model_error(double(cycles_simulated)), "ratio",
+            "the model's error as the interval takes it: root mean square of the per-SM misfits (the misfit where there are none)");
 }
 
 }  // namespace rtu

@@ -745,6 +745,21 @@ TEST(RtsimSampling, SegmentsMergedEqualTheSingleProcessRun) {
         EXPECT_NE(junk.err.find("cut short"), std::string::npos) << junk.err;
         EXPECT_FALSE(exists(dir.file("f.json")));
         const auto& s = m["timing"]["sampling"];
+        // The schedule model's misfit per SM (mobile: 8) comes through the segment files.
+        EXPECT_EQ(s["schedule_model_misfit_per_sm"].size(), 8u);
+        // Files of an older version, without each warp's SM and last cycle, merge to the same
+        // estimate with the whole run's misfit as the model's error.
+        for (int i = 0; i < 3; ++i) {
+            auto j = nlohmann::json::parse(read_text(dir.file("seg" + std::to_string(i) + ".json")));
+            for (auto& w : j["segment"]["warps"]) w.erase(6), w.erase(5);
+            write_text(dir.file("old" + std::to_string(i) + ".json"), j.dump());
+        }
+        ASSERT_EQ(rtsim(dir, split + " --merge-segments " + dir.file("old0.json") + " " + dir.file("old1.json") + " " +
+                                 dir.file("old2.json") + " --stats " + dir.file("mold.json")).status, 0);
+        const auto old = load("mold.json");
+        EXPECT_EQ(old["cycles"], m["cycles"]);
+        EXPECT_TRUE(old["timing"]["sampling"]["schedule_model_misfit_per_sm"].empty());
+        EXPECT_EQ(old["timing"]["sampling"]["schedule_model_error"], old["timing"]["sampling"]["schedule_model_misfit"]);
         EXPECT_EQ(s["cycles_simulated"].get<uint64_t>(), cycles);
         EXPECT_EQ(m["rays"].get<uint64_t>(), rays);
         EXPECT_EQ(s["warps_simulated"].get<uint64_t>(), warps);

@@ -59,6 +59,41 @@ TEST(ScheduleModel, ResidentWarpsHandWorked) {
     EXPECT_DOUBLE_EQ(schedule_cycles({{10}, {4}, {6}}, {2, 1, 0, 0}), 16.0);
 }
 
+// Per RT unit, the cycle its last trace leaves; the frame's end is the latest of them.
+//   2 SMs x 1 slot, shading 10: SM 0 holds w0 and w2 (round robin): w0 0..5, w2 5..11, w0's
+//   second trace ready at 15: 15..20. SM 1 holds w1: 0..3.
+//   With one resident warp per SM (ResidentWarpsHandWorked): SM 0 ends at 10 (w0, then w2),
+//   SM 1 at 13 (w1, then w3, which takes w1's place since w1 finishes at 10 before w2 does).
+TEST(ScheduleModel, PerSmEndsHandWorked) {
+    EXPECT_EQ(schedule_sm_ends({{5, 5}, {3}, {6}}, {2, 1, 10}), (std::vector<double>{20.0, 3.0}));
+    EXPECT_DOUBLE_EQ(schedule_cycles({{5, 5}, {3}, {6}}, {2, 1, 10}), 20.0);
+    EXPECT_EQ(schedule_sm_ends({{4}, {10}, {6}, {3}}, {2, 2, 0, 1}), (std::vector<double>{10.0, 13.0}));
+    EXPECT_EQ(schedule_sm_ends({{4}}, {3, 1, 0}), (std::vector<double>{4.0, 0.0, 0.0}));  // SMs without traces end at 0
+}
+
+// The interval's model term takes the model's error from every SM where it was measured: a
+// whole-run misfit of 0 (the SM that ended last happened to match) does not make it 0.
+TEST(SampleEstimateInterval, ModelErrorIsTheRootMeanSquareOverSms) {
+    SampleEstimate e;
+    e.schedule = true;
+    e.model_sample = 1000;
+    e.misfit_per_sm = {0.03, -0.03, 0.03, -0.03};
+    EXPECT_DOUBLE_EQ(e.model_misfit(1000), 0.0);
+    EXPECT_DOUBLE_EQ(e.model_error(1000), 0.03);
+    // relative_se 0 and no extrapolation gap: the half-width is the model term alone.
+    EXPECT_DOUBLE_EQ(e.relative_half_width(1000), 1.96 * std::sqrt(2.0) * 0.03);
+    e.misfit_per_sm = {0.01, -0.05};
+    EXPECT_DOUBLE_EQ(e.model_error(1000), std::sqrt((0.01 * 0.01 + 0.05 * 0.05) / 2));
+    // Without per-SM misfits (older segment files) the whole run's misfit stands in.
+    e.misfit_per_sm.clear();
+    EXPECT_NEAR(e.model_error(1020), 0.02, 1e-12);
+    EXPECT_NEAR(e.relative_half_width(1020), 1.96 * std::sqrt(2.0) * 0.02, 1e-12);
+    // Without the schedule estimator there is no model term.
+    e.schedule = false;
+    e.misfit_per_sm = {0.03};
+    EXPECT_DOUBLE_EQ(e.model_error(1000), 0.0);
+}
+
 // Conservation: with one RT unit, one slot and no shading the slot never idles, so the frame
 // takes exactly the sum of all durations, in any order of warps.
 TEST(ScheduleModel, OneBusySlotTakesTheSumOfAllWork) {

@@ -328,17 +328,29 @@ SampleEstimate SampleEstimator::estimate(const std::vector<WarpRecord>& warps, u
         }
         for (const WarpRecord& w : warps) sample.push_back(durations(w.frame_warp));
         e.model_frame = schedule_cycles(frame, shape_);
-        if (segment_ends.empty()) {
-            e.model_sample = schedule_cycles(sample, shape_);
-        } else {
-            // Each segment ran alone, from its own start: its ramp and tail are in the simulated
-            // cycles (their sum), so they are in the model of the sample too.
-            size_t begin = 0;
-            for (size_t end : segment_ends) {
-                e.model_sample += schedule_cycles({sample.begin() + long(begin), sample.begin() + long(end)}, shape_);
-                begin = end;
+        // The sample's model: with segments, each ran alone from its own start, so its ramp and
+        // tail are in the simulated cycles (their sum) and in the model of the sample too. Per SM,
+        // the cycle its last trace left, simulated and modelled, summed over the segments in the
+        // same way (records without it, read from older segment files, give no per-SM misfit).
+        const std::vector<size_t> ends = segment_ends.empty() ? std::vector<size_t>{sample.size()} : segment_ends;
+        std::vector<double> model_ends(shape_.sms, 0.0), sim_ends(shape_.sms, 0.0);
+        bool timed = true;
+        size_t begin = 0;
+        for (size_t end : ends) {
+            const std::vector<double> m = schedule_sm_ends({sample.begin() + long(begin), sample.begin() + long(end)}, shape_);
+            e.model_sample += *std::max_element(m.begin(), m.end());
+            std::vector<double> sim(shape_.sms, 0.0);
+            for (size_t i = begin; i < end; ++i) {
+                const WarpRecord& w = warps[i];
+                if (w.residences.empty()) continue;
+                if (w.sm >= shape_.sms || w.last_done < 0) timed = false;
+                else sim[w.sm] = std::max(sim[w.sm], w.last_done);
             }
+            for (uint32_t s = 0; s < shape_.sms; ++s) model_ends[s] += m[s], sim_ends[s] += sim[s];
+            begin = end;
         }
+        for (uint32_t s = 0; timed && s < shape_.sms; ++s)
+            if (model_ends[s] > 0 && sim_ends[s] > 0) e.misfit_per_sm.push_back(sim_ends[s] / model_ends[s] - 1.0);
     }
     // The stratified work's variance: of the strata's weighted work, or for the ratio estimate of
     // their residuals from the ratio line, scaled to the frame's nodes outside the first wave.
@@ -379,7 +391,7 @@ SampleEstimate SampleEstimator::estimate(const std::vector<WarpRecord>& warps, u
 
 double SampleEstimate::relative_half_width(double cycles_simulated) const {
     const double t = t95(variance_pairs);
-    const double model = 1.96 * std::sqrt(2.0) * model_misfit(cycles_simulated);
+    const double model = 1.96 * std::sqrt(2.0) * model_error(cycles_simulated);
     return std::sqrt(t * relative_se * t * relative_se + model * model + 1.96 * extrapolation_gap() * 1.96 * extrapolation_gap());
 }
 

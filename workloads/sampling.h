@@ -186,6 +186,8 @@ struct WarpRecord {
     double critical_nodes = 0;          // their sum
     std::vector<double> residences;     // per trace simulated so far, its residence
     uint32_t traces_done = 0;
+    uint32_t sm = 0;        // the SM its simulated traces ran on
+    double last_done = -1;  // the cycle its latest simulated trace left the RT unit (of its segment's run; -1: not known)
 };
 
 // A sampled run's estimate of the frame. A warp's work is the cycles its traces spent in an RT
@@ -207,6 +209,9 @@ struct SampleEstimate {
     uint64_t fit_traces = 0;
     unsigned prepass_threads = 0;
     double model_frame = 0, model_sample = 0;      // schedule-model cycles
+    // Per SM with traces in both: the cycle its last simulated trace left / the same in the
+    // schedule model of the sample - 1 (with segments, each side summed over the segments).
+    std::vector<double> misfit_per_sm;
     double relative_se = 0;  // standard error of work_estimate / work_estimate
     uint32_t variance_pairs = 0;  // collapsed stratum pairs behind relative_se (degrees of freedom)
     // The design, as the workload driver drew it: warps per cluster, drawn strata, clusters of the
@@ -245,10 +250,21 @@ struct SampleEstimate {
     double model_misfit(double cycles_simulated) const {
         return schedule && model_sample > 0 ? std::fabs(cycles_simulated / model_sample - 1.0) : 0.0;
     }
+    // The scale of the schedule model's error, as the interval takes it: the root mean square of
+    // the per-SM misfits where they were measured, else the whole run's misfit. The run's misfit
+    // is one draw (the SM that ended last) and is near zero by chance in some runs; the SMs' are
+    // eight draws of the same error on eight parts of the sample (docs/sampling.md, "The model's
+    // error from every SM").
+    double model_error(double cycles_simulated) const {
+        if (!schedule || misfit_per_sm.empty()) return model_misfit(cycles_simulated);
+        double sq = 0;
+        for (double m : misfit_per_sm) sq += m * m;
+        return std::sqrt(sq / double(misfit_per_sm.size()));
+    }
     // Half-width of the 95 % interval of cycles_estimate, relative to it (docs/sampling.md),
     // three parts in quadrature: the work's sampling error with Student's t for the collapsed
     // pairs; with the schedule estimator the model's error, taken to be as large on the frame as
-    // on the sample and independent of it (1.96 x sqrt(2) x the misfit), and the extrapolation
+    // on the sample and independent of it (1.96 x sqrt(2) x model_error), and the extrapolation
     // gap (1.96 x it).
     double relative_half_width(double cycles_simulated) const;
 };

@@ -242,6 +242,8 @@ WorkloadDriver::Estimate WorkloadDriver::merge(const std::vector<std::vector<War
             w.dram_nodes = r.dram_nodes;
             w.residences = r.residences;
             w.traces_done = uint32_t(r.residences.size());
+            w.sm = r.sm;
+            w.last_done = r.last_done;
         }
     }
     Estimate e = estimator_.estimate(all, warps_total_, true, segment_ends_);
@@ -338,6 +340,8 @@ void WorkloadDriver::retire(uint32_t sm, const std::vector<RetiredRay>& rays, ui
         if (--sw.in_flight == 0) {
             // The trace left the RT unit: its residence there is the warp's work (cycles of a
             // warp-buffer slot), which is what the GPU's throughput is made of.
+            wr.sm = sw.sm;
+            wr.last_done = double(now);
             estimator_.on_trace_done(wr, double(now - sw.issued_at));
             const bool more = std::any_of(sw.threads.begin(), sw.threads.end(), [](const Thread& t) { return !t.pending.empty(); });
             if (more) {
