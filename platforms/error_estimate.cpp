@@ -125,8 +125,10 @@ ErrorEstimate estimate_error(const RunSpec& spec, const TimingResult& t, const s
             return e;
         }
         sampling = t.estimate.relative_half_width(double(t.cycles_simulated));
-        sampled_basis = "95 % sampling interval over " + std::to_string(t.estimate.design.strata) +
-                        " drawn strata, extrapolation term included (docs/sampling.md)";
+        const std::string model = !t.estimate.schedule            ? ""
+                                  : t.estimate.misfit_per_sm.empty() ? ", with the schedule model's error and the extrapolation term"
+                                                                     : ", with the schedule model's error over every SM and the extrapolation term";
+        sampled_basis = "95 % sampling interval over " + std::to_string(t.estimate.design.strata) + " drawn strata" + model + " (docs/sampling.md)";
     }
     const std::string fid = fidelity_name(spec.fidelity);
     if (spec.fidelity == Fidelity::AT) {
