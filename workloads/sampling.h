@@ -253,8 +253,8 @@ struct SampleEstimate {
     // The scale of the schedule model's error, as the interval takes it: the root mean square of
     // the per-SM misfits where they were measured, else the whole run's misfit. The run's misfit
     // is one draw (the SM that ended last) and is near zero by chance in some runs; the SMs' are
-    // eight draws of the same error on eight parts of the sample (docs/sampling.md, "The model's
-    // error from every SM").
+    // one draw each of the same error, on the part of the sample each SM ran (docs/sampling.md,
+    // "The model's error from every SM").
     double model_error(double cycles_simulated) const {
         if (!schedule || misfit_per_sm.empty()) return model_misfit(cycles_simulated);
         double sq = 0;
