@@ -63,7 +63,7 @@ TEST(ScheduleModel, ResidentWarpsHandWorked) {
 //   2 SMs x 1 slot, shading 10: SM 0 holds w0 and w2 (round robin): w0 0..5, w2 5..11, w0's
 //   second trace ready at 15: 15..20. SM 1 holds w1: 0..3.
 //   With one resident warp per SM (ResidentWarpsHandWorked): SM 0 ends at 10 (w0, then w2),
-//   SM 1 at 13 (w1, then w3, which takes w1's place since w1 finishes at 10 before w2 does).
+//   SM 1 at 13 (w1, then w3: w1 and w2 both finish at 10, and the earlier warp's place goes first).
 TEST(ScheduleModel, PerSmEndsHandWorked) {
     EXPECT_EQ(schedule_sm_ends({{5, 5}, {3}, {6}}, {2, 1, 10}), (std::vector<double>{20.0, 3.0}));
     EXPECT_DOUBLE_EQ(schedule_cycles({{5, 5}, {3}, {6}}, {2, 1, 10}), 20.0);
