@@ -73,6 +73,8 @@ public:
 
 private:
     void select_space(const BvhImage& image, uint32_t inst_block);
+    // Tests an internal node's child boxes and pushes the children hit (see the file comment).
+    void push_children(const InternalNode& n, uint32_t inst_block, StepInfo& info);
     void finish() {
         has_next_ = false;
         stack_.clear();
