@@ -148,8 +148,8 @@ InternalNode decode_internal(const uint8_t* bytes) {
         addr += node_bytes(n.type[i]);
         const uint8_t* q = bytes + 26 + 6 * i;
         for (int a = 0; a < 3; ++a) {
-            n.box[i].lo[a] = add_outward(origin[a], float(q[a]) * scale[a], false);
-            n.box[i].hi[a] = add_outward(origin[a], float(q[3 + a]) * scale[a], true);
+            n.lo[a][i] = add_outward(origin[a], float(q[a]) * scale[a], false);
+            n.hi[a][i] = add_outward(origin[a], float(q[3 + a]) * scale[a], true);
         }
     }
     return n;

@@ -47,7 +47,16 @@ struct InternalNode {
     int count = 0;
     std::array<NodeType, kMaxChildren> type{};
     std::array<uint64_t, kMaxChildren> addr{};  // byte address of each child
-    std::array<Aabb, kMaxChildren> box{};       // decoded (conservative) child boxes
+    // The decoded (conservative) child boxes as a structure of arrays, lo[axis][child] and
+    // hi[axis][child], padded to kLanes children so that a box test can take four children at a
+    // time (TraversalThread::push_children); lanes from `count` on are unused.
+    static constexpr int kLanes = 8;
+    alignas(16) std::array<std::array<float, kLanes>, 3> lo{}, hi{};
+    Aabb box(int i) const {
+        Aabb b;
+        for (int a = 0; a < 3; ++a) b.lo[a] = lo[a][i], b.hi[a] = hi[a][i];
+        return b;
+    }
 };
 
 // Encodes an internal node. `node_box` must contain every child box. Child i is placed at

@@ -9,6 +9,10 @@
 
 #include <glm/geometric.hpp>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 namespace rtu {
 
 uint32_t TraversalThread::next_treelet() const {
@@ -74,13 +78,47 @@ glm::vec3 TraversalThread::normal_to_world(const BvhImage& image, const glm::vec
                      w[2] * n.x + w[6] * n.y + w[10] * n.z);
 }
 
+namespace {
+
+// Bit i set: the ray overlaps child i's box within [tmin, tmax]. The same test as intersect_box
+// (robust.h), lane by lane, four children at a time: every lane does intersect_box's float
+// operations in its order, so the results are the same bits. intersect_box leaves as soon as
+// t0 > t1; here all three axes are taken and t0 <= t1 checked at the end, which decides the
+// same, since t0 only grows and t1 only shrinks and neither is ever NaN (a NaN slab distance is
+// ignored by the NaN-safe max and min, and tmin and tmax * kFarScale are not NaN).
+unsigned child_hits(const BoxTestRay& r, const InternalNode& n, float tmin, float tmax) {
+    constexpr float kFarScale = 1.0f + 2.0f * gamma_f(3);
+    unsigned hits = 0;
+#if defined(__SSE2__)
+    for (int base = 0; base < n.count; base += 4) {
+        __m128 t0 = _mm_set1_ps(tmin), t1 = _mm_set1_ps(tmax * kFarScale);
+        for (int a = 0; a < 3; ++a) {
+            const float* near = (r.neg[a] ? n.hi[a] : n.lo[a]).data() + base;
+            const float* far = (r.neg[a] ? n.lo[a] : n.hi[a]).data() + base;
+            const __m128 org = _mm_set1_ps(r.org[a]), inv = _mm_set1_ps(r.inv_dir[a]);
+            const __m128 tn = _mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(near), org), inv);
+            const __m128 tf = _mm_mul_ps(_mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(far), org), inv), _mm_set1_ps(kFarScale));
+            // MAXPS(x, y) is x > y ? x : y, so MAXPS(tn, t0) is safe_max(t0, tn); MINPS alike.
+            t0 = _mm_max_ps(tn, t0);
+            t1 = _mm_min_ps(tf, t1);
+        }
+        hits |= unsigned(_mm_movemask_ps(_mm_cmple_ps(t0, t1))) << base;
+    }
+#else
+    for (int i = 0; i < n.count; ++i)
+        if (intersect_box(r, n.box(i), tmin, tmax, nullptr)) hits |= 1u << i;
+#endif
+    return hits & ((1u << n.count) - 1u);
+}
+
+}  // namespace
+
 void TraversalThread::push_children(const InternalNode& n, uint32_t inst_block, StepInfo& info) {
     bool first = true;
+    // Culls children whose entry lies beyond the closest hit so far (ray_.tfar).
+    const unsigned hits = child_hits(box_ray_, n, ray_.tnear, ray_.tfar);
     for (int i = 0; i < n.count; ++i) {
-        if (n.type[i] == NodeType::Empty) continue;
-        float tentry;
-        // Culls children whose entry lies beyond the closest hit so far (ray_.tfar).
-        if (!intersect_box(box_ray_, n.box[i], ray_.tnear, ray_.tfar, &tentry)) continue;
+        if (n.type[i] == NodeType::Empty || !(hits >> i & 1u)) continue;
         // Entries are written in place, field by field: a whole entry built first and then
         // copied in is read back as one 16-byte word from three narrower stores, which the host
         // CPU cannot forward (a stall of about 15 cycles per child, 5 % of a functional run).

@@ -68,15 +68,15 @@ TEST(NodeFormat, QuantizedChildBoxesAreConservativeAndTight) {
                     EXPECT_EQ(dec.type[i], types[i]);
                     EXPECT_EQ(dec.addr[i], addr);
                     addr += node_bytes(types[i]);
-                    ASSERT_TRUE(dec.box[i].contains(boxes[i]))
+                    ASSERT_TRUE(dec.box(i).contains(boxes[i]))
                         << "child " << i << " scale " << scale << " offset " << off;
                     for (int a = 0; a < 3; ++a) {
                         const float extent = node.hi[a] - node.lo[a];
                         // One 1/255 step of the node extent (times 2 for the power-of-two
                         // exponent) plus a few ulps of the coordinates.
                         const float slack = 2.0f * extent / 255.0f + 4.0f * std::fabs(node.lo[a]) * 0x1p-23f + 1e-30f;
-                        EXPECT_LE(boxes[i].lo[a] - dec.box[i].lo[a], slack);
-                        EXPECT_LE(dec.box[i].hi[a] - boxes[i].hi[a], slack);
+                        EXPECT_LE(boxes[i].lo[a] - dec.box(i).lo[a], slack);
+                        EXPECT_LE(dec.box(i).hi[a] - boxes[i].hi[a], slack);
                     }
                     ++checked;
                 }

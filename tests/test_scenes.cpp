@@ -496,7 +496,7 @@ void check_image(const Scene& s, const BvhImage& img) {
         EXPECT_EQ(pre->count, n.count);
         EXPECT_EQ(pre->type, n.type);
         EXPECT_EQ(pre->addr, n.addr);
-        for (int i = 0; i < n.count; ++i) EXPECT_TRUE(pre->box[i].lo == n.box[i].lo && pre->box[i].hi == n.box[i].hi);
+        for (int i = 0; i < n.count; ++i) EXPECT_TRUE(pre->box(i).lo == n.box(i).lo && pre->box(i).hi == n.box(i).hi);
         EXPECT_EQ(img.decoded_internal(addr + kBlockBytes / 2), nullptr) << "not a node address";
         if (n.type[0] != NodeType::Internal) {
             EXPECT_EQ(img.decoded_internal(n.addr[0]), nullptr) << "a leaf";
@@ -519,14 +519,14 @@ void check_image(const Scene& s, const BvhImage& img) {
                         tb.lo = glm::min(tb.lo, v);
                         tb.hi = glm::max(tb.hi, v);
                     }
-                    EXPECT_TRUE(n.box[i].contains(tb));
+                    EXPECT_TRUE(n.box(i).contains(tb));
                     break;
                 }
                 case NodeType::Procedural: {
                     const SphereLeaf sp = decode_sphere(img.at(n.addr[i], kBlockBytes));
                     nodes_bytes += kBlockBytes;
                     EXPECT_TRUE(prims.insert({sp.geom, sp.prim}).second);
-                    EXPECT_TRUE(n.box[i].contains(s.meshes[sp.geom].prim_bounds(sp.prim)));
+                    EXPECT_TRUE(n.box(i).contains(s.meshes[sp.geom].prim_bounds(sp.prim)));
                     break;
                 }
                 case NodeType::Instance: {

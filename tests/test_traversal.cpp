@@ -240,7 +240,7 @@ TEST(Traversal, DfsPushesEveryHitChildOrKeepsTheFirstInTheNextNodeRegister) {
         const BoxTestRay br = make_box_test_ray(r.org, r.dir);
         std::vector<uint64_t> hit_children;
         for (int c = 0; c < root.count; ++c)
-            if (intersect_box(br, root.box[c], r.tnear, r.tfar, nullptr)) hit_children.push_back(root.addr[c]);
+            if (intersect_box(br, root.box(c), r.tnear, r.tfar, nullptr)) hit_children.push_back(root.addr[c]);
         const StepInfo a = pop.step(l.image), b = reg.step(l.image);
         EXPECT_TRUE(a.from_stack);
         EXPECT_FALSE(b.from_stack);
