@@ -78,14 +78,11 @@ glm::vec3 TraversalThread::normal_to_world(const BvhImage& image, const glm::vec
                      w[2] * n.x + w[6] * n.y + w[10] * n.z);
 }
 
-namespace {
-
-// Bit i set: the ray overlaps child i's box within [tmin, tmax]. The same test as intersect_box
-// (robust.h), lane by lane, four children at a time: every lane does intersect_box's float
-// operations in its order, so the results are the same bits. intersect_box leaves as soon as
-// t0 > t1; here all three axes are taken and t0 <= t1 checked at the end, which decides the
-// same, since t0 only grows and t1 only shrinks and neither is ever NaN (a NaN slab distance is
-// ignored by the NaN-safe max and min, and tmin and tmax * kFarScale are not NaN).
+// Four children at a time: every lane does intersect_box's float operations (robust.h) in its
+// order, so the results are the same bits. intersect_box leaves as soon as t0 > t1; here all
+// three axes are taken and t0 <= t1 checked at the end, which decides the same, since t0 only
+// grows and t1 only shrinks and neither is ever NaN (a NaN slab distance is ignored by the
+// NaN-safe max and min, and tmin and tmax * kFarScale are not NaN).
 unsigned child_hits(const BoxTestRay& r, const InternalNode& n, float tmin, float tmax) {
     constexpr float kFarScale = 1.0f + 2.0f * gamma_f(3);
     unsigned hits = 0;
@@ -110,8 +107,6 @@ unsigned child_hits(const BoxTestRay& r, const InternalNode& n, float tmin, floa
 #endif
     return hits & ((1u << n.count) - 1u);
 }
-
-}  // namespace
 
 void TraversalThread::push_children(const InternalNode& n, uint32_t inst_block, StepInfo& info) {
     bool first = true;

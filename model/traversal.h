@@ -99,6 +99,10 @@ private:
     BoxTestRay box_ray_, world_box_ray_;
 };
 
+// Bit i set: the ray overlaps child i's box within [tmin, tmax], as intersect_box (robust.h)
+// decides it for n.box(i) (the same bits; four children at a time where the host has SSE2).
+unsigned child_hits(const BoxTestRay& r, const InternalNode& n, float tmin, float tmax);
+
 // Traces one ray to completion. Invalid rays return a miss without touching the image.
 struct TraceResult {
     Hit hit;
