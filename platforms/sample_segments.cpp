@@ -77,13 +77,6 @@ void write_segment(StatsOut& out, const TimingResult& r, uint32_t index, uint32_
            "its SM, the cycle its last trace left]");
 }
 
-std::string plan_identity(const std::vector<IdentityKey>& identity) {
-    std::string id;
-    for (const IdentityKey& k : identity)
-        if (k.name != "sample" && k.name != "segments") id += k.name + "=" + k.value + "\n";  // the pre-pass traces the whole frame
-    return id;
-}
-
 namespace {
 constexpr char kPlanMagic[8] = {'R', 'T', 'U', 'P', 'L', 'A', 'N', '1'};
 

@@ -36,12 +36,12 @@ struct IdentityKey {
 void write_segment(StatsOut& out, const TimingResult& r, uint32_t index, uint32_t count, const std::vector<IdentityKey>& identity);
 
 // A sample plan (--sample-plan): the functional pre-pass of one frame (per shader warp, each
-// trace's critical path), kept in a file so that the segments of a split sample and their merge
-// trace the frame once instead of once each. `identity`: what the pre-pass depends on (the frame,
-// workload, traversal and configuration); a plan of another is refused. Binary: "RTUPLAN1", the
+// trace's critical path), kept in a file so that the segments of a split sample and their merge,
+// and every sampled run of a sweep over configurations, fidelities or samples of that frame,
+// trace the frame once instead of once each. `identity`: what the pre-pass depends on
+// (prepass_identity in simulation.h); a plan of another is refused. Binary: "RTUPLAN1", the
 // identity's length and text, the warps, per warp its traces and their critical paths (uint32,
 // little-endian as the host).
-std::string plan_identity(const std::vector<IdentityKey>& identity);
 void write_plan(const std::string& file, const std::string& identity, const PrepassResult& p);
 // nullopt if `file` does not exist; InputError naming it if it is not a plan of this frame.
 std::optional<PrepassResult> read_plan(const std::string& file, const std::string& identity);

@@ -247,7 +247,7 @@ std::vector<IdentityKey> segment_identity(const RunSpec& spec, const std::string
     char sample[64];
     std::snprintf(sample, sizeof sample, "%.17g seed %llu", spec.sample_rate, static_cast<unsigned long long>(spec.sample_seed));
     const WorkloadParams& p = spec.params;
-    return {{"scene", scene, "the scene's name"},
+    return {{"scene", scene + (spec.flatten ? " (--flatten)" : ""), "the scene's name, and whether it was flattened"},
             {"workload", spec.rays.empty() ? spec.workload : "rays " + spec.rays, "the workload, or the ray file"},
             {"frame", std::to_string(p.width) + "x" + std::to_string(p.height) + " spp " + std::to_string(p.spp) + " bounces " +
                           std::to_string(p.bounces) + " seed " + std::to_string(p.seed),
@@ -257,6 +257,19 @@ std::vector<IdentityKey> segment_identity(const RunSpec& spec, const std::string
             {"sample", sample, "--sample and --sample-seed"},
             {"segments", std::to_string(spec.sample_segments), "--sample-segments"},
             {"config", spec.config.to_json().dump(), "the effective configuration"}};
+}
+
+std::string prepass_identity(const RunSpec& spec, const std::string& scene, const HwConfig& hw) {
+    std::string id;
+    for (const IdentityKey& k : segment_identity(spec, scene))
+        if (k.name == "scene" || k.name == "workload" || k.name == "frame" || k.name == "traversal") id += k.name + "=" + k.value + "\n";
+    id += "rt.warp_size=" + std::to_string(hw.warp_size) + "\n";
+    id += std::string("rt.next_node_register=") + (hw.next_node_register ? "true" : "false") + "\n";
+    if (spec.order == TraversalOrder::Treelet)  // the treelets the traversal keeps to (traversal_treelets)
+        id += "prefetch.treelet_budget=" + std::to_string(hw.prefetch.treelet_budget) +
+              "\nprefetch.treelet_contiguous=" + (hw.prefetch.treelet_contiguous ? "true" : "false") +
+              "\nprefetch.treelet_stride=" + std::to_string(hw.prefetch.treelet_stride) + "\n";
+    return id;
 }
 
 RunResult run_simulation(const RunSpec& spec, std::ostream* log) {
@@ -378,7 +391,7 @@ RunResult run_simulation(const RunSpec& spec, std::ostream* log) {
         to.sample_segments = spec.sample_segments;
         to.sample_segment = spec.segment;
         to.sample_plan = spec.sample_plan;
-        to.plan_identity = plan_identity(segment_identity(spec, scene.name));
+        to.plan_identity = prepass_identity(spec, scene.name, spec.hw);
         // A sampled run traces the whole frame functionally first, with fresh instances of the
         // workload (the run's own one accumulates the simulated image).
         if (spec.sample_rate < 1.0) {

@@ -92,6 +92,13 @@ RunResult run_simulation(const RunSpec& spec, std::ostream* log);
 // the sample, the fidelity and the configuration. `scene`: the loaded scene's name.
 std::vector<IdentityKey> segment_identity(const RunSpec& spec, const std::string& scene);
 
+// What a sample plan (--sample-plan) must match: what the functional pre-pass depends on, and
+// nothing else. The BVH (the scene, flattened or not), the rays (the workload and the frame), the
+// traversal (its order, the next-node register, the treelets it keeps to) and how paths form
+// shader warps (rt.warp_size). Not the fidelity, the sample, the SMs, the memory system, the
+// latencies or the prefetcher: one plan serves every run of a sweep over them on one frame.
+std::string prepass_identity(const RunSpec& spec, const std::string& scene, const HwConfig& hw);
+
 // Every key a run's statistics can have (RunResult::stats, rtsim --stats): dotted path, list
 // items as "[]", unit and description; from the code that writes them (model/stats.h).
 std::vector<StatKey> stats_schema();

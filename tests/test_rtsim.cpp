@@ -807,6 +807,43 @@ TEST(RtsimSampling, SegmentsMergedEqualTheSingleProcessRun) {
     EXPECT_TRUE(nlohmann::json::parse(read_text(dir.file("u.json")))["timing"]["sampling"]["cycles_ci95"].is_null());
 }
 
+// A sample plan holds the functional pre-pass, which depends on the frame and the traversal, not
+// on the hardware: written by one run, it serves runs of the same frame in other fidelities,
+// presets, SM counts, prefetchers and samples, whose statistics are then bit for bit those they
+// have without it; a run that would trace the frame otherwise (another warp size, traversal,
+// next-node register, flattening) refuses it.
+TEST(RtsimSampling, APlanServesEveryRunOfTheFrameAndNoOther) {
+    TempDir dir;
+    const std::string frame = "--scene cornell --width 256 --height 256 --sample 0.5 --threads 1 ";
+    const std::string plan = " --sample-plan " + dir.file("plan.bin");
+    auto load = [&](const std::string& f) {
+        auto j = nlohmann::json::parse(read_text(dir.file(f)));
+        for (const char* k : {"time_s", "simulation_rate", "memory_mb"}) j.erase(k);
+        return j;
+    };
+    ASSERT_EQ(rtsim(dir, frame + "--fidelity interval" + plan).status, 0);
+    ASSERT_TRUE(exists(dir.file("plan.bin")));
+    int i = 0;
+    for (const std::string other : {"--fidelity lt --prefetcher ttp", "--fidelity at --set gpu.sms=4 --sample-seed 3",
+                                    "--fidelity interval --config paper --set l1.size_kb=64", "--fidelity interval --sample 0.75"}) {
+        SCOPED_TRACE(other);
+        const std::string args = (other.find("--sample 0.75") != std::string::npos ? "--scene cornell --width 256 --height 256 --threads 1 " : frame) + other;
+        const std::string without = "n" + std::to_string(i) + ".json", with = "y" + std::to_string(i) + ".json";
+        ++i;
+        const Result a = rtsim(dir, args + " --stats " + dir.file(without));
+        ASSERT_EQ(a.status, 0) << a.err;
+        const Result b = rtsim(dir, args + plan + " --stats " + dir.file(with));
+        ASSERT_EQ(b.status, 0) << b.err;
+        EXPECT_EQ(load(with), load(without));
+    }
+    for (const std::string other : {"--set rt.warp_size=16", "--traversal bfs", "--set rt.next_node_register=true", "--flatten"}) {
+        const Result r = rtsim(dir, frame + "--fidelity interval " + other + plan + " --stats " + dir.file("refused.json"));
+        EXPECT_EQ(r.status, 2) << other;
+        EXPECT_NE(r.err.find("a sample plan of another frame or configuration"), std::string::npos) << other << ": " << r.err;
+        EXPECT_FALSE(exists(dir.file("refused.json"))) << other;
+    }
+}
+
 // The sampled estimate against the truth, known from simulating the whole frame: on two scenes
 // (the built-in cornell box and the bunny, 128x128, 2 spp, half of the frame: the first wave and
 // 15 strata) and four draws of the sample each, the 95 % interval covers the full run's cycles,
