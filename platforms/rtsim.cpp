@@ -298,8 +298,13 @@ RunSpec spec_of(const Args& a) {
     // Outputs are checked before anything runs: a bad path should not wait for the simulation.
     for (const auto& [option, path] : {std::pair<const char*, std::string>{"--stats", a.stats}, {"--image", a.image},
                                        {"--hits", a.hits}, {"--vcd", a.vcd}, {"--dump-bvh", a.dump_bvh},
-                                       {"--dump-rays", a.dump_rays}, {"--dump-hits", a.dump_hits}, {"--sample-plan", a.sample_plan}})
+                                       {"--dump-rays", a.dump_rays}, {"--dump-hits", a.dump_hits}})
         if (!path.empty()) check_writable_folder(option, path);
+    if (!a.sample_plan.empty()) {  // a file, or a folder for a plan per frame (plan_file)
+        std::error_code ec;
+        const bool folder = a.sample_plan.back() == '/' || std::filesystem::is_directory(a.sample_plan, ec);
+        check_writable_folder("--sample-plan", folder ? (std::filesystem::path(a.sample_plan) / "plan.bin").string() : a.sample_plan);
+    }
     if (!(a.sample > 0.0 && a.sample <= 1.0))
         throw InputError("--sample " + std::to_string(a.sample) + ": the share of the frame to simulate must be in (0, 1]");
     // Configuration first: a bad key should not wait for a scene to load.
@@ -489,8 +494,9 @@ int sc_main(int argc, char** argv) {
          "(docs/sampling.md, \"Segments\"); alone: each segment in a child process, one after another")
         ("segment", po::value<uint64_t>()->notifier([&a](uint64_t v) { a.segment = v; }),
          "with --sample-segments K: simulate only segment I (0..K-1) and write it for --merge-segments (a cluster's array task)")
-        ("sample-plan", po::value(&a.sample_plan), "keep the sampling pre-pass in this file: read if it exists (of the same frame "
-         "and configuration), else written; segments and their merge then trace the frame once")
+        ("sample-plan", po::value(&a.sample_plan), "keep the sampling pre-pass in this file (or, given a folder, in a file of the "
+         "frame's own in it): read if it exists (of the same frame, traversal and warp size; any fidelity, preset or sample), "
+         "else written; segments and their merge, and the runs of a sweep over configurations, then trace the frame once")
         ("merge-segments", po::value(&a.merge_segments)->multitoken(),
          "with --sample-segments K and the same frame options: merge the K segments' --stats files into the frame's estimate")
         ("threads", po::value(&a.threads)->default_value(a.threads),

@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
@@ -82,6 +84,17 @@ constexpr char kPlanMagic[8] = {'R', 'T', 'U', 'P', 'L', 'A', 'N', '1'};
 
 void put(std::string& out, uint64_t v, size_t bytes) { out.append(reinterpret_cast<const char*>(&v), bytes); }
 }  // namespace
+
+std::string plan_file(const std::string& given, const std::string& identity) {
+    if (given.empty()) return given;
+    std::error_code ec;
+    if (given.back() != '/' && !std::filesystem::is_directory(given, ec)) return given;
+    uint64_t h = 14695981039346656037ull;  // FNV-1a, 64 bits
+    for (unsigned char c : identity) h = (h ^ c) * 1099511628211ull;
+    char name[32];
+    std::snprintf(name, sizeof name, "plan-%016llx.bin", static_cast<unsigned long long>(h));
+    return (std::filesystem::path(given) / name).string();
+}
 
 void write_plan(const std::string& file, const std::string& identity, const PrepassResult& p) {
     std::string out(kPlanMagic, sizeof kPlanMagic);

@@ -42,6 +42,10 @@ void write_segment(StatsOut& out, const TimingResult& r, uint32_t index, uint32_
 // (prepass_identity in simulation.h); a plan of another is refused. Binary: "RTUPLAN1", the
 // identity's length and text, the warps, per warp its traces and their critical paths (uint32,
 // little-endian as the host).
+// The file of a plan: `given` itself, or where `given` is a folder (it exists, or its name ends
+// in '/'), `given`/plan-HASH.bin with HASH the 64-bit FNV-1a hash of `identity` in hex, so that
+// one folder keeps the plans of a sweep over scenes and frames, one per frame. Empty: empty.
+std::string plan_file(const std::string& given, const std::string& identity);
 void write_plan(const std::string& file, const std::string& identity, const PrepassResult& p);
 // nullopt if `file` does not exist; InputError naming it if it is not a plan of this frame.
 std::optional<PrepassResult> read_plan(const std::string& file, const std::string& identity);

@@ -390,8 +390,8 @@ RunResult run_simulation(const RunSpec& spec, std::ostream* log) {
         to.sample_unchecked = spec.sample_unchecked;
         to.sample_segments = spec.sample_segments;
         to.sample_segment = spec.segment;
-        to.sample_plan = spec.sample_plan;
         to.plan_identity = prepass_identity(spec, scene.name, spec.hw);
+        to.sample_plan = plan_file(spec.sample_plan, to.plan_identity);
         // A sampled run traces the whole frame functionally first, with fresh instances of the
         // workload (the run's own one accumulates the simulated image).
         if (spec.sample_rate < 1.0) {

@@ -842,6 +842,23 @@ TEST(RtsimSampling, APlanServesEveryRunOfTheFrameAndNoOther) {
         EXPECT_NE(r.err.find("a sample plan of another frame or configuration"), std::string::npos) << other << ": " << r.err;
         EXPECT_FALSE(exists(dir.file("refused.json"))) << other;
     }
+    // Given a folder, each frame keeps a plan of its own in it: a sweep over frames and
+    // configurations shares one --sample-plan. Two frames, two plans; a rerun of the first under
+    // another configuration reads its plan (no third file) and equals the run without one.
+    std::filesystem::create_directory(dir.file("plans"));
+    const std::string folder = " --sample-plan " + dir.file("plans");
+    const std::string wknd = "--scene wknd --width 256 --height 256 --sample 0.5 --threads 1 --fidelity interval";
+    ASSERT_EQ(rtsim(dir, frame + "--fidelity interval" + folder).status, 0);
+    ASSERT_EQ(rtsim(dir, wknd + folder).status, 0);
+    auto files = [&] {
+        size_t n = 0;
+        for (const auto& e : std::filesystem::directory_iterator(dir.file("plans"))) n += e.path().filename().string().rfind("plan-", 0) == 0;
+        return n;
+    };
+    EXPECT_EQ(files(), 2u);
+    ASSERT_EQ(rtsim(dir, frame + "--fidelity lt --prefetcher ttp" + folder + " --stats " + dir.file("f.json")).status, 0);
+    EXPECT_EQ(files(), 2u);
+    EXPECT_EQ(load("f.json"), load("n0.json"));
 }
 
 // The sampled estimate against the truth, known from simulating the whole frame: on two scenes
