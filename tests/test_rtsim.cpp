@@ -842,6 +842,17 @@ TEST(RtsimSampling, APlanServesEveryRunOfTheFrameAndNoOther) {
         EXPECT_NE(r.err.find("a sample plan of another frame or configuration"), std::string::npos) << other << ": " << r.err;
         EXPECT_FALSE(exists(dir.file("refused.json"))) << other;
     }
+    // The BVH is part of the frame: the same mesh file rewritten with other geometry (or a
+    // LumiBench scene's name with other assets) is another frame.
+    write_text(dir.file("m.obj"), "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nf 1 2 3\nf 1 3 4\n");
+    const std::string mesh = "--scene " + dir.file("m.obj") + " --workload primary --width 256 --height 256 --sample 0.5 --threads 1 --fidelity interval";
+    const std::string mplan = " --sample-plan " + dir.file("mesh-plan.bin");
+    const Result m1 = rtsim(dir, mesh + mplan);
+    ASSERT_EQ(m1.status, 0) << m1.err;
+    write_text(dir.file("m.obj"), "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nv 0 0 0.5\nf 1 2 3\nf 1 3 4\nf 1 2 5\n");
+    const Result m2 = rtsim(dir, mesh + mplan);
+    EXPECT_EQ(m2.status, 2);
+    EXPECT_NE(m2.err.find("a sample plan of another frame or configuration"), std::string::npos) << m2.err;
     // Given a folder, each frame keeps a plan of its own in it: a sweep over frames and
     // configurations shares one --sample-plan. Two frames, two plans; a rerun of the first under
     // another configuration reads its plan (no third file) and equals the run without one.
