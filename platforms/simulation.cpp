@@ -259,18 +259,38 @@ std::vector<IdentityKey> segment_identity(const RunSpec& spec, const std::string
             {"config", spec.config.to_json().dump(), "the effective configuration"}};
 }
 
-std::string prepass_identity(const RunSpec& spec, const std::string& scene, const HwConfig& hw, const BvhImage& image) {
+namespace {
+// 64-bit FNV-1a, continued from `h`.
+uint64_t fnv1a(const void* data, size_t n, uint64_t h = 14695981039346656037ull) {
+    const auto* b = static_cast<const unsigned char*>(data);
+    for (size_t i = 0; i < n; ++i) h = (h ^ b[i]) * 1099511628211ull;
+    return h;
+}
+}  // namespace
+
+std::string prepass_identity(const RunSpec& spec, const std::string& scene, const HwConfig& hw, const BvhImage& image,
+                             const std::vector<RayFileEntry>& ray_file) {
     std::string id;
     for (const IdentityKey& k : segment_identity(spec, scene))
         if (k.name == "scene" || k.name == "workload" || k.name == "frame" || k.name == "traversal") id += k.name + "=" + k.value + "\n";
-    // The BVH itself, not its scene's name: two meshes of one file name in other folders, or a
-    // LumiBench scene's other assets, are other frames. FNV-1a over the image's bytes (about
-    // 50 ms for sprng's 53 MB, against seconds of pre-pass).
-    uint64_t h = 14695981039346656037ull;
-    for (size_t i = 0; i < image.size(); ++i) h = (h ^ image.data()[i]) * 1099511628211ull;
-    char bvh[64];
-    std::snprintf(bvh, sizeof bvh, "bvh=%zu bytes, FNV-1a %016llx\n", image.size(), static_cast<unsigned long long>(h));
-    id += bvh;
+    // The BVH itself, not its scene's name: a mesh file rewritten, or a LumiBench scene's other
+    // assets, are other frames. FNV-1a over the image's bytes (about 50 ms for sprng's 53 MB,
+    // against seconds of pre-pass). A ray file likewise by its rays, not its name.
+    char line[96];
+    std::snprintf(line, sizeof line, "bvh=%zu bytes, FNV-1a %016llx\n", image.size(),
+                  static_cast<unsigned long long>(fnv1a(image.data(), image.size())));
+    id += line;
+    if (!spec.rays.empty()) {
+        uint64_t h = fnv1a(nullptr, 0);
+        for (const RayFileEntry& e : ray_file) {  // field by field: a struct's padding is not data
+            const Ray& r = e.ray;
+            const float f[8] = {r.org.x, r.org.y, r.org.z, r.dir.x, r.dir.y, r.dir.z, r.tnear, r.tfar};
+            const uint8_t q[2] = {uint8_t(r.query), uint8_t(e.valid)};
+            h = fnv1a(q, sizeof q, fnv1a(f, sizeof f, h));
+        }
+        std::snprintf(line, sizeof line, "rays=%zu, FNV-1a %016llx\n", ray_file.size(), static_cast<unsigned long long>(h));
+        id += line;
+    }
     id += "rt.warp_size=" + std::to_string(hw.warp_size) + "\n";
     id += std::string("rt.next_node_register=") + (hw.next_node_register ? "true" : "false") + "\n";
     if (spec.order == TraversalOrder::Treelet)  // the treelets the traversal keeps to (traversal_treelets)
@@ -398,7 +418,7 @@ RunResult run_simulation(const RunSpec& spec, std::ostream* log) {
         to.sample_unchecked = spec.sample_unchecked;
         to.sample_segments = spec.sample_segments;
         to.sample_segment = spec.segment;
-        to.plan_identity = prepass_identity(spec, scene.name, spec.hw, image);
+        to.plan_identity = prepass_identity(spec, scene.name, spec.hw, image, ray_entries);
         to.sample_plan = plan_file(spec.sample_plan, to.plan_identity);
         // A sampled run traces the whole frame functionally first, with fresh instances of the
         // workload (the run's own one accumulates the simulated image).

@@ -95,11 +95,12 @@ std::vector<IdentityKey> segment_identity(const RunSpec& spec, const std::string
 
 // What a sample plan (--sample-plan) must match: what the functional pre-pass depends on, and
 // nothing else. The BVH (the scene's name, flattened or not, and a hash of the image's bytes),
-// the rays (the workload and the frame), the traversal (its order, the next-node register, the
-// treelets it keeps to) and how paths form shader warps (rt.warp_size). Not the fidelity, the
-// sample, the SMs, the memory system, the latencies or the prefetcher: one plan serves every run
-// of a sweep over them on one frame.
-std::string prepass_identity(const RunSpec& spec, const std::string& scene, const HwConfig& hw, const BvhImage& image);
+// the rays (the workload and the frame; a ray file's rays hashed, `ray_file`), the traversal (its
+// order, the next-node register, the treelets it keeps to) and how paths form shader warps
+// (rt.warp_size). Not the fidelity, the sample, the SMs, the memory system, the latencies or the
+// prefetcher: one plan serves every run of a sweep over them on one frame.
+std::string prepass_identity(const RunSpec& spec, const std::string& scene, const HwConfig& hw, const BvhImage& image,
+                             const std::vector<RayFileEntry>& ray_file);
 
 // Every key a run's statistics can have (RunResult::stats, rtsim --stats): dotted path, list
 // items as "[]", unit and description; from the code that writes them (model/stats.h).

@@ -853,6 +853,24 @@ TEST(RtsimSampling, APlanServesEveryRunOfTheFrameAndNoOther) {
     const Result m2 = rtsim(dir, mesh + mplan);
     EXPECT_EQ(m2.status, 2);
     EXPECT_NE(m2.err.find("a sample plan of another frame or configuration"), std::string::npos) << m2.err;
+    // A ray file likewise: rewritten under its name with other rays (as many), another frame.
+    auto ray_file = [&](float spread) {
+        std::string text;
+        for (int y = 0; y < 256; ++y)
+            for (int x = 0; x < 256; ++x)
+                text += "278 278 800 " + std::to_string(spread * (x - 128) / 128.0f) + " " + std::to_string(spread * (y - 128) / 128.0f) + " -1 0 inf\n";
+        write_text(dir.file("rays.txt"), text);
+    };
+    const std::string rays = "--scene cornell --rays " + dir.file("rays.txt") + " --sample 0.5 --threads 1";
+    const std::string rplan = " --sample-plan " + dir.file("rays-plan.bin");
+    ray_file(0.4f);
+    const Result r1 = rtsim(dir, rays + rplan + " --fidelity interval");
+    ASSERT_EQ(r1.status, 0) << r1.err;
+    ASSERT_EQ(rtsim(dir, rays + rplan + " --fidelity lt").status, 0);  // the same rays: read
+    ray_file(0.3f);
+    const Result r2 = rtsim(dir, rays + rplan + " --fidelity interval");
+    EXPECT_EQ(r2.status, 2);
+    EXPECT_NE(r2.err.find("a sample plan of another frame or configuration"), std::string::npos) << r2.err;
     // Given a folder, each frame keeps a plan of its own in it: a sweep over frames and
     // configurations shares one --sample-plan. Two frames, two plans; a rerun of the first under
     // another configuration reads its plan (no third file) and equals the run without one.
