@@ -418,8 +418,10 @@ RunResult run_simulation(const RunSpec& spec, std::ostream* log) {
         to.sample_unchecked = spec.sample_unchecked;
         to.sample_segments = spec.sample_segments;
         to.sample_segment = spec.segment;
-        to.plan_identity = prepass_identity(spec, scene.name, spec.hw, image, ray_entries);
-        to.sample_plan = plan_file(spec.sample_plan, to.plan_identity);
+        if (!spec.sample_plan.empty()) {  // hashing the image costs tens of ms on large scenes: only for a plan
+            to.plan_identity = prepass_identity(spec, scene.name, spec.hw, image, ray_entries);
+            to.sample_plan = plan_file(spec.sample_plan, to.plan_identity);
+        }
         // A sampled run traces the whole frame functionally first, with fresh instances of the
         // workload (the run's own one accumulates the simulated image).
         if (spec.sample_rate < 1.0) {
