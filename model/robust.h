@@ -40,6 +40,10 @@ struct Aabb {
     }
 };
 
+// The far distances' widening of the slab test below, shared with the test of four children at
+// a time (child_hits, traversal.h), which must decide as intersect_box does.
+constexpr float kBoxFarScale = 1.0f + 2.0f * gamma_f(3);
+
 // Conservative slab test (pbrt-v4 Bounds3::IntersectP): near/far planes are chosen by the sign
 // bit of the direction, min/max are NaN-safe, and the far distance is scaled by 1 + 2 gamma(3)
 // so that rounding in (bound - org) * inv_dir never loses a box the ray really touches.
@@ -47,16 +51,15 @@ struct Aabb {
 // when the ray overlaps the box within [tmin, tmax].
 // Inline: traversal runs it for every child of every internal node it visits.
 inline bool intersect_box(const BoxTestRay& r, const Aabb& b, float tmin, float tmax, float* t_entry) {
-    constexpr float kFarScale = 1.0f + 2.0f * gamma_f(3);
     const glm::vec3* bounds[2] = {&b.lo, &b.hi};
     float t0 = tmin;
     // The far end of the interval is widened the same way as each slab's far distance, so a
     // box whose entry equals tmax (e.g. the closest hit so far) is not lost to rounding.
-    float t1 = tmax * kFarScale;
+    float t1 = tmax * kBoxFarScale;
     for (int a = 0; a < 3; ++a) {
         float tn = ((*bounds[r.neg[a]])[a] - r.org[a]) * r.inv_dir[a];
         float tf = ((*bounds[1 - r.neg[a]])[a] - r.org[a]) * r.inv_dir[a];
-        tf *= kFarScale;
+        tf *= kBoxFarScale;
         t0 = safe_max(t0, tn);
         t1 = safe_min(t1, tf);
         if (t0 > t1) return false;

@@ -82,19 +82,18 @@ glm::vec3 TraversalThread::normal_to_world(const BvhImage& image, const glm::vec
 // order, so the results are the same bits. intersect_box leaves as soon as t0 > t1; here all
 // three axes are taken and t0 <= t1 checked at the end, which decides the same, since t0 only
 // grows and t1 only shrinks and neither is ever NaN (a NaN slab distance is ignored by the
-// NaN-safe max and min, and tmin and tmax * kFarScale are not NaN).
+// NaN-safe max and min, and tmin and tmax * kBoxFarScale are not NaN).
 unsigned child_hits(const BoxTestRay& r, const InternalNode& n, float tmin, float tmax) {
-    constexpr float kFarScale = 1.0f + 2.0f * gamma_f(3);
     unsigned hits = 0;
 #if defined(__SSE2__)
     for (int base = 0; base < n.count; base += 4) {
-        __m128 t0 = _mm_set1_ps(tmin), t1 = _mm_set1_ps(tmax * kFarScale);
+        __m128 t0 = _mm_set1_ps(tmin), t1 = _mm_set1_ps(tmax * kBoxFarScale);
         for (int a = 0; a < 3; ++a) {
             const float* near = (r.neg[a] ? n.hi[a] : n.lo[a]).data() + base;
             const float* far = (r.neg[a] ? n.lo[a] : n.hi[a]).data() + base;
             const __m128 org = _mm_set1_ps(r.org[a]), inv = _mm_set1_ps(r.inv_dir[a]);
             const __m128 tn = _mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(near), org), inv);
-            const __m128 tf = _mm_mul_ps(_mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(far), org), inv), _mm_set1_ps(kFarScale));
+            const __m128 tf = _mm_mul_ps(_mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(far), org), inv), _mm_set1_ps(kBoxFarScale));
             // MAXPS(x, y) is x > y ? x : y, so MAXPS(tn, t0) is safe_max(t0, tn); MINPS alike.
             t0 = _mm_max_ps(tn, t0);
             t1 = _mm_min_ps(tf, t1);
@@ -117,17 +116,16 @@ void TraversalThread::push_children(const InternalNode& n, uint32_t inst_block, 
         // Entries are written in place, field by field: a whole entry built first and then
         // copied in is read back as one 16-byte word from three narrower stores, which the host
         // CPU cannot forward (a stall of about 15 cycles per child, 5 % of a functional run).
-        std::deque<StackEntry>* to = &stack_;
-        if (treelets_ && treelets_->treelet_of(n.addr[i]) != current_treelet_) {
-            to = &deferred_;  // another treelet: after this one is finished
-        } else if (first && register_) {
+        // A child in another treelet waits until this one is finished (deferred_).
+        const bool other_treelet = treelets_ && treelets_->treelet_of(n.addr[i]) != current_treelet_;
+        if (!other_treelet && first && register_) {
             next_ = StackEntry{n.addr[i], n.type[i], inst_block};
             has_next_ = true;
             first = false;
             continue;
         }
-        if (to == &stack_) first = false;
-        StackEntry& child = to->emplace_back();
+        if (!other_treelet) first = false;
+        StackEntry& child = (other_treelet ? deferred_ : stack_).emplace_back();
         child.addr = n.addr[i];
         child.type = n.type[i];
         child.inst_block = inst_block;

@@ -300,11 +300,8 @@ RunSpec spec_of(const Args& a) {
                                        {"--hits", a.hits}, {"--vcd", a.vcd}, {"--dump-bvh", a.dump_bvh},
                                        {"--dump-rays", a.dump_rays}, {"--dump-hits", a.dump_hits}})
         if (!path.empty()) check_writable_folder(option, path);
-    if (!a.sample_plan.empty()) {  // a file, or a folder for a plan per frame (plan_file)
-        std::error_code ec;
-        const bool folder = a.sample_plan.back() == '/' || std::filesystem::is_directory(a.sample_plan, ec);
-        check_writable_folder("--sample-plan", folder ? (std::filesystem::path(a.sample_plan) / "plan.bin").string() : a.sample_plan);
-    }
+    // A plan's file, or given a folder a file in it (plan_file; the frame's name is not known yet).
+    if (!a.sample_plan.empty()) check_writable_folder("--sample-plan", plan_file(a.sample_plan, ""));
     if (!(a.sample > 0.0 && a.sample <= 1.0))
         throw InputError("--sample " + std::to_string(a.sample) + ": the share of the frame to simulate must be in (0, 1]");
     // Configuration first: a bad key should not wait for a scene to load.

@@ -85,14 +85,18 @@ constexpr char kPlanMagic[8] = {'R', 'T', 'U', 'P', 'L', 'A', 'N', '1'};
 void put(std::string& out, uint64_t v, size_t bytes) { out.append(reinterpret_cast<const char*>(&v), bytes); }
 }  // namespace
 
+uint64_t fnv1a(const void* data, size_t n, uint64_t h) {
+    const auto* b = static_cast<const unsigned char*>(data);
+    for (size_t i = 0; i < n; ++i) h = (h ^ b[i]) * 1099511628211ull;
+    return h;
+}
+
 std::string plan_file(const std::string& given, const std::string& identity) {
     if (given.empty()) return given;
     std::error_code ec;
     if (given.back() != '/' && !std::filesystem::is_directory(given, ec)) return given;
-    uint64_t h = 14695981039346656037ull;  // FNV-1a, 64 bits
-    for (unsigned char c : identity) h = (h ^ c) * 1099511628211ull;
     char name[32];
-    std::snprintf(name, sizeof name, "plan-%016llx.bin", static_cast<unsigned long long>(h));
+    std::snprintf(name, sizeof name, "plan-%016llx.bin", static_cast<unsigned long long>(fnv1a(identity.data(), identity.size())));
     return (std::filesystem::path(given) / name).string();
 }
 

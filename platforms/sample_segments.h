@@ -46,6 +46,9 @@ void write_segment(StatsOut& out, const TimingResult& r, uint32_t index, uint32_
 // in '/'), `given`/plan-HASH.bin with HASH the 64-bit FNV-1a hash of `identity` in hex, so that
 // one folder keeps the plans of a sweep over scenes and frames, one per frame. Empty: empty.
 std::string plan_file(const std::string& given, const std::string& identity);
+// 64-bit FNV-1a of `n` bytes, continued from `h` (the plans' identities and file names).
+constexpr uint64_t kFnv1aBasis = 14695981039346656037ull;
+uint64_t fnv1a(const void* data, size_t n, uint64_t h = kFnv1aBasis);
 void write_plan(const std::string& file, const std::string& identity, const PrepassResult& p);
 // nullopt if `file` does not exist; InputError naming it if it is not a plan of this frame.
 std::optional<PrepassResult> read_plan(const std::string& file, const std::string& identity);

@@ -259,15 +259,6 @@ std::vector<IdentityKey> segment_identity(const RunSpec& spec, const std::string
             {"config", spec.config.to_json().dump(), "the effective configuration"}};
 }
 
-namespace {
-// 64-bit FNV-1a, continued from `h`.
-uint64_t fnv1a(const void* data, size_t n, uint64_t h = 14695981039346656037ull) {
-    const auto* b = static_cast<const unsigned char*>(data);
-    for (size_t i = 0; i < n; ++i) h = (h ^ b[i]) * 1099511628211ull;
-    return h;
-}
-}  // namespace
-
 std::string prepass_identity(const RunSpec& spec, const std::string& scene, const HwConfig& hw, const BvhImage& image,
                              const std::vector<RayFileEntry>& ray_file) {
     std::string id;
@@ -281,7 +272,7 @@ std::string prepass_identity(const RunSpec& spec, const std::string& scene, cons
                   static_cast<unsigned long long>(fnv1a(image.data(), image.size())));
     id += line;
     if (!spec.rays.empty()) {
-        uint64_t h = fnv1a(nullptr, 0);
+        uint64_t h = kFnv1aBasis;
         for (const RayFileEntry& e : ray_file) {  // field by field: a struct's padding is not data
             const Ray& r = e.ray;
             const float f[8] = {r.org.x, r.org.y, r.org.z, r.dir.x, r.dir.y, r.dir.z, r.tnear, r.tfar};
