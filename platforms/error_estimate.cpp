@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "error_bounds.h"
+#include "workloads/sampling.h"
 #include "simulation.h"
 #include "timing_run.h"
 
@@ -38,6 +39,27 @@ nlohmann::ordered_json grid_config(const std::string& name) {
     Config c = Config::load(name.substr(0, plus));
     if (plus != std::string::npos) c.set("prefetch.kind=" + name.substr(plus + 1));
     return hardware(c.to_json());
+}
+
+// A sample of fewer than kAimStrata drawn strata (and not every cluster): its interval rests on
+// few strata, and the rate that draws kAimStrata, where the frame has that many clusters to draw.
+std::string few_strata(const SampleEstimate& e) {
+    const SampleEstimate::Design& d = e.design;
+    if (d.cluster_warps == 0 || d.strata >= kAimStrata) return "";
+    const uint64_t clusters = (e.warps_total + d.cluster_warps - 1) / d.cluster_warps;
+    const uint64_t candidates = clusters - std::min(clusters, d.first_wave_clusters + d.empty_clusters);
+    if (d.strata >= candidates) return "";  // every cluster simulated: no sampling error
+    std::string s = "; " + std::to_string(d.strata) + " drawn strata, fewer than " + std::to_string(kAimStrata) +
+                    ": intervals of so few strata missed more often in the project's grids (docs/sampling.md, \"How many strata\"); ";
+    const std::optional<double> rate = rate_for_strata(clusters, candidates, kAimStrata);
+    if (rate && *rate < 1.0) {
+        char r[16];
+        std::snprintf(r, sizeof r, "%.3g", *rate);
+        s += "--sample " + std::string(r) + " draws " + std::to_string(kAimStrata);
+    } else {
+        s += "this frame has " + std::to_string(candidates) + " clusters to draw from: a larger frame draws more";
+    }
+    return s;
 }
 
 }  // namespace
@@ -129,6 +151,7 @@ ErrorEstimate estimate_error(const RunSpec& spec, const TimingResult& t, const s
                                   : t.estimate.misfit_per_sm.empty() ? ", with the schedule model's error and the extrapolation term"
                                                                      : ", with the schedule model's error over every SM and the extrapolation term";
         sampled_basis = "95 % sampling interval over " + std::to_string(t.estimate.design.strata) + " drawn strata" + model + " (docs/sampling.md)";
+        sampled_basis += few_strata(t.estimate);
     }
     const std::string fid = fidelity_name(spec.fidelity);
     if (spec.fidelity == Fidelity::AT) {

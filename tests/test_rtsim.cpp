@@ -1463,6 +1463,19 @@ TEST(RtsimError, EveryTimingRunStatesItsError) {
     EXPECT_EQ(p["error_estimate"]["kind"], "interval");
     const double c = p["cycles"].get<double>(), hi = p["timing"]["sampling"]["cycles_ci95"][1].get<double>();
     EXPECT_NEAR(p["error_estimate"]["value"].get<double>(), (hi - c) / c, 1e-9);
+    EXPECT_EQ(p["timing"]["sampling"]["strata"], 63);  // 128 clusters at 50 %, the first wave among them
+    EXPECT_EQ(p["error_estimate"]["basis"].get<std::string>().find("fewer than 30"), std::string::npos) << p["error_estimate"].dump();
+    // Below 30 strata the estimate says so and names the rate that draws 30: round(128 x rate) >=
+    // 31 clusters simulated, rate >= 0.2383.
+    const Result few = rtsim(dir, "--scene cornell --fidelity interval --width 256 --height 256 --sample 0.1 --stats " + dir.file("f.json"));
+    ASSERT_EQ(few.status, 0) << few.err;
+    const auto f = nlohmann::json::parse(read_text(dir.file("f.json")));
+    EXPECT_EQ(f["timing"]["sampling"]["strata"], 12);
+    EXPECT_NE(f["error_estimate"]["basis"].get<std::string>().find("12 drawn strata, fewer than 30"), std::string::npos) << f["error_estimate"].dump();
+    EXPECT_NE(few.out.find("--sample 0.239 draws 30"), std::string::npos) << few.out;
+    const Result thirty = rtsim(dir, "--scene cornell --fidelity interval --width 256 --height 256 --sample 0.239 --stats " + dir.file("t.json"));
+    ASSERT_EQ(thirty.status, 0) << thirty.err;
+    EXPECT_EQ(nlohmann::json::parse(read_text(dir.file("t.json")))["timing"]["sampling"]["strata"], 30);
 }
 
 // --check-error N simulates the same clusters in the run's fidelity and in AT. A frame of no more

@@ -62,6 +62,12 @@ SampleDesign::SampleDesign(uint64_t warps, uint64_t cluster, double rate, uint64
     std::sort(sim_.begin(), sim_.end(), [](const SampledCluster& a, const SampledCluster& b) { return a.cluster < b.cluster; });
 }
 
+std::optional<double> rate_for_strata(uint64_t clusters, uint64_t candidates, uint64_t strata) {
+    if (clusters == 0 || candidates < strata) return std::nullopt;
+    // round(clusters x rate) >= 1 + strata: clusters x rate >= strata + 0.5 (llround rounds halves up).
+    return std::min(1.0, std::ceil(1000.0 * (double(strata) + 0.5) / double(clusters)) / 1000.0);
+}
+
 std::vector<uint32_t> SampleDesign::feeds() const {
     std::vector<uint32_t> feeds(warps_, ~0u);
     for (size_t i = 0; i < sim_.size(); ++i)

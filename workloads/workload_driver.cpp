@@ -26,9 +26,9 @@ void check_sample_size(const SampleDesign& planned, uint64_t warps, uint64_t clu
     if (planned.strata() >= kMinStrata || planned.census() || o.unchecked) return;
     const uint64_t clusters = planned.clusters();
     // n strata need round(clusters x rate) >= 1 + n (the first wave is one cluster, simulated
-    // whole); the 0.5 is llround's.
+    // whole); the 0.5 is llround's. Before the pre-pass no cluster is known to be empty.
     const double need = double(1 + kMinStrata) - 0.5;
-    const double rate = std::ceil(1000.0 * need / double(clusters)) / 1000.0;
+    const double rate = rate_for_strata(clusters, clusters - 1, kMinStrata).value_or(1.0);
     std::string msg = "--sample " + percent(o.rate) + " % of this frame's " + std::to_string(clusters) + " clusters of " +
                       std::to_string(cluster) + " shader warps (" + std::to_string(warps) + " warps) draws " +
                       std::to_string(planned.strata()) + " strata beside the first wave (simulated whole); a 95 % interval needs at least " +
