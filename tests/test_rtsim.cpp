@@ -57,6 +57,12 @@ std::vector<std::string> lines(const std::string& s) {
 
 bool exists(const std::string& p) { return std::filesystem::exists(p); }
 
+// A run's statistics without what measures the host rather than the model: wall-clock time, the
+// simulation rate and the peak resident memory, which vary from run to run.
+void erase_host_keys(nlohmann::json& j) {
+    for (const char* k : {"time_s", "simulation_rate", "memory_mb"}) j.erase(k);
+}
+
 }  // namespace
 
 // Cornell box: a ray from the camera straight down -z meets the back wall z = -555 at
@@ -286,10 +292,7 @@ TEST(Rtsim, SameSeedSameStatistics) {
     ASSERT_EQ(rtsim(dir, "--scene cornell --width 16 --height 16 --seed 5 --stats " + a).status, 0);
     ASSERT_EQ(rtsim(dir, "--scene cornell --width 16 --height 16 --seed 5 --stats " + b).status, 0);
     auto ja = nlohmann::json::parse(read_text(a)), jb = nlohmann::json::parse(read_text(b));
-    for (auto* j : {&ja, &jb}) {
-        j->erase("time_s");
-        j->erase("memory_mb");  // peak resident memory varies from run to run
-    }
+    for (auto* j : {&ja, &jb}) erase_host_keys(*j);
     EXPECT_EQ(ja, jb);
     EXPECT_EQ(rtsim(dir, "--help").status, 0);
 }
@@ -340,11 +343,7 @@ TEST(RtsimTiming, AtIsDeterministicAndWritesItsConfiguration) {
     ASSERT_EQ(rtsim(dir, args + a).status, 0);
     ASSERT_EQ(rtsim(dir, args + b).status, 0);
     auto ja = nlohmann::json::parse(read_text(a)), jb = nlohmann::json::parse(read_text(b));
-    for (auto* j : {&ja, &jb}) {
-        j->erase("time_s");
-        j->erase("simulation_rate");
-        j->erase("memory_mb");
-    }
+    for (auto* j : {&ja, &jb}) erase_host_keys(*j);
     EXPECT_EQ(ja, jb);
     EXPECT_EQ(ja["config"]["l1"]["size_kb"], 16);
     EXPECT_EQ(ja["config"]["gpu"]["sms"], 8);
@@ -406,7 +405,7 @@ TEST(RtsimTiming, TracingChangesNoStatistic) {
         ASSERT_EQ(r.status, 0) << args << r.err;
         auto ja = nlohmann::json::parse(read_text(a)), jb = nlohmann::json::parse(read_text(b));
         for (auto* j : {&ja, &jb})
-            for (const char* k : {"time_s", "simulation_rate", "memory_mb"}) j->erase(k);
+            erase_host_keys(*j);
         EXPECT_EQ(ja["cycles"], jb["cycles"]) << args;
         EXPECT_EQ(ja, jb) << args;
         // The trace ends where the frame does (its last value change), not at the kernel's time
@@ -450,7 +449,7 @@ TEST(RtsimTiming, TraceWindowSetsTheWaveformSamplingOnly) {
     auto ja = nlohmann::json::parse(read_text(dir.file("a.json"))), jb = nlohmann::json::parse(read_text(dir.file("b.json")));
     EXPECT_EQ(jb["config"]["sim"]["trace_window"], 100);
     for (auto* j : {&ja, &jb}) {
-        for (const char* k : {"time_s", "simulation_rate", "memory_mb"}) j->erase(k);
+        erase_host_keys(*j);
         (*j)["config"]["sim"].erase("trace_window");
     }
     EXPECT_EQ(ja, jb);
@@ -604,11 +603,7 @@ TEST(RtsimSampling, FullFrameSampleEqualsTheUnsampledRun) {
     EXPECT_FALSE(exists(dir.file("refused.json")));
     auto full = nlohmann::json::parse(read_text(dir.file("full.json")));
     auto one = nlohmann::json::parse(read_text(dir.file("one.json")));
-    for (auto* j : {&full, &one}) {
-        j->erase("time_s");
-        j->erase("simulation_rate");
-        j->erase("memory_mb");
-    }
+    for (auto* j : {&full, &one}) erase_host_keys(*j);
     EXPECT_EQ(full, one);
     EXPECT_FALSE(full["timing"].contains("sampling"));
     // The pre-pass's threads change nothing (128x128: 1024 warps, 32 clusters; a half is the first
@@ -633,7 +628,7 @@ TEST(RtsimSampling, FullFrameSampleEqualsTheUnsampledRun) {
         EXPECT_GE(ci[0].get<double>(), s["cycles_simulated"].get<double>());
         EXPECT_LE(ci[0].get<double>(), t["cycles"].get<double>());
         EXPECT_GE(ci[1].get<double>(), t["cycles"].get<double>());
-        for (const char* k : {"time_s", "simulation_rate", "memory_mb"}) by_threads.back().erase(k);
+        erase_host_keys(by_threads.back());
         by_threads.back()["timing"]["sampling"].erase("prepass_threads");
     }
     EXPECT_EQ(by_threads[0], by_threads[1]);
@@ -655,7 +650,7 @@ TEST(RtsimSampling, IntervalFidelitySampledAsAt) {
             const Result r = rtsim(dir, base + args + " --stats " + dir.file("s.json"));
             EXPECT_EQ(r.status, 0) << r.err;
             auto j = nlohmann::json::parse(read_text(dir.file("s.json")));
-            for (const char* k : {"time_s", "simulation_rate", "memory_mb"}) j.erase(k);
+            erase_host_keys(j);
             return j;
         };
         const auto full = stats("interval");
@@ -699,7 +694,7 @@ TEST(RtsimSampling, SegmentsMergedEqualTheSingleProcessRun) {
         const std::string split = base + " --sample-segments 3";
         auto load = [&](const std::string& f) {
             auto j = nlohmann::json::parse(read_text(dir.file(f)));
-            for (const char* k : {"time_s", "simulation_rate", "memory_mb"}) j.erase(k);
+            erase_host_keys(j);
             return j;
         };
         const Result single = rtsim(dir, split + " --stats " + dir.file("single.json"));
@@ -818,7 +813,7 @@ TEST(RtsimSampling, APlanServesEveryRunOfTheFrameAndNoOther) {
     const std::string plan = " --sample-plan " + dir.file("plan.bin");
     auto load = [&](const std::string& f) {
         auto j = nlohmann::json::parse(read_text(dir.file(f)));
-        for (const char* k : {"time_s", "simulation_rate", "memory_mb"}) j.erase(k);
+        erase_host_keys(j);
         return j;
     };
     ASSERT_EQ(rtsim(dir, frame + "--fidelity interval" + plan).status, 0);
@@ -1019,7 +1014,7 @@ TEST(RtsimFlatten, SameAnswersAndNoChangeWhereTransformsAreNeeded) {
     auto s1 = nlohmann::json::parse(read_text(dir.file("s1.json")));
     auto s2 = nlohmann::json::parse(read_text(dir.file("s2.json")));
     for (auto* j : {&s1, &s2})
-        for (const char* k : {"time_s", "simulation_rate", "memory_mb"}) j->erase(k);
+        erase_host_keys(*j);
     EXPECT_EQ(s1, s2);
 }
 
@@ -1052,7 +1047,8 @@ TEST(RtsimTiming, LtStatisticsDoNotDependOnTheQuantum) {
         EXPECT_EQ(r.status, 0) << args << r.err;
         auto j = nlohmann::json::parse(read_text(dir.file(name)));
         EXPECT_EQ(j["config"]["gpu"]["sms"].get<int>(), 8);
-        for (const char* k : {"time_s", "simulation_rate", "memory_mb", "config"}) j.erase(k);
+        erase_host_keys(j);
+        j.erase("config");
         return j;
     };
     const auto stock = run("q.json", "--vcd " + dir.file("q.vcd"));
@@ -1083,7 +1079,7 @@ TEST(RtsimTiming, IntervalIsWithinTheStatedBoundOfAt) {
         auto run = [&](const std::string& name, const std::string& args) {
             EXPECT_EQ(rtsim(dir, base + dir.file(name) + " " + args).status, 0) << args;
             auto j = nlohmann::json::parse(read_text(dir.file(name)));
-            for (const char* k : {"time_s", "simulation_rate", "memory_mb"}) j.erase(k);
+            erase_host_keys(j);
             return j;
         };
         const auto at = run("at.json", "--fidelity at"), at_ttp = run("at_ttp.json", "--fidelity at --prefetcher ttp");
@@ -1203,7 +1199,8 @@ std::string two_heightfields(const TempDir& dir) {
 // The statistics of a run without what measures the machine or echoes the configuration.
 nlohmann::json model_stats(const std::string& path) {
     auto j = nlohmann::json::parse(read_text(path));
-    for (const char* k : {"time_s", "simulation_rate", "memory_mb", "config"}) j.erase(k);
+    erase_host_keys(j);
+    j.erase("config");
     return j;
 }
 }  // namespace
