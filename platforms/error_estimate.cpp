@@ -62,13 +62,24 @@ std::string few_strata(const SampleEstimate& e) {
     return s;
 }
 
+// A frame size added to the grid later (scripts/bench_error_grid.py, EXTEND): its own scenes and commit.
+std::string added_later(const std::string& side, const nlohmann::json& size_entry) {
+    const auto scenes = size_entry["scenes"].get<std::vector<std::string>>();
+    return side + "x" + side + " added later: " + std::to_string(scenes.size()) + " scenes (" + join(scenes) + "), rtsim " +
+           size_entry.value("measured_on", std::string("?"));
+}
+
 }  // namespace
 
 std::optional<ErrorBounds::Bound> ErrorBounds::bound(const std::string& fidelity, const std::string& workload) const {
     if (!bounds.contains(fidelity) || !bounds[fidelity].contains(workload)) return std::nullopt;
     const nlohmann::json& b = bounds[fidelity][workload];
     if (b.value("runs", 0) == 0) return std::nullopt;
-    return Bound{b["runs"].get<uint64_t>(), b["worst"].get<double>()};
+    Bound all{b["runs"].get<uint64_t>(), b["worst"].get<double>(), {}};
+    if (b.contains("by_size"))
+        for (const auto& [side, s] : b["by_size"].items())
+            if (s.contains("scenes")) all.added.push_back(added_later(side, s));
+    return all;
 }
 
 double ErrorBounds::side(const RunSpec& spec) const {
@@ -89,6 +100,7 @@ std::optional<ErrorBounds::Bound> ErrorBounds::bound(const std::string& fidelity
         if (s.value("runs", 0) == 0) return all;  // a size without runs: the whole grid's bound
         b.runs += s["runs"].get<uint64_t>();
         b.worst = std::max(b.worst, s["worst"].get<double>());
+        if (s.contains("scenes")) b.added.push_back(added_later(std::to_string(sizes[i]), s));
     }
     if (b.runs == 0) return all;
     return b;
@@ -172,7 +184,8 @@ ErrorEstimate estimate_error(const RunSpec& spec, const TimingResult& t, const s
         const std::string bound_basis = "worst |cycles error| against AT in the " + std::to_string(b.runs) + " runs of " + fid + " on " +
                                         spec.workload + " at the nearest frame sizes of the error grid (" +
                                         std::to_string(bounds.scenes.size()) + " scenes, configurations " + join(bounds.configs) +
-                                        "; rtsim " + bounds.measured_on + "; docs/accuracy.md)";
+                                        "; rtsim " + bounds.measured_on + (b.added.empty() ? "" : "; " + join(b.added)) +
+                                        "; docs/accuracy.md)";
         // A measurement beyond the bound shows the bound does not hold here: it replaces it.
         if (check && std::abs(check->difference()) > b.worst) {
             e.value = sampling + std::abs(check->difference());

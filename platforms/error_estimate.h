@@ -45,6 +45,9 @@ struct ErrorBounds {
     struct Bound {
         uint64_t runs = 0;
         double worst = 0;
+        // Frame sizes added to the grid later (scripts/bench_error_grid.py, EXTEND), as
+        // "512x512 added later: 5 scenes (mesh, ...), rtsim COMMIT": their own scenes and commit.
+        std::vector<std::string> added;
     };
     std::string measured_on;
     std::vector<std::string> scenes, configs;  // configs as NAME or NAME+PREFETCHER

@@ -11,7 +11,10 @@ Usage: scripts/bench_error_grid.py RTSIM OUTDIR [SCENES]
 Environment: PRIMARY_SIZES (64,128,256,512), PT_SIZES (64,128,256), CONFIGS (mobile,paper,
 paper+ttp,desktop,mobile+ttp; NAME+PREFETCHER), SEED (1), JOBS (2), SHARED (../shared/scenes beside the
 repository), ANALYSE_ONLY (1: no runs, tables from the runs already in OUTDIR), COMMIT (the
-commit RTSIM was built from; default: the repository's HEAD)."""
+commit RTSIM was built from; default: the repository's HEAD), EXTEND (a bounds file, e.g.
+platforms/configs/error_bounds.json: OUTDIR/error_bounds.json is then that file with this grid's
+frame sizes added, each size's entry naming its own scenes and commit; the configurations must be
+the file's, and a size it already has is refused)."""
 import concurrent.futures as cf
 import datetime
 import itertools
@@ -25,8 +28,8 @@ from bench_util import config_args, run_stats, scene_args
 rtsim, out = sys.argv[1], sys.argv[2]
 SC = scene_args()
 scenes = sys.argv[3].split(",") if len(sys.argv) > 3 else ["mesh", "bunny", "ship", "bath", "sprng", "party"]
-sizes = {"primary": [int(x) for x in os.environ.get("PRIMARY_SIZES", "64,128,256,512").split(",")],
-         "pt": [int(x) for x in os.environ.get("PT_SIZES", "64,128,256").split(",")]}
+sizes = {"primary": [int(x) for x in os.environ.get("PRIMARY_SIZES", "64,128,256,512").split(",") if x],
+         "pt": [int(x) for x in os.environ.get("PT_SIZES", "64,128,256").split(",") if x]}
 configs = os.environ.get("CONFIGS", "mobile,paper,paper+ttp,desktop,mobile+ttp").split(",")
 seed = int(os.environ.get("SEED", "1"))
 fids = ["at", "lt", "interval"]
@@ -84,6 +87,32 @@ def summary(sel):
     return {"runs": len(e), "mean": sum(e) / max(1, len(e)), "worst": max(e or [0.0])}
 
 
+def extend(base, new):
+    """`base` with `new`'s frame sizes added. Each added size's entry names the scenes and the commit
+    it was measured on (rtsim states them in the bound's basis); the whole-grid summary of each
+    fidelity and workload is recomputed from the sizes (runs summed, mean weighted by runs)."""
+    if new["grid"]["configs"] != base["grid"]["configs"]:
+        sys.exit(f"EXTEND: configurations {new['grid']['configs']} are not the file's {base['grid']['configs']}")
+    for wl in ("primary", "pt"):
+        both = set(base["grid"][f"{wl}_sizes"]) & set(new["grid"][f"{wl}_sizes"])
+        if both:
+            sys.exit(f"EXTEND: {wl} at {sorted(both)} is in the file already (measure other sizes, or a whole new grid)")
+        base["grid"][f"{wl}_sizes"] = sorted(base["grid"][f"{wl}_sizes"] + new["grid"][f"{wl}_sizes"])
+    base.setdefault("extended", []).append({k: new[k] for k in ("measured_on", "date", "command")} |
+                                           {"scenes": new["grid"]["scenes"], "seed": new["grid"]["seed"],
+                                            "primary_sizes": new["grid"]["primary_sizes"], "pt_sizes": new["grid"]["pt_sizes"]})
+    for fid, wls in new["bounds"].items():
+        for wl, b in wls.items():
+            into = base["bounds"][fid][wl]
+            for n, cell in b["by_size"].items():
+                into["by_size"][n] = cell | {"scenes": new["grid"]["scenes"], "measured_on": new["measured_on"]}
+            cells = list(into["by_size"].values())
+            into["runs"] = sum(c["runs"] for c in cells)
+            into["mean"] = sum(c["runs"] * c["mean"] for c in cells) / max(1, into["runs"])
+            into["worst"] = max(c["worst"] for c in cells)
+    return base
+
+
 commit = os.environ.get("COMMIT") or subprocess.run("git rev-parse --short HEAD", shell=True, capture_output=True, text=True,
                         cwd=os.path.dirname(os.path.abspath(__file__))).stdout.strip()
 # The regime rtsim claims: only the frame sizes with runs in (a partial grid claims less).
@@ -100,6 +129,8 @@ for fid in ("lt", "interval"):
         b = summary(sel)
         b["by_size"] = {str(n): summary([r for r in sel if r["size"] == n]) for n in measured[wl]}
         bounds["bounds"][fid][wl] = b
+if os.environ.get("EXTEND"):
+    bounds = extend(json.load(open(os.environ["EXTEND"])), bounds)
 with open(f"{out}/error_bounds.json", "w") as f:
     json.dump(bounds, f, indent=2)
     f.write("\n")

@@ -26,6 +26,7 @@
 #include "model/config.h"
 #include "model/dram.h"
 #include "model/stats.h"
+#include "platforms/error_estimate.h"
 #include "platforms/timing_stats.h"
 #include "test_util.h"
 
@@ -1473,6 +1474,32 @@ TEST(RtsimError, EveryTimingRunStatesItsError) {
     const Result thirty = rtsim(dir, "--scene cornell --fidelity interval --width 256 --height 256 --sample 0.239 --stats " + dir.file("t.json"));
     ASSERT_EQ(thirty.status, 0) << thirty.err;
     EXPECT_EQ(nlohmann::json::parse(read_text(dir.file("t.json")))["timing"]["sampling"]["strata"], 30);
+}
+
+// Frame sizes added to the error grid later (scripts/bench_error_grid.py, EXTEND) carry their own
+// scenes and commit, and a bound that takes one of them names them in its basis.
+TEST(ErrorBounds, AddedSizesNameTheirScenesAndCommit) {
+    const auto b = rtu::ErrorBounds::parse(R"({"measured_on": "base", "grid": {"scenes": ["a", "b", "c"], "configs": ["mobile"],
+        "primary_sizes": [], "pt_sizes": [64, 128, 512]}, "bounds": {"interval": {"pt": {"runs": 6, "worst": 0.05, "by_size": {
+        "64": {"runs": 3, "worst": 0.05}, "128": {"runs": 1, "worst": 0.01},
+        "512": {"runs": 2, "worst": 0.02, "scenes": ["a", "b"], "measured_on": "later"}}}}}})");
+    const auto at64 = b.bound("interval", "pt", 64);
+    ASSERT_TRUE(at64);
+    EXPECT_EQ(at64->runs, 3u);
+    EXPECT_TRUE(at64->added.empty());
+    const auto at512 = b.bound("interval", "pt", 512);
+    ASSERT_TRUE(at512);
+    EXPECT_EQ(at512->runs, 2u);
+    EXPECT_EQ(at512->worst, 0.02);
+    EXPECT_EQ(at512->added, std::vector<std::string>{"512x512 added later: 2 scenes (a, b), rtsim later"});
+    const auto at256 = b.bound("interval", "pt", 256);  // between 128 and 512: both, the worse of the two
+    ASSERT_TRUE(at256);
+    EXPECT_EQ(at256->runs, 3u);
+    EXPECT_EQ(at256->worst, 0.02);
+    EXPECT_EQ(at256->added.size(), 1u);
+    const auto whole = b.bound("interval", "pt");  // the whole grid's, added sizes among them
+    ASSERT_TRUE(whole);
+    EXPECT_EQ(whole->added, at512->added);
 }
 
 // --check-error N simulates the same clusters in the run's fidelity and in AT. A frame of no more
