@@ -159,8 +159,9 @@ TEST(SampleDesign, RateForStrataIsTheSmallestThatDrawsThem) {
                 }
                 ASSERT_TRUE(rate) << clusters << " clusters";
                 EXPECT_GE(rtu::SampleDesign(clusters * 4, 4, *rate, 1, work).strata(), want) << clusters << " clusters, rate " << *rate;
-                if (*rate > 0.001)
+                if (*rate > 0.001) {
                     EXPECT_LT(rtu::SampleDesign(clusters * 4, 4, *rate - 0.001, 1, work).strata(), want) << clusters << " clusters, rate " << *rate;
+                }
             }
 }
 
