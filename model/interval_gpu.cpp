@@ -185,7 +185,10 @@ void IntervalGpu::send_prefetch(uint32_t sm, uint64_t cycle) {
         issue.book(cycle);
         const uint64_t chunk = q.chunks.front().addr;
         q.chunks.pop();
-        read(sm, chunk, cycle, ReqKind::Prefetch);
+        const Served s = read(sm, chunk, cycle, ReqKind::Prefetch);
+        // Its response takes a cycle of the response FIFO's drain, as a demand's does
+        // (model/response_fifo.h).
+        drain_[sm].book(std::max(s.at, cycle + 1));
         ++rt_[sm].prefetch_queue.sent;
         ++rt_[sm].prefetch_queue.answered;
     }

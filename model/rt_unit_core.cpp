@@ -162,12 +162,11 @@ void RtUnitCore::Sink::prefetch(const StackEntry& e, uint64_t deadline) {
 }
 
 void RtUnitCore::on_response(uint64_t id, bool l1_miss, bool dram, uint64_t now) {
-    if (prefetch_ids_.erase(id)) {  // a prefetch filled the caches; the RT unit drops the data
-        ++stats_.prefetch_queue.answered;
-        return;
-    }
     if (fifo_.full()) throw std::logic_error("response into a full response FIFO");
-    fifo_.push({id, l1_miss, dram});
+    // A prefetch filled the caches; its response still passes the FIFO (model/response_fifo.h).
+    const bool prefetch = prefetch_ids_.erase(id) > 0;
+    if (prefetch) ++stats_.prefetch_queue.answered;
+    fifo_.push({id, l1_miss, dram, prefetch});
     stats_.max_response_fifo = std::max<uint64_t>(stats_.max_response_fifo, fifo_.size());
     (void)now;
 }
@@ -193,10 +192,12 @@ void RtUnitCore::answer_limit_study_fetches(uint64_t now) {
     }
 }
 
-// Response FIFO: one response per cycle. A thread whose node is now whole runs the node's tests.
+// Response FIFO: one response per cycle. A prefetch's is dropped; a thread whose node is now
+// whole runs the node's tests.
 void RtUnitCore::drain_response(uint64_t now) {
     if (fifo_.empty()) return;
     const ChunkResponse resp = fifo_.pop();
+    if (resp.prefetch) return;
     ++stats_.responses;
     Pending& p = slot_of(resp.id);
     if (p.id != resp.id) throw std::logic_error("response for an unknown or answered request");

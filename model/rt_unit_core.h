@@ -59,12 +59,12 @@ public:
     void pop_request(uint64_t now);
 
     // A response for chunk `id` reached the RT unit; `l1_miss`/`dram` describe where it was
-    // served. A demand response enters the response FIFO, which must have room
-    // (takes_response); a prefetch's response is dropped (its data went into the caches).
+    // served. It enters the response FIFO, which must have room (takes_response), a prefetch's
+    // as well: it takes its drain cycle and is then dropped (model/response_fifo.h).
     void on_response(uint64_t id, bool l1_miss, bool dram, uint64_t now);
-    // Whether the response for chunk `id` can come in now: a prefetch's always, a demand's while
-    // the response FIFO (rt.response_fifo entries) has room; otherwise memory holds it back.
-    bool takes_response(uint64_t id) const { return !fifo_.full() || prefetch_ids_.contains(id); }
+    // Whether a response can come in now: while the response FIFO (rt.response_fifo entries) has
+    // room; otherwise memory holds it back.
+    bool takes_response(uint64_t) const { return !fifo_.full(); }
 
     // Rays of warps that finished since the last call.
     std::vector<RetiredRay> take_retired();

@@ -86,7 +86,7 @@ struct RtUnitStats {
         {"limit_study_hits", &RtUnitStats::limit_study_hits, "requests", "32 B demand requests answered as L1 hits by a perfect-up/down limit study"},
         {"l1_misses_with_next_queued", &RtUnitStats::l1_misses_with_next_queued, "node reads",
          "pops whose node read missed L1 while the thread's stack (BFS: queue) still held a node after the pop: with BFS an accurate prefetch could follow (paper Figure 'bfs_trend')"},
-        {"max_response_fifo", &RtUnitStats::max_response_fifo, "entries", "most responses waiting in the response FIFO at once", Merge::Max},
+        {"max_response_fifo", &RtUnitStats::max_response_fifo, "entries", "most responses (prefetches' included) waiting in the response FIFO at once", Merge::Max},
         {"max_memory_access_queue", &RtUnitStats::max_memory_access_queue, "requests", "most demand requests waiting in the memory access queue at once", Merge::Max},
     };
     static constexpr bool kParts = true;
