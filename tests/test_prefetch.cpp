@@ -140,6 +140,19 @@ TEST(PrefetchAccounting, TheAuthorsUnusedLineCount) {
 }
 
 namespace {
+// A warp of 32 rays from the camera at the LumiBench bunny.
+std::vector<WarpRay> bunny_warp() {
+    std::vector<WarpRay> rays;
+    for (int i = 0; i < 32; ++i) {
+        WarpRay r;
+        r.ray.org = {278, 278, 800};
+        r.ray.dir = glm::vec3(-0.13f + 0.005f * (i % 8), -0.2f + 0.005f * (i / 8), -1.0f);
+        r.key = uint64_t(i);
+        rays.push_back(r);
+    }
+    return rays;
+}
+
 // In the RT unit, every prefetch TTP generates is for a node that is in the thread's stack (DFS)
 // or queue (BFS) at that moment.
 void prefetches_only_current_entries(TraversalOrder order) {
@@ -150,14 +163,7 @@ void prefetches_only_current_entries(TraversalOrder order) {
     hw.prefetch.bfs_n = 4;
     RtUnitCore core(hw, img, order);
     // A warp of 32 rays from the camera at the bunny; memory answers every request 50 cycles later.
-    std::vector<WarpRay> rays;
-    for (int i = 0; i < 32; ++i) {
-        WarpRay r;
-        r.ray.org = {278, 278, 800};
-        r.ray.dir = glm::vec3(-0.13f + 0.005f * (i % 8), -0.2f + 0.005f * (i / 8), -1.0f);
-        r.key = uint64_t(i);
-        rays.push_back(r);
-    }
+    const std::vector<WarpRay> rays = bunny_warp();
     core.accept_warp(rays, 0);
     uint64_t generated = 0;
     core.on_prefetch_generated = [&](const ChunkRequest& r) {
@@ -211,14 +217,7 @@ TEST(RtUnitCore, PrefetchResponsesTakeADrainCycleEach) {
     ASSERT_EQ(hw.response_fifo, 0u);  // unbounded: every response comes in when it arrives
     hw.prefetch.kind = PrefetcherKind::Ttp;
     RtUnitCore core(hw, img, TraversalOrder::DFS);
-    std::vector<WarpRay> rays;
-    for (int i = 0; i < 32; ++i) {
-        WarpRay r;
-        r.ray.org = {278, 278, 800};
-        r.ray.dir = glm::vec3(-0.13f + 0.005f * (i % 8), -0.2f + 0.005f * (i / 8), -1.0f);
-        r.key = uint64_t(i);
-        rays.push_back(r);
-    }
+    const std::vector<WarpRay> rays = bunny_warp();
     core.accept_warp(rays, 0);
     std::multimap<uint64_t, uint64_t> demands;  // cycle -> chunk id
     std::vector<uint64_t> prefetches;           // held
