@@ -64,7 +64,7 @@ public:
     void on_response(uint64_t id, bool l1_miss, bool dram, uint64_t now);
     // Whether a response can come in now: while the response FIFO (rt.response_fifo entries) has
     // room; otherwise memory holds it back.
-    bool takes_response(uint64_t) const { return !fifo_.full(); }
+    bool takes_response() const { return !fifo_.full(); }
 
     // Rays of warps that finished since the last call.
     std::vector<RetiredRay> take_retired();

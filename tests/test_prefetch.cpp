@@ -221,10 +221,14 @@ TEST(RtUnitCore, PrefetchResponsesTakeADrainCycleEach) {
     core.accept_warp(rays, 0);
     std::multimap<uint64_t, uint64_t> demands;  // cycle -> chunk id
     std::vector<uint64_t> prefetches;           // held
+    // The demands due by `now` reach the unit.
+    auto answer_due = [&](uint64_t now) {
+        for (auto it = demands.begin(); it != demands.end() && it->first <= now; it = demands.erase(it))
+            core.on_response(it->second, true, true, now);
+    };
     uint64_t c = 0;
     for (; c < 100000 && prefetches.size() < 6; ++c) {
-        for (auto it = demands.begin(); it != demands.end() && it->first <= c; it = demands.erase(it))
-            core.on_response(it->second, true, true, c);
+        answer_due(c);
         if (core.has_request(c)) {
             const ChunkRequest r = core.front_request(c);
             core.pop_request(c);
@@ -236,8 +240,7 @@ TEST(RtUnitCore, PrefetchResponsesTakeADrainCycleEach) {
     ASSERT_EQ(prefetches.size(), 6u) << "TTP sent too few prefetches";
     // Let the FIFO run empty (no response due in the next cycles), then deliver.
     while (core.response_fifo_depth() > 0 || (!demands.empty() && demands.begin()->first <= c + 1)) {
-        for (auto it = demands.begin(); it != demands.end() && it->first <= c; it = demands.erase(it))
-            core.on_response(it->second, true, true, c);
+        answer_due(c);
         core.cycle(c++);
     }
     ASSERT_FALSE(demands.empty()) << "no demand left in flight";

@@ -103,7 +103,7 @@ tlm::tlm_sync_enum RtUnit::nb_transport_bw(tlm::tlm_generic_payload& t, tlm::tlm
     }
     if (ph == tlm::BEGIN_RESP) {
         const RtExtension& e = ext(t);
-        if (!core_.takes_response(e.id)) {
+        if (!core_.takes_response()) {
             // The response FIFO is full: the response waits in the L1, which sends no other
             // until END_RESP (the base protocol's response exclusion).
             held_response_ = &t;
@@ -120,7 +120,7 @@ tlm::tlm_sync_enum RtUnit::nb_transport_bw(tlm::tlm_generic_payload& t, tlm::tlm
 
 // A response held back by a full response FIFO comes in once the FIFO has drained one.
 void RtUnit::admit_held_response(uint64_t c) {
-    if (!held_response_ || !core_.takes_response(ext(*held_response_).id)) return;
+    if (!held_response_ || !core_.takes_response()) return;
     tlm::tlm_generic_payload* t = held_response_;
     held_response_ = nullptr;
     const RtExtension& e = ext(*t);
@@ -139,7 +139,7 @@ void RtUnit::lt_run(uint64_t end) {
     while (c < end) {
         last_cycle_ = c;
         // Responses due enter the response FIFO while it has room (the rest wait in the L1).
-        while (!st.responses.empty() && st.responses.top().at <= c && core_.takes_response(st.responses.top().id)) {
+        while (!st.responses.empty() && st.responses.top().at <= c && core_.takes_response()) {
             core_.on_response(st.responses.top().id, st.responses.top().l1_miss, st.responses.top().dram, c);
             st.responses.pop();
         }
