@@ -2,6 +2,8 @@
 # A local sweep stopped on the way (Ctrl-C or kill reaching GNU parallel, which then starts no
 # more runs and exits as usual) writes no results.csv and exits 130, so that the experiment
 # scripts write no report from part of the runs; the same command then resumes and collects all.
+# A run whose rtsim was stopped by a signal left its statistics so far ("interrupted": true) and
+# exit 143: that run is not finished, and the next resume runs it again rather than collecting it.
 # The stop is made deterministic by a stand-in for rtsim that, on the second run, sends SIGTERM to
 # the parallel above it, then runs the real rtsim.
 # Usage: sweep_stop_test.sh RTSIM SOURCE_DIR
@@ -41,5 +43,27 @@ rc=0
 "$src/scripts/sweep/run.sh" --jobs 1 "$work/m.tsv" "$work/out" 2>"$work/err2" || rc=$?
 check "the same command resumes and exits 0 (got $rc)" '[ "$rc" = 0 ]'
 check "with every run in results.csv" '[ "$(tail -n +2 "$work/out/results.csv" | wc -l)" = 4 ]'
+# r3 as a SIGTERM to its rtsim alone leaves it: the stats so far, exit 143 (and the worker itself
+# killed with it: no .status for r4, whose stats are whole).
+/usr/bin/python3 - "$work/out/t" <<'PY'
+import json, pathlib, sys
+d = pathlib.Path(sys.argv[1])
+j = json.loads((d / "r3.json").read_text())
+j["interrupted"] = True
+(d / "r3.json").write_text(json.dumps(j, indent=2) + "\n")
+(d / "r3.json.status").write_text('{"id": "t/r3", "exit": 143, "wall_s": 0.1}\n')
+(d / "r4.json.status").unlink()
+PY
+m="$src/scripts/sweep/manifest.py"
+check "the interrupted run counts as not run, the one without .status but whole stats does not" \
+  '[ "$(/usr/bin/python3 "$m" not-run "$work/m.tsv" "$work/out")" = 1 ]'
+check "the interrupted run is not finished" '! /usr/bin/python3 "$m" finished "$work/m.tsv" "$work/out" 3'
+check "the whole one is" '/usr/bin/python3 "$m" finished "$work/m.tsv" "$work/out" 4'
+rc=0
+rm "$work/out/results.csv"
+"$src/scripts/sweep/run.sh" --jobs 1 "$work/m.tsv" "$work/out" 2>"$work/err3" || rc=$?
+check "resuming runs the interrupted run again and exits 0 (got $rc)" '[ "$rc" = 0 ]'
+check "whose stats are now whole" '! grep -q "\"interrupted\": true" "$work/out/t/r3.json"'
+check "and results.csv has it with exit 0" 'grep -q "^t/r3,t,r3,0," "$work/out/results.csv"'
 echo "$pass passed, $fail failed"
 [ "$fail" = 0 ]

@@ -5,8 +5,11 @@ arguments, output path relative to the sweep's folder), numbered from 1 as worke
 As a command, `manifest.py invalidate MANIFEST OUTDIR RTSIM` keeps a sweep folder to one model:
 OUTDIR/rtsim.sha256 names the rtsim binary its results came from; when RTSIM is another binary,
 every run's outputs (stats, .status, .err) move to OUTDIR/previous-<old hash>/ so that the sweep
-runs them again rather than mixing two models in one results.csv. Both engines call it."""
+runs them again rather than mixing two models in one results.csv. Both engines call it.
+`manifest.py finished MANIFEST OUTDIR INDEX` exits 0 when run INDEX is finished (worker.sh skips it);
+`manifest.py not-run MANIFEST OUTDIR` prints how many runs are still to run (run.sh)."""
 import hashlib
+import json
 import os
 import pathlib
 import shutil
@@ -36,10 +39,39 @@ def read(path):
     return runs
 
 
+def interrupted(stats):
+    """rtsim stopped by SIGINT or SIGTERM writes its statistics so far with "interrupted": true
+    (docs/robustness.md): a file that is there but is not the run's result."""
+    try:
+        return json.loads(stats.read_text()).get("interrupted") is True
+    except ValueError:  # not rtsim's JSON (rtsim writes its stats whole, atomically)
+        return True
+
+
 def finished(outdir, run):
-    """A run is finished when its stats file exists and is not empty (rtsim writes it whole)."""
+    """A run is finished when its stats file exists, is not empty (rtsim writes it whole) and is not
+    of a run stopped on the way."""
     p = pathlib.Path(outdir) / run.output
-    return p.exists() and p.stat().st_size > 0
+    return p.exists() and p.stat().st_size > 0 and not interrupted(p)
+
+
+# rtsim's exit status when stopped by SIGINT / SIGTERM (128 + the signal; rtsim --help).
+STOPPED_EXITS = (130, 143)
+
+
+def not_run(outdir, run):
+    """Still to run: neither finished nor failed on its own. A run that failed (an exit status other
+    than a stop, without stats) has run, and the collector lists it; one stopped by a signal, or with
+    no exit status at all (its worker was killed too), has not."""
+    if finished(outdir, run):
+        return False
+    stats, status, _ = outputs(outdir, run)
+    if not status.exists() or (stats.exists() and stats.stat().st_size > 0):
+        return True
+    try:
+        return json.loads(status.read_text())["exit"] in STOPPED_EXITS
+    except (ValueError, KeyError):
+        return True
 
 
 def outputs(outdir, run):
@@ -78,7 +110,19 @@ def invalidate(manifest, outdir, rtsim):
     return new
 
 
+USAGE = "usage: manifest.py invalidate MANIFEST OUTDIR RTSIM | finished MANIFEST OUTDIR INDEX | not-run MANIFEST OUTDIR"
+
 if __name__ == "__main__":
-    if len(sys.argv) != 5 or sys.argv[1] != "invalidate":
-        sys.exit("usage: manifest.py invalidate MANIFEST OUTDIR RTSIM")
-    invalidate(*sys.argv[2:])
+    cmd, args = (sys.argv[1], sys.argv[2:]) if len(sys.argv) > 1 else ("", [])
+    if cmd == "invalidate" and len(args) == 3:
+        invalidate(*args)
+    elif cmd == "finished" and len(args) == 3:
+        runs = read(args[0])
+        index = int(args[2])
+        if not 1 <= index <= len(runs):
+            sys.exit(f"manifest: {args[0]} has no run {index} (1 to {len(runs)})")
+        sys.exit(0 if finished(args[1], runs[index - 1]) else 1)
+    elif cmd == "not-run" and len(args) == 2:
+        print(sum(not_run(args[1], r) for r in read(args[0])))
+    else:
+        sys.exit(USAGE)

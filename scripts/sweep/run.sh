@@ -40,9 +40,10 @@ case $engine in
     echo "sweep: $n runs from $manifest, $jobs at a time, into $outdir" >&2
     # Failed runs are the collector's to list (parallel exits with their count). A sweep stopped
     # on the way (Ctrl-C, kill: parallel then starts no more runs and exits as usual) leaves
-    # runs that never started, without a .status: no results.csv then, exit 130.
+    # runs that never started, or that rtsim left with "interrupted": true: no results.csv then,
+    # exit 130 (manifest.py not-run counts them; the worker runs them again).
     seq 1 "$n" | parallel --will-cite -j "$jobs" --joblog "+$outdir/joblog" "$here/worker.sh" "$manifest" {} "$outdir" || true
-    not_run=$(awk -F'\t' 'NR > 1 { print $3 }' "$manifest" | while read -r o; do [ -f "$outdir/$o.status" ] || echo x; done | wc -l)
+    not_run=$(/usr/bin/python3 "$here/manifest.py" not-run "$manifest" "$outdir")
     if [ "$not_run" -gt 0 ]; then
       echo "sweep: stopped with $not_run of $n runs not run; no results.csv written (the same command resumes)" >&2
       exit 130

@@ -11,7 +11,8 @@
 #           configuration of it reads the plan (docs/sampling.md, "Sample plan": the same
 #           statistics, bit for bit). The folder is per binary: another rtsim makes its own plans.
 # Usage: worker.sh MANIFEST INDEX OUTDIR
-# Skips a run whose stats file exists (resume). Records exit status and wall time next to it.
+# Skips a finished run (resume): its stats file exists and is not of a run stopped by a signal
+# ("interrupted": true; manifest.py finished). Records exit status and wall time next to it.
 set -uo pipefail
 manifest=$1 index=$2 outdir=$3
 here=$(cd "$(dirname "$0")/../.." && pwd)
@@ -21,7 +22,11 @@ line=$(awk -F'\t' -v i="$index" 'NR == i + 1' "$manifest")
 if [ -z "$line" ]; then echo "worker: $manifest has no line $index" >&2; exit 2; fi
 IFS=$'\t' read -r id args output <<<"$line"
 stats="$outdir/$output"
-[ -s "$stats" ] && exit 0
+if [ -e "$stats" ]; then
+  /usr/bin/python3 "$here/scripts/sweep/manifest.py" finished "$manifest" "$outdir" "$index" && exit 0
+  # Stopped on the way last time: its statistics so far are not the run's; run it again.
+  rm -f "$stats" "$stats.status" "$stats.err"
+fi
 mkdir -p "$(dirname "$stats")"
 args=${args//\{shared\}/$shared}
 # The rate after --sample (given once: rtsim refuses more); a plan is for rates below 1.
