@@ -19,16 +19,8 @@ public:
         while (head_ < busy_.size() && busy_[head_].second <= horizon) ++head_;
         if (head_ > 64 && head_ * 2 > busy_.size()) compact();
         if (len == 0) return start;
-        uint64_t s = std::max(start, floor_);
-        // The first booking that starts after s; the one before it may cover s.
-        size_t i = size_t(std::upper_bound(busy_.begin() + long(head_), busy_.end(), s,
-                                           [](uint64_t v, const Interval& x) { return v < x.first; }) -
-                          busy_.begin());
-        if (i > head_ && busy_[i - 1].second > s) s = busy_[i - 1].second;
-        while (i < busy_.size() && busy_[i].first < s + len) {
-            s = std::max(s, busy_[i].second);
-            ++i;
-        }
+        size_t i;
+        const uint64_t s = find(start, len, &i);
         // [s, s + len) is free; bookings before i end by s, those from i start at s + len or later.
         // Merge with neighbours that touch it.
         const uint64_t e = s + len;
@@ -47,10 +39,30 @@ public:
         if (intervals() > 4096) prune();
         return s;
     }
+    // The s that book(start, len) would return, left free.
+    uint64_t first_free(uint64_t start, uint64_t len) const {
+        size_t i;
+        return len == 0 ? start : find(start, len, &i);
+    }
     size_t intervals() const { return busy_.size() - head_; }
 
 private:
     using Interval = std::pair<uint64_t, uint64_t>;  // [start, end)
+    // The earliest free [s, s + len), s >= start and the floor; *at: the first booking after it.
+    uint64_t find(uint64_t start, uint64_t len, size_t* at) const {
+        uint64_t s = std::max(start, floor_);
+        // The first booking that starts after s; the one before it may cover s.
+        size_t i = size_t(std::upper_bound(busy_.begin() + long(head_), busy_.end(), s,
+                                           [](uint64_t v, const Interval& x) { return v < x.first; }) -
+                          busy_.begin());
+        if (i > head_ && busy_[i - 1].second > s) s = busy_[i - 1].second;
+        while (i < busy_.size() && busy_[i].first < s + len) {
+            s = std::max(s, busy_[i].second);
+            ++i;
+        }
+        *at = i;
+        return s;
+    }
     void compact() {
         busy_.erase(busy_.begin(), busy_.begin() + long(head_));
         head_ = 0;

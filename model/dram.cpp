@@ -62,7 +62,8 @@ bool DramChannel::schedule(uint64_t now, DramRequest* out, uint64_t* done) {
 }
 
 DramBookings::DramBookings(const DramConfig& c, const AddressMap& map)
-    : cfg_(c), map_(map), banks_(c.channels, std::vector<Bank>(c.banks)), bus_(c.channels), commands_(c.channels), stats_(c.channels) {}
+    : cfg_(c), map_(map), banks_(c.channels, std::vector<Bank>(c.banks)), bus_(c.channels), commands_(c.channels),
+      activations_(c.channels), stats_(c.channels), act_gap_(std::max<uint64_t>(c.tRC, uint64_t(c.tRAS) + c.tRP)) {}
 
 uint64_t DramBookings::access(uint64_t addr, uint32_t bytes, uint64_t now, uint64_t horizon) {
     const DramCoord at = map_.dram(addr);
@@ -96,7 +97,24 @@ uint64_t DramBookings::access(uint64_t addr, uint32_t bytes, uint64_t now, uint6
         // ACT overlaps the transfer ahead of it (tRCD), a conflict's precharge does not.
         const uint64_t pre = epochs.empty() ? 0 : cfg_.tRP;
         (epochs.empty() ? st.row_misses : st.row_conflicts)++;
-        const uint64_t bank_start = b.busy.book(now, pre + cfg_.tRCD + cfg_.tCCD, horizon);
+        // The ACT (bank_start + pre) also keeps AT's spacing of activations: a bank's at least
+        // act_gap apart (tRC from ACT to ACT, and tRAS from ACT to the precharge before the next
+        // ACT: tRAS + tRP), a channel's at least tRRD apart. Each ACT books [ACT, ACT + gap) in
+        // its bank's and its channel's activation calendars, so two ACTs booked in either order
+        // are a gap apart. The earliest bank_start that all three calendars leave free: each
+        // probe only moves it later, and a fixed point is a start none of them pushes further.
+        const uint64_t hold = pre + cfg_.tRCD + cfg_.tCCD;
+        Calendar& channel_acts = activations_[at.channel];
+        uint64_t bank_start = now;
+        for (;;) {
+            const uint64_t s = b.busy.first_free(bank_start, hold);
+            const uint64_t act = channel_acts.first_free(b.activations.first_free(s + pre, act_gap_), cfg_.tRRD);
+            bank_start = act - pre;
+            if (bank_start == s) break;
+        }
+        b.busy.book(bank_start, hold, horizon);
+        b.activations.book(bank_start + pre, act_gap_, horizon);
+        channel_acts.book(bank_start + pre, cfg_.tRRD, horizon);
         const uint64_t sequence = commands_[at.channel].book(bank_start + cfg_.tRCD, pre + slot, horizon);
         column = sequence + pre;
         st.queue_wait += column - now - pre - cfg_.tRCD;  // beyond the unloaded latency

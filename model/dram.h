@@ -99,7 +99,11 @@ private:
 // at its own timestamp or later is a row hit, as FR-FCFS would serve it before the conflict that
 // closes the row; otherwise it opens a new epoch. Before, open rows followed call order, and the
 // interval fidelity, calling in time order, found down to 0.67x AT's row hits (bunny mesh).
-// Not modelled: the request queue's bound, tRAS/tRC/tRRD, and a hit overtaking the conflicts
+// Activations keep AT's spacing (tRC, tRAS + tRP per bank, tRRD per channel; until 2026-11-27
+// they did not: LT on sprng's primary rays 256x256 on `paper`, where more than half the reads
+// are row conflicts, -5.5 % against AT before, -4.2 % after). Not modelled: the request queue's
+// bound, AT's channel waiting for a conflict's activation before it picks any other request
+// (docs/accuracy.md), and a hit overtaking the conflicts
 // booked before it (it takes the first free column slot, so the channel's throughput is AT's
 // but FR-FCFS's spread of latencies, short for hits and long for conflicts, is not; giving hits
 // their own slots while still taking one from the sequence made the interval fidelity 2-10 %
@@ -122,12 +126,15 @@ private:
     struct Bank {
         std::deque<Epoch> epochs;  // by decision; until of each is the next one's decision
         Calendar busy;
+        Calendar activations;  // [ACT, ACT + act_gap_) per activation
     };
     DramConfig cfg_;
     AddressMap map_;
     std::vector<std::vector<Bank>> banks_;  // per channel
     std::vector<Calendar> bus_, commands_;  // per channel: data bus, command sequence
+    std::vector<Calendar> activations_;     // per channel: [ACT, ACT + tRRD) per activation
     std::vector<DramStats> stats_;
+    uint64_t act_gap_;  // a bank's ACT to its next ACT: max(tRC, tRAS + tRP)
 };
 
 }  // namespace rtu
