@@ -43,8 +43,8 @@ rc=0
 "$src/scripts/sweep/run.sh" --jobs 1 "$work/m.tsv" "$work/out" 2>"$work/err2" || rc=$?
 check "the same command resumes and exits 0 (got $rc)" '[ "$rc" = 0 ]'
 check "with every run in results.csv" '[ "$(tail -n +2 "$work/out/results.csv" | wc -l)" = 4 ]'
-# r3 as a SIGTERM to its rtsim alone leaves it: the stats so far, exit 143 (and the worker itself
-# killed with it: no .status for r4, whose stats are whole).
+# Two states a kill can leave: r3 as rtsim leaves a run it was stopped in (its statistics so far,
+# "interrupted": true, exit 143); r4 whole but without .status (its worker killed after rtsim ended).
 /usr/bin/python3 - "$work/out/t" <<'PY'
 import json, pathlib, sys
 d = pathlib.Path(sys.argv[1])

@@ -439,7 +439,7 @@ TEST(DramBookings, HandWorkedCommandSequence) {
     DramBookings d(c, hw.address_map());
     EXPECT_EQ(d.access(0, 32, 0, 0), 48u);       // A
     EXPECT_EQ(d.access(32, 32, 0, 0), 56u);      // B
-    EXPECT_EQ(d.access(131072, 32, 0, 0), 118u);  // C
+    EXPECT_EQ(d.access(131072, 32, 0, 0), 118u); // C
     EXPECT_EQ(d.access(128, 32, 0, 0), 48u);     // D
     EXPECT_EQ(d.access(8192, 32, 0, 0), 64u);    // E
     const DramStats& s0 = d.stats()[0];
