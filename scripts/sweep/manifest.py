@@ -39,13 +39,25 @@ def read(path):
     return runs
 
 
+# Per stats file, (mtime, size) -> interrupted: the Slurm engine asks finished() of every run at
+# each poll, and a file rtsim has written (whole, by rename) is read once, not at every poll.
+_interrupted_seen = {}
+
+
 def interrupted(stats):
     """rtsim stopped by SIGINT or SIGTERM writes its statistics so far with "interrupted": true
     (docs/robustness.md): a file that is there but is not the run's result."""
+    st = stats.stat()
+    key = (st.st_mtime_ns, st.st_size)
+    seen = _interrupted_seen.get(stats)
+    if seen and seen[0] == key:
+        return seen[1]
     try:
-        return json.loads(stats.read_text()).get("interrupted") is True
+        result = json.loads(stats.read_text()).get("interrupted") is True
     except ValueError:  # not rtsim's JSON (rtsim writes its stats whole, atomically)
-        return True
+        result = True
+    _interrupted_seen[stats] = (key, result)
+    return result
 
 
 def finished(outdir, run):
