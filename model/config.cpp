@@ -66,7 +66,7 @@ const Key kSchema[] = {
     {"dram.frontend_latency", "core cycles", Type::Int, 0, 1e6, false, "cycles a request waits between the L2 and the DRAM scheduler's queue (GPGPU-Sim's dram_latency queue)"},
     {"dram.queue", "requests", Type::Int, 1, 1 << 16, false, "scheduler queue entries per channel"},
     {"dram.row_bytes", "bytes", Type::Int, 128, 1 << 20, true, "row (page) size"},
-    {"dram.scheduler", "", Type::Text, 0, 0, false, "frfcfs or fcfs"},
+    {"dram.scheduler", "", Type::Text, 0, 0, false, "frfcfs_banks (GPGPU-Sim's FR-FCFS: every bank serves a request of its own, a command a cycle), frfcfs_channel (one request at a time per channel, rtunit's scheduler until 2026-11-27) or fcfs (one at a time, oldest first); model/dram.h"},
     {"dram.tCL", "memory cycles", Type::Int, 1, 1000, false, "CAS latency (memory cycles)"},
     {"dram.tRCD", "memory cycles", Type::Int, 1, 1000, false, "ACT to column command"},
     {"dram.tRP", "memory cycles", Type::Int, 1, 1000, false, "precharge"},
@@ -325,8 +325,13 @@ HwConfig Config::resolve() const {
     d.frontend_latency = u32("dram.frontend_latency");
     d.row_bytes = u32("dram.row_bytes");
     const std::string sched = values_.at("dram.scheduler").get<std::string>();
-    if (sched != "frfcfs" && sched != "fcfs") throw ConfigError("key 'dram.scheduler' = '" + sched + "': allowed are frfcfs, fcfs");
-    d.frfcfs = sched == "frfcfs";
+    if (sched == "frfcfs")  // its meaning until 2026-11-27; a silent change would mislabel results
+        throw ConfigError("key 'dram.scheduler' = 'frfcfs': since 2026-11-27 say which: frfcfs_banks (GPGPU-Sim's, every bank serving its "
+                          "own request; the presets') or frfcfs_channel (one request at a time per channel, what 'frfcfs' was)");
+    if (sched != "frfcfs_banks" && sched != "frfcfs_channel" && sched != "fcfs")
+        throw ConfigError("key 'dram.scheduler' = '" + sched + "': allowed are frfcfs_banks, frfcfs_channel, fcfs");
+    d.frfcfs = sched != "fcfs";
+    d.per_bank = sched == "frfcfs_banks";
     d.tCL = u32("dram.tCL");
     d.tRCD = u32("dram.tRCD");
     d.tRP = u32("dram.tRP");

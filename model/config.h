@@ -34,6 +34,7 @@ struct DramConfig {
     uint32_t frontend_latency;  // core cycles between the L2 and the scheduler's queue
     std::string address_map;    // "line" or a GPGPU-Sim mapping (model/address_map.h)
     bool frfcfs;
+    bool per_bank = false;      // dram.scheduler frfcfs_banks: GPGPU-Sim's banks, each serving its own request
     uint32_t tCL, tRCD, tRP, tRAS, tRC, tRRD, tCCD, tWL, tWR;  // memory clock cycles
 };
 

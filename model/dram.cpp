@@ -7,7 +7,144 @@ namespace rtu {
 
 DramChannel::DramChannel(const DramConfig& c) : cfg_(c), banks_(c.banks) {}
 
+uint64_t DramChannel::next_decision() const {
+    if (!cfg_.per_bank) return next_col_ > cfg_.tRCD ? next_col_ - cfg_.tRCD : 0;
+    if (!ran_) return 0;
+    // The earliest cycle after the last run at which a bank without a request can take one, or a
+    // bank's next command is allowed by its timing. A command may still lose that cycle to
+    // another's (one of each kind a cycle); the channel then runs again the cycle after.
+    const uint64_t after = last_cycle_ + 1;
+    uint64_t next = ~0ull;
+    for (const Bank& b : banks_) {
+        uint64_t t;
+        if (!b.serving) {
+            if (!b.queued) continue;
+            t = after;
+        } else if (b.open && b.row == b.req.at.row) {
+            t = std::max(b.column_ok, next_col_);
+        } else if (!b.open) {
+            t = std::max(b.act_ok, channel_act_ok_);
+        } else {
+            t = b.precharge_ok;
+        }
+        next = std::min(next, std::max(t, after));
+    }
+    return next == ~0ull ? after : next;
+}
+
 bool DramChannel::schedule(uint64_t now, DramRequest* out, uint64_t* done) {
+    return cfg_.per_bank ? schedule_banks(now, out, done) : schedule_channel(now, out, done);
+}
+
+// GPGPU-Sim's dram_t::cycle for one memory cycle (single command bus): a bank takes a request,
+// then the banks in priority order try a column command, and a row command while none has issued.
+bool DramChannel::schedule_banks(uint64_t now, DramRequest* out, uint64_t* done) {
+    last_cycle_ = now;
+    ran_ = true;
+    take_request();
+    bool column = false, row = false, finished = false;
+    const uint32_t n = uint32_t(banks_.size());
+    for (uint32_t i = 0; i < n; ++i) {
+        // prio_ moves when a row command issues; GPGPU-Sim reads it afresh for every bank.
+        const uint32_t j = (i + prio_) % n;
+        Bank& b = banks_[j];
+        if (!column) column = column_command(now, b, &finished, out, done);
+        if (!column && !row) row = row_command(now, b, j);
+    }
+    return finished;
+}
+
+// GPGPU-Sim's frfcfs_scheduler::schedule for the first bank, in priority order, without a
+// request: the oldest request to the row it last took (which is the bank's row: a bank takes its
+// next request only once the last has had its columns), else its oldest. One bank a cycle.
+void DramChannel::take_request() {
+    const uint32_t n = uint32_t(banks_.size());
+    bool any = false;
+    for (const Bank& b : banks_) any = any || (!b.serving && b.queued);
+    if (!any) return;
+    hit_.assign(n, -1);
+    oldest_.assign(n, -1);
+    for (size_t q = 0; q < queue_.size(); ++q) {
+        const DramRequest& r = queue_[q];
+        const Bank& b = banks_[r.at.bank];
+        if (b.serving) continue;
+        if (oldest_[r.at.bank] < 0) oldest_[r.at.bank] = long(q);
+        if (hit_[r.at.bank] < 0 && b.activated && b.row == r.at.row) hit_[r.at.bank] = long(q);
+    }
+    for (uint32_t i = 0; i < n; ++i) {
+        const uint32_t j = (i + prio_) % n;
+        const long q = hit_[j] >= 0 ? hit_[j] : oldest_[j];
+        if (q < 0) continue;
+        Bank& b = banks_[j];
+        b.req = queue_[size_t(q)];
+        queue_.erase(queue_.begin() + q);
+        --b.queued;
+        if (!b.open) ++stats_.row_misses;  // closed only before its first ACT: no request pending now
+        else if (b.row == b.req.at.row) ++stats_.row_hits;
+        else ++stats_.row_conflicts;
+        const uint64_t atom = uint64_t(cfg_.bus_bytes) * cfg_.burst;
+        b.columns_left = uint32_t(std::max<uint64_t>(1, (b.req.bytes + atom - 1) / atom));
+        b.serving = true;
+        ++serving_;
+        prio_ = (prio_ + 1) % n;
+        return;
+    }
+}
+
+// A column command for the bank's request if its row is open, tRCD has passed since the ACT
+// and tCCD since the channel's last column command. Each moves bus_bytes x burst bytes in
+// burst / beats_per_cycle data cycles, tCL (writes: tWL) after it, on the channel's data bus.
+bool DramChannel::column_command(uint64_t now, Bank& b, bool* finished, DramRequest* out, uint64_t* done) {
+    if (!b.serving || !b.open || b.row != b.req.at.row || now < b.column_ok || now < next_col_) return false;
+    const uint64_t data = (uint64_t(cfg_.burst) + cfg_.beats_per_cycle - 1) / cfg_.beats_per_cycle;
+    const DramRequest& r = b.req;
+    next_col_ = now + cfg_.tCCD;
+    // A precharge waits for a read's burst (GPGPU-Sim's RTPc), a write's recovery (WTPc).
+    b.precharge_ok = std::max(b.precharge_ok, now + (r.write ? cfg_.tWL + data + cfg_.tWR : data));
+    const uint64_t atom = uint64_t(cfg_.bus_bytes) * cfg_.burst;
+    if (b.columns_left == std::max<uint64_t>(1, (r.bytes + atom - 1) / atom)) stats_.queue_wait += now - std::min(now, r.arrival);
+    const uint64_t start = std::max(now + (r.write ? cfg_.tWL : cfg_.tCL), bus_free_);
+    bus_free_ = start + data;
+    if (--b.columns_left == 0) {
+        (r.write ? stats_.writes : stats_.reads)++;
+        stats_.bytes += r.bytes;
+        stats_.data_cycles += transfer_cycles(r.bytes);
+        *out = r;
+        *done = bus_free_;
+        *finished = true;
+        b.serving = false;
+        --serving_;
+    }
+    return true;
+}
+
+// An ACT for the bank's request if the bank is closed (tRP after its precharge, tRC after its
+// last ACT, tRRD after the channel's last), or a precharge if it is open on another row (tRAS
+// after its ACT and after its last column's burst or write recovery).
+bool DramChannel::row_command(uint64_t now, Bank& b, uint32_t j) {
+    if (!b.serving) return false;
+    const uint32_t n = uint32_t(banks_.size());
+    if (!b.open) {
+        if (now < b.act_ok || now < channel_act_ok_) return false;
+        b.open = true;
+        b.activated = true;
+        b.row = b.req.at.row;
+        b.act = now;
+        b.column_ok = now + cfg_.tRCD;
+        b.precharge_ok = std::max(b.precharge_ok, now + cfg_.tRAS);
+        b.act_ok = now + cfg_.tRC;
+        channel_act_ok_ = now + cfg_.tRRD;
+        prio_ = (j + 1) % n;
+        return true;
+    }
+    if (b.row == b.req.at.row || now < b.precharge_ok) return false;
+    b.open = false;
+    b.act_ok = std::max(b.act_ok, now + cfg_.tRP);
+    prio_ = (j + 1) % n;
+    return true;
+}
+
+bool DramChannel::schedule_channel(uint64_t now, DramRequest* out, uint64_t* done) {
     if (queue_.empty()) return false;
     size_t pick = 0;
     if (cfg_.frfcfs) {
@@ -115,11 +252,22 @@ uint64_t DramBookings::access(uint64_t addr, uint32_t bytes, uint64_t now, uint6
         b.busy.book(bank_start, hold, horizon);
         b.activations.book(bank_start + pre, act_gap_, horizon);
         channel_acts.book(bank_start + pre, cfg_.tRRD, horizon);
-        const uint64_t sequence = commands_[at.channel].book(bank_start + cfg_.tRCD, pre + slot, horizon);
-        column = sequence + pre;
+        // The decision: the cycle the scheduler takes the request. frfcfs_channel and fcfs: the channel's
+        // command sequence holds the precharge too, and the ACT overlaps the transfer ahead.
+        // frfcfs_banks: the bank takes it at bank_start and precharges on its own; the channel
+        // gives only the column slot, after the ACT's tRCD.
+        uint64_t decision;
+        if (cfg_.per_bank) {
+            column = commands_[at.channel].book(bank_start + pre + cfg_.tRCD, slot, horizon);
+            decision = bank_start;
+        } else {
+            const uint64_t sequence = commands_[at.channel].book(bank_start + cfg_.tRCD, pre + slot, horizon);
+            column = sequence + pre;
+            decision = sequence - cfg_.tRCD;
+        }
         st.queue_wait += column - now - pre - cfg_.tRCD;  // beyond the unloaded latency
         // The new epoch goes in at its decision; the one before it closes there.
-        Epoch e{at.row, sequence - cfg_.tRCD, column, ~0ull};
+        Epoch e{at.row, decision, column, ~0ull};
         auto pos = std::upper_bound(epochs.begin(), epochs.end(), e.decision,
                                     [](uint64_t d, const Epoch& x) { return d < x.decision; });
         if (pos != epochs.end()) e.until = pos->decision;

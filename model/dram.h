@@ -51,20 +51,44 @@ struct DramStats {
     };
 };
 
+// One channel's scheduler, by dram.scheduler:
+// - frfcfs_channel / fcfs: one request at a time per channel (rtunit's only scheduler until
+//   2026-11-27). The scheduler picks a request (the oldest row hit, else the oldest; fcfs: the
+//   oldest) and issues its commands at their earliest legal cycles; it picks the next tRCD before
+//   the column bus frees, so a closed bank's ACT overlaps the transfers ahead of it. A picked row
+//   conflict holds the channel until its ACT, so it holds back row hits to the other banks: on
+//   DRAM-bound frames AT came out up to 39 % slower than with frfcfs_banks (docs/accuracy.md).
+// - frfcfs_banks (every preset): GPGPU-Sim's DRAM (dram.cc `dram_t::cycle`, dram_sched.cc, branch
+//   traversal_trend_prefetcher of the TTP authors' simulator), memory cycle by memory cycle. Each
+//   bank holds one request of its own; a bank without one takes, at most one bank a cycle in
+//   rotating priority, the oldest request of the row it last took (a row streak), else the
+//   oldest of its requests. Then, in the same priority order, at most one column command a
+//   cycle (tCCD apart, tRCD after the bank's ACT) and, if no column command went before it, one
+//   row command: an ACT to an idle bank (tRP after its precharge, tRC after its last ACT, tRRD
+//   after the channel's last), or a precharge of a bank open on another row (tRAS after its
+//   ACT, burst / beats_per_cycle after its last read's column). So a conflict waiting for its
+//   precharge holds only its own bank. A request moves bus_bytes x burst bytes a column
+//   command; its data ends tCL (tWL) + burst / beats_per_cycle after its last. Not modelled:
+//   bank groups (tCCDL and tRTPL are 4 in the authors' configuration, as tCCD and a read's
+//   burst are), read-write turnaround, the return queue's bound.
 class DramChannel {
 public:
     explicit DramChannel(const DramConfig& c);
     bool full() const { return queue_.size() >= cfg_.queue; }
-    bool empty() const { return queue_.empty(); }
-    size_t depth() const { return queue_.size(); }
-    void enqueue(const DramRequest& r) { queue_.push_back(r); }
-    // Earliest memory cycle at which the scheduler picks the next request: tRCD before the
+    bool empty() const { return queue_.empty() && serving_ == 0; }
+    size_t depth() const { return queue_.size() + serving_; }
+    void enqueue(const DramRequest& r) {
+        queue_.push_back(r);
+        if (cfg_.per_bank) ++banks_[r.at.bank].queued;
+    }
+    // Earliest memory cycle at which schedule() may do anything. frfcfs_channel, fcfs: tRCD before the
     // column bus frees, so that a row miss's ACT overlaps the transfers ahead of it while row
-    // hits that arrive meanwhile can still be preferred.
-    uint64_t next_decision() const { return next_col_ > cfg_.tRCD ? next_col_ - cfg_.tRCD : 0; }
-    // Picks a request at memory cycle `now` (FR-FCFS: the oldest row hit, else the oldest),
-    // issues its commands at their earliest legal cycles and returns it with the cycle its
-    // data transfer ends. False if the queue is empty.
+    // hits that arrive meanwhile can still be preferred. frfcfs_banks: the next cycle after the
+    // last it ran at which a bank can take a request or its timing lets a command issue.
+    uint64_t next_decision() const;
+    // At memory cycle `now` (not before next_decision()): frfcfs_channel and fcfs pick a request and issue
+    // its commands at their earliest legal cycles; frfcfs_banks runs the cycle `now`. True with
+    // the request whose last column command issued and the cycle its data transfer ends.
     bool schedule(uint64_t now, DramRequest* out, uint64_t* done);
     const DramStats& stats() const { return stats_; }
 
@@ -78,32 +102,56 @@ private:
         uint64_t act = 0;          // cycle of the last ACT
         bool activated = false;
         uint64_t write_done = 0;   // end of write recovery
+        // frfcfs_banks: the request the bank serves and its command timing, as the cycles from
+        // which each command is allowed (GPGPU-Sim's counters RCDc, RASc, RCc, RPc, RTPc, WTPc).
+        uint32_t queued = 0;  // requests of this bank in the queue
+        bool serving = false;
+        DramRequest req;
+        uint32_t columns_left = 0;
+        uint64_t column_ok = 0, precharge_ok = 0, act_ok = 0;
     };
+    bool schedule_channel(uint64_t now, DramRequest* out, uint64_t* done);
+    bool schedule_banks(uint64_t now, DramRequest* out, uint64_t* done);
+    void take_request();  // frfcfs_banks: a bank without a request takes one
+    bool column_command(uint64_t now, Bank& b, bool* finished, DramRequest* out, uint64_t* done);
+    bool row_command(uint64_t now, Bank& b, uint32_t j);
+
     DramConfig cfg_;
     std::deque<DramRequest> queue_;
     std::vector<Bank> banks_;
     uint64_t next_col_ = 0, bus_free_ = 0, last_act_ = 0;
     bool any_act_ = false;
+    // frfcfs_banks: requests held by banks, the last cycle run, the channel's next ACT cycle
+    // (RRDc; next_col_ is its CCDc) and the banks' rotating priority.
+    uint32_t serving_ = 0;
+    uint64_t last_cycle_ = 0;
+    bool ran_ = false;
+    uint64_t channel_act_ok_ = 0;
+    uint32_t prio_ = 0;
+    std::vector<long> hit_, oldest_;  // take_request's scratch, per bank
     DramStats stats_;
 };
 
 // DRAM of the fast fidelities (LT, interval): a read's timestamp books, in calendars, its bank,
 // its channel's command sequence and its data bus, so the order of calls does not matter. The
-// command sequence is AT's scheduler's: one request at a time per channel, a column slot
-// (max(tCCD, transfer)) each, an activation of a closed bank overlapping the transfer ahead of
-// it, a conflict's precharge (tRP) not. Without it, booking banks alone let conflicts run in
-// parallel across banks and LT came out up to 14 % fast on the memory-bound scenes.
+// command sequence follows AT's scheduler (DramChannel): a column slot (max(tCCD, transfer)) per
+// read, an activation of a closed bank overlapping the transfers ahead of it. frfcfs_channel and
+// fcfs: one request at a time per channel, so a conflict's precharge (tRP) takes the sequence's
+// time too (booking banks alone let conflicts run in parallel across banks, and LT came out up
+// to 14 % fast against that AT on the memory-bound scenes). frfcfs_banks: a bank precharges and
+// activates on its own, and the sequence gives only the column slot, tRCD after the ACT.
 // FR-FCFS is kept in time, not in call order: each bank remembers the rows it opened as epochs
-// [decision, next epoch's decision), the decision being the cycle AT's scheduler would pick the
-// activating request (its command slot less tRCD). A read that finds its row's epoch still open
-// at its own timestamp or later is a row hit, as FR-FCFS would serve it before the conflict that
-// closes the row; otherwise it opens a new epoch. Before, open rows followed call order, and the
-// interval fidelity, calling in time order, found down to 0.67x AT's row hits (bunny mesh).
+// [decision, next epoch's decision), the decision being the cycle AT's scheduler would take the
+// activating request (frfcfs_channel: its command slot less tRCD; frfcfs_banks: when its bank
+// starts on it). A read that finds its row's epoch still open at its own timestamp or later is a
+// row hit, as FR-FCFS would serve it before the conflict that closes the row; otherwise it opens
+// a new epoch. Before, open rows followed call order, and the interval fidelity, calling in time
+// order, found down to 0.67x AT's row hits (bunny mesh).
 // Activations keep AT's spacing (tRC, tRAS + tRP per bank, tRRD per channel; until 2026-11-27
 // they did not: LT on sprng's primary rays 256x256 on `paper`, where more than half the reads
-// are row conflicts, -5.5 % against AT before, -4.2 % after). Not modelled: the request queue's
-// bound, AT's channel waiting for a conflict's activation before it picks any other request
-// (docs/accuracy.md), and a hit overtaking the conflicts
+// are row conflicts, -5.5 % against frfcfs_channel's AT before, -4.2 % after). Not modelled: the
+// request queue's bound, frfcfs_channel's AT waiting for a conflict's activation before it picks
+// any other request, the one command a cycle of frfcfs_banks, and a hit overtaking the conflicts
 // booked before it (it takes the first free column slot, so the channel's throughput is AT's
 // but FR-FCFS's spread of latencies, short for hits and long for conflicts, is not; giving hits
 // their own slots while still taking one from the sequence made the interval fidelity 2-10 %

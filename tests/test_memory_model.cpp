@@ -1,4 +1,6 @@
 // Cache tags/LRU/MSHR logic and DRAM timing, checked against hand-worked sequences.
+#include <map>
+
 #include <gtest/gtest.h>
 
 #include "test_util.h"
@@ -108,7 +110,7 @@ DramConfig dram() {
     d.beats_per_cycle = 2;
     d.queue = 8;
     d.row_bytes = 2048;
-    d.frfcfs = true;
+    d.frfcfs = true;  // per_bank false: frfcfs_channel, the scheduler these tests work by hand
     d.tCL = 20, d.tRCD = 20, d.tRP = 20, d.tRAS = 50, d.tRC = 62, d.tRRD = 10, d.tCCD = 4, d.tWL = 8, d.tWR = 20;
     return d;
 }
@@ -171,6 +173,92 @@ TEST(Dram, FrFcfsPrefersRowHitsAndTrcHolds) {
     EXPECT_EQ(out.addr, conflict);
     // ACT at 0; the next ACT of the same bank waits for tRC = 62 and tRAS + tRP = 70.
     EXPECT_EQ(done, 70u + 20 + 20 + 8);
+}
+
+namespace {
+// Runs a channel over timed arrivals as the DRAM module does, and returns each request's end of
+// data by token. `every_cycle`: run every memory cycle instead of jumping to next_decision(),
+// which must give the same answers if the jumps skip only cycles where nothing can issue.
+std::map<uint64_t, uint64_t> run_channel(const DramConfig& cfg, const AddressMap& map, std::vector<std::pair<uint64_t, uint64_t>> arrivals,
+                                         bool every_cycle) {
+    DramChannel ch(cfg);
+    std::map<uint64_t, uint64_t> done;
+    size_t next_arrival = 0;
+    for (uint64_t t = 0; next_arrival < arrivals.size() || !ch.empty();) {
+        for (; next_arrival < arrivals.size() && arrivals[next_arrival].first <= t; ++next_arrival) {
+            DramRequest r;
+            r.addr = arrivals[next_arrival].second;
+            r.token = r.addr;
+            r.arrival = t;
+            r.at = map.dram(r.addr);
+            ch.enqueue(r);
+        }
+        DramRequest out;
+        uint64_t end;
+        if (!ch.empty() && ch.next_decision() <= t && ch.schedule(t, &out, &end)) done[out.token] = end;
+        uint64_t next = next_arrival < arrivals.size() ? arrivals[next_arrival].first : ~0ull;
+        if (!ch.empty()) next = std::min(next, every_cycle ? t + 1 : std::max(t + 1, ch.next_decision()));
+        t = next;
+    }
+    return done;
+}
+}  // namespace
+
+// dram.scheduler frfcfs_banks (GPGPU-Sim's per-bank DRAM), worked by hand from dram.cc's rules
+// with the timings of dram() (tRCD 20, tCL 20, tRP 20, tRAS 50, tRC 62, tRRD 10, tCCD 4); a 32 B
+// read is two column commands of 16 B (2 B x burst 8), each with 4 data cycles, tCL after it.
+//   0: bank 0 takes A (row 0) and ACTs; 1: bank 1 takes B; 10 (tRRD): bank 1 ACTs;
+//   20, 24: A's columns, data ends 24 + 20 + 4 = 48; 30, 34: B's, ends 34 + 24 = 58.
+//   100: bank 0 takes C (row 1, a conflict) and precharges (tRAS since its ACT at 0 has passed);
+//   105: bank 1 takes D (row 0 of bank 1, a hit) and issues its columns at 105 and 109: ends 133;
+//   120 (tRP): bank 0 ACTs row 1; 140, 144: C's columns, ends 168.
+// The channel scheduler (frfcfs) gives C the same 168, but D waits for C's ACT: it picks D at
+// 128 (tRCD before the column bus frees at 148), column 148, data 168..176.
+TEST(Dram, PerBankSchedulerLetsOtherBanksPassAConflict) {
+    DramConfig cfg = dram();
+    cfg.per_bank = true;
+    AddressMap map("line", cfg.channels, cfg.banks, cfg.row_bytes, cfg.channels, 128);
+    const uint64_t a = 0, b = 16 * 128, c = 16ull * 128 * 4, d = 16 * 128 + 256;
+    ASSERT_EQ(map.dram(b).bank, 1u);
+    ASSERT_EQ(map.dram(c).bank, 0u);
+    ASSERT_EQ(map.dram(c).row, 1u);
+    ASSERT_EQ(map.dram(d).row, map.dram(b).row);
+    const std::vector<std::pair<uint64_t, uint64_t>> arrivals{{0, a}, {0, b}, {100, c}, {105, d}};
+    for (bool every_cycle : {false, true}) {
+        const auto done = run_channel(cfg, map, arrivals, every_cycle);
+        EXPECT_EQ(done.at(a), 48u);
+        EXPECT_EQ(done.at(b), 58u);
+        EXPECT_EQ(done.at(c), 168u);
+        EXPECT_EQ(done.at(d), 133u);
+    }
+    cfg.per_bank = false;
+    const auto channel = run_channel(cfg, map, arrivals, false);
+    EXPECT_EQ(channel.at(c), 168u);
+    EXPECT_EQ(channel.at(d), 176u);
+}
+
+// frfcfs_banks keeps the activation spacing: bank 0's second ACT tRC (62) after its first, and
+// across banks tRRD (10). Reads to rows 0, 1 and 2 of bank 0 and row 0 of banks 1 and 2, all at 0.
+//   0: bank 0 takes row 0, ACT; 1: bank 1 takes its read; 2: bank 2; 10: bank 1 ACTs, 20: bank 2.
+//   Columns: bank 0 at 20, 24 (ends 48); bank 1 at 30, 34 (ends 58); bank 2 at 40, 44 (ends 68).
+//   25: bank 0, its read done, takes row 1 (the oldest left); precharge at 50 (tRAS), ACT at 70
+//   (tRP; tRC would allow 62), columns 90, 94: ends 118. 95: takes row 2; precharge at 120 (tRAS
+//   after the ACT at 70), ACT 140, columns 160, 164: ends 188.
+TEST(Dram, PerBankSchedulerKeepsActivationSpacing) {
+    DramConfig cfg = dram();
+    cfg.per_bank = true;
+    AddressMap map("line", cfg.channels, cfg.banks, cfg.row_bytes, cfg.channels, 128);
+    const uint64_t row = 16ull * 128 * 4;
+    const uint64_t b1 = 16 * 128, b2 = 2 * 16 * 128;
+    const std::vector<std::pair<uint64_t, uint64_t>> arrivals{{0, 0}, {0, row}, {0, 2 * row}, {0, b1}, {0, b2}};
+    for (bool every_cycle : {false, true}) {
+        const auto done = run_channel(cfg, map, arrivals, every_cycle);
+        EXPECT_EQ(done.at(0), 48u);
+        EXPECT_EQ(done.at(b1), 58u);
+        EXPECT_EQ(done.at(b2), 68u);
+        EXPECT_EQ(done.at(row), 118u);
+        EXPECT_EQ(done.at(2 * row), 188u);
+    }
 }
 
 // The TTP authors' mapping (MOBILE gpgpusim.config l.155): the channel is bits 8-9 (256 B
@@ -535,6 +623,42 @@ TEST(DramBookings, ActivationsKeepAtsSpacing) {
     ASSERT_EQ(map.dram(8192).channel, map.dram(0).channel);
     EXPECT_EQ(lt(two_banks), at(two_banks));
     EXPECT_EQ(at(two_banks), (std::vector<uint64_t>{48, 58}));
+}
+
+// The fast fidelities' DRAM under frfcfs_banks (every preset's) against AT's (DramChannel, an
+// independent implementation, worked by hand in Dram.PerBankSchedulerLetsOtherBanksPassAConflict):
+// a conflict's precharge holds only its own bank. `mobile`'s line map puts lines 0, 64, 1024 and
+// 68 (addresses 0, 8192, 131072, 8704) in channel 0: bank 0 row 0, bank 1 row 0, bank 0 row 1,
+// bank 1 row 0. A and B at 0: 48 and 58 (B's ACT tRRD after A's). C at 100, a conflict: precharge
+// 100, ACT 120, column 140, data 160..168. D at 105, a hit in bank 1: column 105, data 125..133,
+// in whichever order the fast fidelities book C and D. frfcfs_channel's AT gives D 176 (it waits
+// for C's ACT; Dram.PerBankSchedulerLetsOtherBanksPassAConflict).
+TEST(DramBookings, PerBankConflictHoldsOnlyItsBank) {
+    const HwConfig hw = Config::load("mobile").resolve();
+    ASSERT_TRUE(hw.dram.per_bank);
+    const AddressMap map = hw.address_map();
+    const uint64_t a = 0, b = 8192, c = 131072, d = 8704;
+    ASSERT_EQ(map.dram(b).channel, 0u);
+    ASSERT_EQ(map.dram(b).bank, 1u);
+    ASSERT_EQ(map.dram(c).bank, 0u);
+    ASSERT_EQ(map.dram(c).row, 1u);
+    ASSERT_EQ(map.dram(d).bank, 1u);
+    ASSERT_EQ(map.dram(d).row, 0u);
+    const std::vector<std::pair<uint64_t, uint64_t>> arrivals{{0, a}, {0, b}, {100, c}, {105, d}};
+    const auto at = run_channel(hw.dram, map, arrivals, false);
+    EXPECT_EQ(at, (std::map<uint64_t, uint64_t>{{a, 48}, {b, 58}, {c, 168}, {d, 133}}));
+    for (bool d_first : {false, true}) {
+        DramBookings lt(hw.dram, map);
+        EXPECT_EQ(lt.access(a, 32, 0, 0), at.at(a));
+        EXPECT_EQ(lt.access(b, 32, 0, 0), at.at(b));
+        if (d_first) {
+            EXPECT_EQ(lt.access(d, 32, 105, 0), at.at(d));
+        }
+        EXPECT_EQ(lt.access(c, 32, 100, 0), at.at(c));
+        if (!d_first) {
+            EXPECT_EQ(lt.access(d, 32, 105, 0), at.at(d));
+        }
+    }
 }
 
 // Calendar against a plain set of busy cycles: each booking gets the earliest run of `len` free

@@ -1337,14 +1337,16 @@ TEST(RtsimConfig, EveryKeyOfEveryPresetIsRead) {
             DramRequest w;
             w.write = true;
             ch.enqueue(w);
-            DramRequest out;
-            uint64_t done = 0;
-            ch.schedule(0, &out, &done);
             DramRequest conflict;  // same bank, another row: its precharge waits for the write's recovery
             conflict.at.row = 1;
             ch.enqueue(conflict);
-            ch.schedule(ch.next_decision(), &out, &done);
-            return done;
+            uint64_t last = 0;
+            for (uint64_t now = 0; !ch.empty(); now = std::max(now + 1, ch.next_decision())) {
+                DramRequest out;
+                uint64_t done;
+                if (now >= ch.next_decision() && ch.schedule(now, &out, &done)) last = done;
+            }
+            return last;  // the conflict's
         };
         const uint64_t base = write_done(d);
         DramConfig wl = d, wr = d;

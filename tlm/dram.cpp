@@ -88,11 +88,13 @@ void Dram::schedule() {
         }
         DramRequest r;
         uint64_t done;
-        ch.schedule(now, &r, &done);
-        auto* t = reinterpret_cast<tlm::tlm_generic_payload*>(r.token);
-        resp_peq_.notify(*t, clock_.time_of(done) - sc_time_stamp());
-        // A queue slot freed: admit the oldest request waiting out of the latency queue, or the
-        // oldest blocked request of this channel.
+        if (ch.schedule(now, &r, &done)) {
+            auto* t = reinterpret_cast<tlm::tlm_generic_payload*>(r.token);
+            resp_peq_.notify(*t, clock_.time_of(done) - sc_time_stamp());
+        }
+        // A queue slot may have freed (frfcfs_banks: when a bank takes a request, in a cycle
+        // that may finish none): admit the oldest request waiting out of the latency queue, or
+        // the oldest blocked request of this channel.
         if (!waiting_[c].empty() && admit(*waiting_[c].front(), now)) {
             waiting_[c].pop_front();
         } else if (!blocked_[c].empty() && admit(*blocked_[c].front(), now)) {
