@@ -82,8 +82,7 @@ void DramChannel::take_request() {
         if (!b.open) ++stats_.row_misses;  // closed only before its first ACT: no request pending now
         else if (b.row == b.req.at.row) ++stats_.row_hits;
         else ++stats_.row_conflicts;
-        const uint64_t atom = uint64_t(cfg_.bus_bytes) * cfg_.burst;
-        b.columns_left = uint32_t(std::max<uint64_t>(1, (b.req.bytes + atom - 1) / atom));
+        b.columns_left = columns(b.req.bytes);
         b.serving = true;
         ++serving_;
         prio_ = (prio_ + 1) % n;
@@ -101,8 +100,7 @@ bool DramChannel::column_command(uint64_t now, Bank& b, bool* finished, DramRequ
     next_col_ = now + cfg_.tCCD;
     // A precharge waits for a read's burst (GPGPU-Sim's RTPc), a write's recovery (WTPc).
     b.precharge_ok = std::max(b.precharge_ok, now + (r.write ? cfg_.tWL + data + cfg_.tWR : data));
-    const uint64_t atom = uint64_t(cfg_.bus_bytes) * cfg_.burst;
-    if (b.columns_left == std::max<uint64_t>(1, (r.bytes + atom - 1) / atom)) stats_.queue_wait += now - std::min(now, r.arrival);
+    if (b.columns_left == columns(r.bytes)) stats_.queue_wait += now - std::min(now, r.arrival);  // its first column
     const uint64_t start = std::max(now + (r.write ? cfg_.tWL : cfg_.tCL), bus_free_);
     bus_free_ = start + data;
     if (--b.columns_left == 0) {

@@ -3,6 +3,7 @@
 // bus_bytes x 2 (double data rate) per memory cycle, and an FR-FCFS (or FCFS) scheduler over a
 // bounded request queue. Plain C++ (no SystemC); the tlm/ DRAM module drives it.
 #pragma once
+#include <algorithm>
 #include <cstdint>
 #include <deque>
 #include <vector>
@@ -19,9 +20,15 @@ namespace rtu {
 // with bursts of 8 at 2 beats a cycle: two bursts of 16 B, 16 beats, 8 cycles (GPGPU-Sim: two
 // column commands of BL / dram_data_command_freq_ratio = 4 cycles each). The authors' desktop
 // (bursts of 16 at 4 beats a cycle): one burst of 32 B, 4 cycles.
-inline uint64_t dram_transfer_cycles(const DramConfig& c, uint32_t bytes) {
+// Whole bursts of bus_bytes x burst bytes in a transfer of `bytes` (GPGPU-Sim: column commands
+// of dram_atom_size each).
+inline uint64_t dram_bursts(const DramConfig& c, uint32_t bytes) {
     const uint64_t burst_bytes = uint64_t(c.bus_bytes) * c.burst;
-    const uint64_t beats = (bytes + burst_bytes - 1) / burst_bytes * c.burst;
+    return (bytes + burst_bytes - 1) / burst_bytes;
+}
+
+inline uint64_t dram_transfer_cycles(const DramConfig& c, uint32_t bytes) {
+    const uint64_t beats = dram_bursts(c, bytes) * c.burst;
     return (beats + c.beats_per_cycle - 1) / c.beats_per_cycle;
 }
 
@@ -115,6 +122,8 @@ private:
     void take_request();  // frfcfs_banks: a bank without a request takes one
     bool column_command(uint64_t now, Bank& b, bool* finished, DramRequest* out, uint64_t* done);
     bool row_command(uint64_t now, Bank& b, uint32_t j);
+    // frfcfs_banks: column commands of a request, one per burst (at least one).
+    uint32_t columns(uint32_t bytes) const { return uint32_t(std::max<uint64_t>(1, dram_bursts(cfg_, bytes))); }
 
     DramConfig cfg_;
     std::deque<DramRequest> queue_;

@@ -589,21 +589,13 @@ TEST(DramBookings, RowHitsFollowTimeNotCallOrder) {
 TEST(DramBookings, ActivationsKeepAtsSpacing) {
     const HwConfig hw = Config::load("mobile").resolve();
     const AddressMap map = hw.address_map();
-    // Each read's data end in AT, the reads queued in this order at cycle 0 and scheduled in turn.
+    // Each read's data end in AT, the reads queued in this order at cycle 0.
     auto at = [&](const std::vector<uint64_t>& addrs) {
-        DramChannel ch(hw.dram);
-        for (uint64_t a : addrs) {
-            DramRequest r;
-            r.addr = a;
-            r.at = map.dram(a);
-            ch.enqueue(r);
-        }
+        std::vector<std::pair<uint64_t, uint64_t>> arrivals;
+        for (uint64_t a : addrs) arrivals.push_back({0, a});
+        const auto by_addr = run_channel(hw.dram, map, arrivals, false);
         std::vector<uint64_t> done;
-        for (uint64_t now = 0; !ch.empty(); now = std::max(now + 1, ch.next_decision())) {
-            DramRequest out;
-            uint64_t d;
-            if (now >= ch.next_decision() && ch.schedule(now, &out, &d)) done.push_back(d);
-        }
+        for (uint64_t a : addrs) done.push_back(by_addr.at(a));
         return done;
     };
     auto lt = [&](const std::vector<uint64_t>& addrs) {
