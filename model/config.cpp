@@ -328,10 +328,10 @@ HwConfig Config::resolve() const {
     if (sched == "frfcfs")  // its meaning until 2026-11-27; a silent change would mislabel results
         throw ConfigError("key 'dram.scheduler' = 'frfcfs': since 2026-11-27 say which: frfcfs_banks (GPGPU-Sim's, every bank serving its "
                           "own request; the presets') or frfcfs_channel (one request at a time per channel, what 'frfcfs' was)");
-    if (sched != "frfcfs_banks" && sched != "frfcfs_channel" && sched != "fcfs")
-        throw ConfigError("key 'dram.scheduler' = '" + sched + "': allowed are frfcfs_banks, frfcfs_channel, fcfs");
-    d.frfcfs = sched != "fcfs";
-    d.per_bank = sched == "frfcfs_banks";
+    if (sched == "frfcfs_banks") d.scheduler = DramScheduler::FrfcfsBanks;
+    else if (sched == "frfcfs_channel") d.scheduler = DramScheduler::FrfcfsChannel;
+    else if (sched == "fcfs") d.scheduler = DramScheduler::Fcfs;
+    else throw ConfigError("key 'dram.scheduler' = '" + sched + "': allowed are frfcfs_banks, frfcfs_channel, fcfs");
     d.tCL = u32("dram.tCL");
     d.tRCD = u32("dram.tRCD");
     d.tRP = u32("dram.tRP");

@@ -29,12 +29,20 @@ struct CacheConfig {
     bool ipoly = false;  // sets by GPGPU-Sim's IPOLY hash (l2.set_index) instead of linearly
 };
 
+// dram.scheduler: which request a DRAM channel serves next (model/dram.h, docs/paper-preset.md).
+enum class DramScheduler {
+    FrfcfsBanks,    // frfcfs_banks: GPGPU-Sim's; each bank takes its own request, open row first
+    FrfcfsChannel,  // frfcfs_channel: one request at a time per channel, open row first
+    Fcfs,           // fcfs: one request at a time per channel, in arrival order
+};
+
 struct DramConfig {
     uint32_t channels, banks, bus_bytes, burst, beats_per_cycle, queue, row_bytes;
     uint32_t frontend_latency;  // core cycles between the L2 and the scheduler's queue
     std::string address_map;    // "line" or a GPGPU-Sim mapping (model/address_map.h)
-    bool frfcfs;
-    bool per_bank = false;      // dram.scheduler frfcfs_banks: GPGPU-Sim's banks, each serving its own request
+    DramScheduler scheduler = DramScheduler::FrfcfsBanks;
+    bool per_bank() const { return scheduler == DramScheduler::FrfcfsBanks; }
+    bool frfcfs() const { return scheduler != DramScheduler::Fcfs; }  // an open row's requests first
     uint32_t tCL, tRCD, tRP, tRAS, tRC, tRRD, tCCD, tWL, tWR;  // memory clock cycles
 };
 

@@ -8,7 +8,7 @@ namespace rtu {
 DramChannel::DramChannel(const DramConfig& c) : cfg_(c), banks_(c.banks) {}
 
 uint64_t DramChannel::next_decision() const {
-    if (!cfg_.per_bank) return next_col_ > cfg_.tRCD ? next_col_ - cfg_.tRCD : 0;
+    if (!cfg_.per_bank()) return next_col_ > cfg_.tRCD ? next_col_ - cfg_.tRCD : 0;
     if (!ran_) return 0;
     // The earliest cycle after the last run at which a bank without a request can take one, or a
     // bank's next command is allowed by its timing. A command may still lose that cycle to
@@ -33,7 +33,7 @@ uint64_t DramChannel::next_decision() const {
 }
 
 bool DramChannel::schedule(uint64_t now, DramRequest* out, uint64_t* done) {
-    return cfg_.per_bank ? schedule_banks(now, out, done) : schedule_channel(now, out, done);
+    return cfg_.per_bank() ? schedule_banks(now, out, done) : schedule_channel(now, out, done);
 }
 
 // GPGPU-Sim's dram_t::cycle for one memory cycle (single command bus): a bank takes a request,
@@ -145,7 +145,7 @@ bool DramChannel::row_command(uint64_t now, Bank& b, uint32_t j) {
 bool DramChannel::schedule_channel(uint64_t now, DramRequest* out, uint64_t* done) {
     if (queue_.empty()) return false;
     size_t pick = 0;
-    if (cfg_.frfcfs) {
+    if (cfg_.frfcfs()) {
         for (size_t i = 0; i < queue_.size(); ++i) {
             const Bank& b = banks_[queue_[i].at.bank];
             if (b.open && b.row == queue_[i].at.row) {
@@ -212,7 +212,7 @@ uint64_t DramBookings::access(uint64_t addr, uint32_t bytes, uint64_t now, uint6
     // FCFS (dram.scheduler fcfs): only the bank's last epoch, as reads are served in turn.
     const Epoch* open = nullptr;
     for (const Epoch& e : epochs) {
-        if (e.row == at.row && e.until > now && (cfg_.frfcfs || e.until == ~0ull)) {
+        if (e.row == at.row && e.until > now && (cfg_.frfcfs() || e.until == ~0ull)) {
             open = &e;
             break;
         }
@@ -255,7 +255,7 @@ uint64_t DramBookings::access(uint64_t addr, uint32_t bytes, uint64_t now, uint6
         // frfcfs_banks: the bank takes it at bank_start and precharges on its own; the channel
         // gives only the column slot, after the ACT's tRCD.
         uint64_t decision;
-        if (cfg_.per_bank) {
+        if (cfg_.per_bank()) {
             column = commands_[at.channel].book(bank_start + pre + cfg_.tRCD, slot, horizon);
             decision = bank_start;
         } else {

@@ -86,7 +86,7 @@ public:
     size_t depth() const { return queue_.size() + serving_; }
     void enqueue(const DramRequest& r) {
         queue_.push_back(r);
-        if (cfg_.per_bank) ++banks_[r.at.bank].queued;
+        if (cfg_.per_bank()) ++banks_[r.at.bank].queued;
     }
     // Earliest memory cycle at which schedule() may do anything. frfcfs_channel, fcfs: tRCD before the
     // column bus frees, so that a row miss's ACT overlaps the transfers ahead of it while row

@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include "dram_driver.h"
 #include "test_util.h"
 
 #include <random>
@@ -110,7 +111,7 @@ DramConfig dram() {
     d.beats_per_cycle = 2;
     d.queue = 8;
     d.row_bytes = 2048;
-    d.frfcfs = true;  // per_bank false: frfcfs_channel, the scheduler these tests work by hand
+    d.scheduler = DramScheduler::FrfcfsChannel;  // the scheduler these tests work by hand
     d.tCL = 20, d.tRCD = 20, d.tRP = 20, d.tRAS = 50, d.tRC = 62, d.tRRD = 10, d.tCCD = 4, d.tWL = 8, d.tWR = 20;
     return d;
 }
@@ -176,31 +177,19 @@ TEST(Dram, FrFcfsPrefersRowHitsAndTrcHolds) {
 }
 
 namespace {
-// Runs a channel over timed arrivals as the DRAM module does, and returns each request's end of
-// data by token. `every_cycle`: run every memory cycle instead of jumping to next_decision(),
-// which must give the same answers if the jumps skip only cycles where nothing can issue.
+// test::drive_channel over (arrival, address) pairs, each request's token its address.
 std::map<uint64_t, uint64_t> run_channel(const DramConfig& cfg, const AddressMap& map, std::vector<std::pair<uint64_t, uint64_t>> arrivals,
                                          bool every_cycle) {
-    DramChannel ch(cfg);
-    std::map<uint64_t, uint64_t> done;
-    size_t next_arrival = 0;
-    for (uint64_t t = 0; next_arrival < arrivals.size() || !ch.empty();) {
-        for (; next_arrival < arrivals.size() && arrivals[next_arrival].first <= t; ++next_arrival) {
-            DramRequest r;
-            r.addr = arrivals[next_arrival].second;
-            r.token = r.addr;
-            r.arrival = t;
-            r.at = map.dram(r.addr);
-            ch.enqueue(r);
-        }
-        DramRequest out;
-        uint64_t end;
-        if (!ch.empty() && ch.next_decision() <= t && ch.schedule(t, &out, &end)) done[out.token] = end;
-        uint64_t next = next_arrival < arrivals.size() ? arrivals[next_arrival].first : ~0ull;
-        if (!ch.empty()) next = std::min(next, every_cycle ? t + 1 : std::max(t + 1, ch.next_decision()));
-        t = next;
+    std::vector<DramRequest> requests;
+    for (auto [arrival, addr] : arrivals) {
+        DramRequest r;
+        r.addr = addr;
+        r.token = addr;
+        r.arrival = arrival;
+        r.at = map.dram(addr);
+        requests.push_back(r);
     }
-    return done;
+    return test::drive_channel(cfg, requests, every_cycle);
 }
 }  // namespace
 
@@ -216,7 +205,7 @@ std::map<uint64_t, uint64_t> run_channel(const DramConfig& cfg, const AddressMap
 // 128 (tRCD before the column bus frees at 148), column 148, data 168..176.
 TEST(Dram, PerBankSchedulerLetsOtherBanksPassAConflict) {
     DramConfig cfg = dram();
-    cfg.per_bank = true;
+    cfg.scheduler = DramScheduler::FrfcfsBanks;
     AddressMap map("line", cfg.channels, cfg.banks, cfg.row_bytes, cfg.channels, 128);
     const uint64_t a = 0, b = 16 * 128, c = 16ull * 128 * 4, d = 16 * 128 + 256;
     ASSERT_EQ(map.dram(b).bank, 1u);
@@ -231,7 +220,7 @@ TEST(Dram, PerBankSchedulerLetsOtherBanksPassAConflict) {
         EXPECT_EQ(done.at(c), 168u);
         EXPECT_EQ(done.at(d), 133u);
     }
-    cfg.per_bank = false;
+    cfg.scheduler = DramScheduler::FrfcfsChannel;
     const auto channel = run_channel(cfg, map, arrivals, false);
     EXPECT_EQ(channel.at(c), 168u);
     EXPECT_EQ(channel.at(d), 176u);
@@ -246,7 +235,7 @@ TEST(Dram, PerBankSchedulerLetsOtherBanksPassAConflict) {
 //   after the ACT at 70), ACT 140, columns 160, 164: ends 188.
 TEST(Dram, PerBankSchedulerKeepsActivationSpacing) {
     DramConfig cfg = dram();
-    cfg.per_bank = true;
+    cfg.scheduler = DramScheduler::FrfcfsBanks;
     AddressMap map("line", cfg.channels, cfg.banks, cfg.row_bytes, cfg.channels, 128);
     const uint64_t row = 16ull * 128 * 4;
     const uint64_t b1 = 16 * 128, b2 = 2 * 16 * 128;
@@ -572,7 +561,7 @@ TEST(DramBookings, RowHitsFollowTimeNotCallOrder) {
     // FCFS serves reads in turn: only the bank's last row is a hit. F finds C's row 1 open, K
     // then F's row 0, G then K's row 1: conflicts; L follows G in row 0.
     HwConfig fcfs = hw;
-    fcfs.dram.frfcfs = false;
+    fcfs.dram.scheduler = DramScheduler::Fcfs;
     DramBookings f(fcfs.dram, fcfs.address_map());
     for (auto [addr, now] : {std::pair<uint64_t, uint64_t>{0, 0}, {131072, 0}, {32, 10}, {131104, 50}, {32, 60}, {0, 70}})
         f.access(addr, 32, now, 0);
@@ -627,7 +616,7 @@ TEST(DramBookings, ActivationsKeepAtsSpacing) {
 // for C's ACT; Dram.PerBankSchedulerLetsOtherBanksPassAConflict).
 TEST(DramBookings, PerBankConflictHoldsOnlyItsBank) {
     const HwConfig hw = Config::load("mobile").resolve();
-    ASSERT_TRUE(hw.dram.per_bank);
+    ASSERT_EQ(hw.dram.scheduler, DramScheduler::FrfcfsBanks);
     const AddressMap map = hw.address_map();
     const uint64_t a = 0, b = 8192, c = 131072, d = 8704;
     ASSERT_EQ(map.dram(b).channel, 0u);

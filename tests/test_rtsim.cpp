@@ -28,6 +28,7 @@
 #include "model/stats.h"
 #include "platforms/error_estimate.h"
 #include "platforms/timing_stats.h"
+#include "dram_driver.h"
 #include "test_util.h"
 
 using rtu::test::read_text;
@@ -1333,20 +1334,13 @@ TEST(RtsimConfig, EveryKeyOfEveryPresetIsRead) {
     {
         DramConfig d = Config::load("mobile").resolve().dram;
         auto write_done = [&](const DramConfig& c) {
-            DramChannel ch(c);
             DramRequest w;
             w.write = true;
-            ch.enqueue(w);
+            w.token = 1;
             DramRequest conflict;  // same bank, another row: its precharge waits for the write's recovery
             conflict.at.row = 1;
-            ch.enqueue(conflict);
-            uint64_t last = 0;
-            for (uint64_t now = 0; !ch.empty(); now = std::max(now + 1, ch.next_decision())) {
-                DramRequest out;
-                uint64_t done;
-                if (now >= ch.next_decision() && ch.schedule(now, &out, &done)) last = done;
-            }
-            return last;  // the conflict's
+            conflict.token = 2;
+            return test::drive_channel(c, {w, conflict}).at(2);
         };
         const uint64_t base = write_done(d);
         DramConfig wl = d, wr = d;
