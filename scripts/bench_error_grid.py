@@ -113,13 +113,20 @@ def extend(base, new):
     return base
 
 
+def command():
+    """How to make this grid again: the settings that shape it, and the scenes; RTSIM and OUTDIR
+    as placeholders (the paths of one machine say nothing elsewhere)."""
+    env = [f"{k}={os.environ[k]}" for k in ("PRIMARY_SIZES", "PT_SIZES", "CONFIGS", "SEED") if k in os.environ]
+    return " ".join(env + ["scripts/bench_error_grid.py RTSIM OUTDIR"] + sys.argv[3:4])
+
+
 commit = os.environ.get("COMMIT") or subprocess.run("git rev-parse --short HEAD", shell=True, capture_output=True, text=True,
                         cwd=os.path.dirname(os.path.abspath(__file__))).stdout.strip()
 # The regime rtsim claims: only the frame sizes with runs in (a partial grid claims less).
 measured = {wl: [n for n in sizes[wl] if any(r["workload"] == wl and r["size"] == n for r in rows)] for wl in sizes}
 grid = {"scenes": scenes, "primary_sizes": measured["primary"], "pt_sizes": measured["pt"], "spp": 2, "configs": configs, "seed": seed}
 bounds = {"measured_on": commit, "date": datetime.date.today().isoformat(),
-          "command": "scripts/bench_error_grid.py " + " ".join(sys.argv[1:]), "grid": grid, "bounds": {}}
+          "command": command(), "grid": grid, "bounds": {}}
 # Per fidelity and workload: over the whole grid and per frame size (rtsim takes the worst of the
 # grid's frame sizes on either side of a run's frame).
 for fid in ("lt", "interval"):

@@ -38,8 +38,8 @@ with cf.ThreadPoolExecutor(2) as ex:
     for key, rc, err in ex.map(lambda j: run(*j), jobs):
         if rc: fails[key] = (rc, err)
 # analyse
-rows = []
-cov = n = narrow_miss = refused = 0; errs = []
+cov = n = narrow_miss = refused = 0; errs = []; halfwidths = []; misses = []
+few = [0, 0]  # intervals over 10-29 drawn strata: runs, covered ("How many strata" in docs/sampling.md)
 for sc, sz, pre in itertools.product([cell(sc, wl) for sc in scenes for wl in workloads], sizes, presets):
     try: truth = json.load(open(f"{out}/{sc}_{sz}_{pre}_full.json"))["cycles"]
     except Exception: continue
@@ -52,10 +52,24 @@ for sc, sz, pre in itertools.product([cell(sc, wl) for sc in scenes for wl in wo
             e = est / truth - 1; errs.append(abs(e))
             if ci is None: line.append(f"{100*e:+.1f}(noci)"); continue
             n += 1; c = ci[0] <= truth <= ci[1]; cov += c
-            hw = (ci[1] - ci[0]) / 2 / est
-            if not c and hw < 0.10: narrow_miss += 1
+            hw = (ci[1] - ci[0]) / 2 / est; halfwidths.append(hw)
+            if sm.get("strata", 30) < 30: few[0] += 1; few[1] += c
+            if not c:
+                misses.append(f"{k}: {100*e:+.1f} % with +-{100*hw:.1f} %")
+                if hw < 0.10: narrow_miss += 1
             line.append(f"{100*e:+.1f}{'' if c else '!'}±{100*hw:.0f}")
         print(f"{sc:13s} {sz:4d} {pre:8s} r={r:5s} strata={sm.get('strata', '?')} rate_sim={sm.get('rate_simulated', 0):.3f}  " + "  ".join(line))
-errs.sort()
-print(f"coverage {cov}/{n} intervals, narrow(<10%) misses {narrow_miss}, refused {refused}, mean|err| {100*sum(errs)/max(1,len(errs)):.2f}%, worst {100*max(errs or [0]):.1f}%")
+errs.sort(); halfwidths.sort()
+summary = {"runs_with_interval": n, "covered": cov, "narrow_misses": narrow_miss, "refused": refused,
+           "estimates": len(errs), "mean_abs_error": sum(errs) / max(1, len(errs)), "worst_abs_error": max(errs or [0]),
+           "median_halfwidth": halfwidths[len(halfwidths) // 2] if halfwidths else None,
+           "runs_10_29_strata": few[0], "covered_10_29_strata": few[1], "misses": misses,
+           "grid": {"scenes": scenes, "sizes": sizes, "presets": presets, "rates": rates, "seeds": len(seeds),
+                    "fidelity": fid, "workloads": workloads}}
+with open(f"{out}/summary.json", "w") as f:
+    json.dump(summary, f, indent=1)
+print(f"coverage {cov}/{n} intervals, narrow(<10%) misses {narrow_miss}, refused {refused}, mean|err| {100*sum(errs)/max(1,len(errs)):.2f}%, worst {100*max(errs or [0]):.1f}%"
+      + (f", median half-width {100*summary['median_halfwidth']:.1f}%" if halfwidths else "")
+      + f"; 10-29 strata: {few[1]}/{few[0]} covered")
+for m in misses: print("miss", m)
 for k, v in fails.items(): print("FAIL", k, v[0], v[1][:200])
