@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "error_bounds.h"
+#include "sampling_bias.h"
 #include "workloads/sampling.h"
 #include "simulation.h"
 #include "timing_run.h"
@@ -125,6 +126,40 @@ const ErrorBounds& ErrorBounds::built_in() {
     return b;
 }
 
+SamplingBias SamplingBias::parse(const std::string& text) {
+    const nlohmann::json j = nlohmann::json::parse(text);
+    SamplingBias b;
+    b.measured_on = j.at("measured_on").get<std::string>();
+    auto kind = [&](const char* name) {
+        const nlohmann::json& k = j.at("bias").at(name);
+        return Kind{k.at("value").get<double>(), k.at("cell").is_null() ? std::string("no cell biased") : k.at("cell").get<std::string>(),
+                    k.at("cells").get<uint64_t>(), k.at("runs").get<uint64_t>()};
+    };
+    b.primary = kind("primary");
+    b.other = kind("other");
+    return b;
+}
+
+const SamplingBias& SamplingBias::built_in() {
+    static const SamplingBias b = parse(kSamplingBiasJson);
+    return b;
+}
+
+double SamplingBias::value(const std::string& workload) const {
+    if (workload == "primary") return primary.value;
+    if (workload == "pt") return other.value;
+    return std::max(primary.value, other.value);
+}
+
+std::string SamplingBias::basis(const std::string& workload) const {
+    const bool p = workload == "primary" || (workload != "pt" && primary.value >= other.value);
+    const Kind& k = p ? primary : other;
+    std::string s = "the sample design's bias bound " + percent(k.value) + ", the largest of " + std::to_string(k.cells) + " grid cells (" +
+                    std::to_string(k.runs) + " runs of " + (p ? "primary rays" : "path tracing") + ", rtsim " + measured_on + "; " + k.cell + ")";
+    if (workload != "primary" && workload != "pt") s += ", taken for " + (workload.empty() ? std::string("a ray file") : workload) + " (not measured)";
+    return s;
+}
+
 std::optional<std::string> outside_regime(const RunSpec& spec, const ErrorBounds& bounds) {
     const std::string fid = fidelity_name(spec.fidelity);
     if (!spec.rays.empty()) return "a ray file (the grid measured scene workloads)";
@@ -162,7 +197,9 @@ ErrorEstimate estimate_error(const RunSpec& spec, const TimingResult& t, const s
         const std::string model = !t.estimate.schedule            ? ""
                                   : t.estimate.misfit_per_sm.empty() ? ", with the schedule model's error and the extrapolation term"
                                                                      : ", with the schedule model's error over every SM and the extrapolation term";
-        sampled_basis = "95 % sampling interval over " + std::to_string(t.estimate.design.strata) + " drawn strata" + model + " (docs/sampling.md)";
+        sampled_basis = "95 % sampling interval over " + std::to_string(t.estimate.design.strata) + " drawn strata" + model +
+                        (t.estimate.design_bias > 0 ? " and " + SamplingBias::built_in().basis(spec.rays.empty() ? spec.workload : "") : "") +
+                        " (docs/sampling.md)";
         sampled_basis += few_strata(t.estimate);
     }
     const std::string fid = fidelity_name(spec.fidelity);

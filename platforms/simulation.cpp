@@ -445,6 +445,8 @@ RunResult run_simulation(const RunSpec& spec, std::ostream* log) {
             GpuPlatform platform(spec.hw, image, *workload, to);
             timing_result = platform.run();
         }
+        // The sample design's bias bound, measured on the grids, widens the interval.
+        if (timing_result.sampled) timing_result.estimate.design_bias = SamplingBias::built_in().value(spec.rays.empty() ? spec.workload : "");
         if (!merge && spec.sample_segments > 1 && !timing_result.interrupted) {
             // One segment: its own cycles; the frame's estimate is the merge's.
             timing_result.cycles = timing_result.cycles_simulated;

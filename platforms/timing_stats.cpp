@@ -204,6 +204,8 @@ void write_sampling(StatsOut& out, const SampleEstimate& est, double rate, uint6
             "per SM: the cycle its last simulated trace left / the same in the schedule model of the sample - 1");
     s.value("schedule_model_error", est.model_error(double(cycles_simulated)), "ratio",
             "the model's error as the interval takes it: root mean square of the per-SM misfits (the misfit where there are none)");
+    s.value("design_bias", est.design_bias, "ratio",
+            "the sample design's bias bound in the interval: the largest bias beyond the draws' noise on the project's grids, for this workload (platforms/configs/sampling_bias.json)");
 }
 
 }  // namespace rtu

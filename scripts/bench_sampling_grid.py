@@ -6,8 +6,8 @@ errors. Resumable (a run with stats is not redone; use a new OUTDIR for a new rt
 Usage: scripts/bench_sampling_grid.py RTSIM OUTDIR [SCENES]   (SCENES: comma-separated, from
 mesh, bunny, cornell, sprng, ship; default mesh,bunny,cornell)
 Environment: SIZES (default 64,128), PRESETS (mobile,desktop), RATES (0.1,0.25), SEEDS (4),
-FID (at), WORKLOADS (pt; also primary, ao, sh), SHARED (../shared/scenes beside the repository).
-Two runs at a time.
+FID (at), WORKLOADS (pt; also primary, ao, sh), SHARED (../shared/scenes beside the repository),
+JOBS (runs at a time, 2).
 The grids of docs/sampling.md:
   SIZES=128,256 RATES=0.25,0.5 scripts/bench_sampling_grid.py build/rtsim out/grid
   SIZES=256 RATES=0.1,0.25 PRESETS=mobile,paper scripts/bench_sampling_grid.py build/rtsim out/heldout ship,sprng"""
@@ -34,7 +34,7 @@ for sc, wl, n, pre in itertools.product(scenes, workloads, sizes, presets):
     for r, s in itertools.product(rates, seeds):
         jobs.append((f"{cell(sc, wl)}_{n}_{pre}_{r}_{s}", base + f" --sample {r} --sample-seed {s} --threads 1"))
 fails = {}
-with cf.ThreadPoolExecutor(2) as ex:
+with cf.ThreadPoolExecutor(int(os.environ.get("JOBS", "2"))) as ex:
     for key, rc, err in ex.map(lambda j: run(*j), jobs):
         if rc: fails[key] = (rc, err)
 # analyse

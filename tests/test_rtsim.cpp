@@ -1498,6 +1498,47 @@ TEST(ErrorBounds, AddedSizesNameTheirScenesAndCommit) {
     EXPECT_EQ(whole->added, at512->added);
 }
 
+// The sample design's bias bound: per workload kind, and the larger of the two for what the grids
+// did not measure; the basis says where it was measured and, for those, that it was not.
+TEST(SamplingBias, KindsAndWhatWasNotMeasured) {
+    const auto b = rtu::SamplingBias::parse(R"({"measured_on": "abc", "bias": {
+        "primary": {"value": 0.07, "cell": "wknd primary 256 mobile interval 0.1", "cells": 32, "runs": 96},
+        "other": {"value": 0.03, "cell": null, "cells": 60, "runs": 300}}})");
+    EXPECT_EQ(b.value("primary"), 0.07);
+    EXPECT_EQ(b.value("pt"), 0.03);
+    EXPECT_EQ(b.value("ao"), 0.07);
+    EXPECT_EQ(b.value(""), 0.07);  // a ray file
+    EXPECT_NE(b.basis("primary").find("wknd primary 256"), std::string::npos) << b.basis("primary");
+    EXPECT_EQ(b.basis("primary").find("not measured"), std::string::npos) << b.basis("primary");
+    EXPECT_NE(b.basis("pt").find("no cell biased"), std::string::npos) << b.basis("pt");
+    EXPECT_NE(b.basis("sh").find("taken for sh (not measured)"), std::string::npos) << b.basis("sh");
+    // The built-in bound is measured: a bias on both kinds, from cells of the grids.
+    const auto& in = rtu::SamplingBias::built_in();
+    EXPECT_GT(in.primary.value, 0.0);
+    EXPECT_GT(in.other.value, 0.0);
+    EXPECT_GE(in.other.cells, 10u);
+}
+
+// A sampled run's interval carries the design's bias bound for its workload: reported, named in
+// the error estimate's basis, and never narrower than it.
+TEST(RtsimSampling, IntervalCarriesTheDesignBias) {
+    TempDir dir;
+    for (const std::string wl : {"pt", "primary"}) {
+        const std::string stats = dir.file(wl + ".json");
+        const Result r = rtsim(dir, "--scene cornell --fidelity interval --width 256 --height 256 --workload " + wl +
+                                        " --sample 0.25 --stats " + stats);
+        ASSERT_EQ(r.status, 0) << r.err;
+        const auto j = nlohmann::json::parse(read_text(stats));
+        const auto& s = j["timing"]["sampling"];
+        const double bias = rtu::SamplingBias::built_in().value(wl);
+        EXPECT_EQ(s["design_bias"].get<double>(), bias) << wl;
+        const double c = j["cycles"].get<double>();
+        EXPECT_GE(s["cycles_ci95"][1].get<double>() - c, bias * c * (1 - 1e-12)) << wl;
+        EXPECT_NE(j["error_estimate"]["basis"].get<std::string>().find("the sample design's bias bound"), std::string::npos)
+            << j["error_estimate"].dump();
+    }
+}
+
 // --check-error N simulates the same clusters in the run's fidelity and in AT. A frame of no more
 // than N + 1 clusters is checked whole: the check's cycles are the run's own and a full AT run's.
 // A larger frame is checked on N drawn clusters and the first wave, the sample an AT run with

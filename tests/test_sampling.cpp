@@ -94,6 +94,24 @@ TEST(SampleEstimateInterval, ModelErrorIsTheRootMeanSquareOverSms) {
     EXPECT_DOUBLE_EQ(e.model_error(1000), 0.0);
 }
 
+// The sample design's bias bound joins the interval's terms in quadrature, as a 95 % figure
+// of its own (no t or 1.96 on it): model term 1.96 x sqrt(2) x 0.03 = 0.0832, bias 0.04,
+// half-width sqrt(0.0832^2 + 0.04^2) = 0.0923.
+TEST(SampleEstimateInterval, DesignBiasJoinsInQuadrature) {
+    SampleEstimate e;
+    e.schedule = true;
+    e.model_sample = 1000;
+    e.misfit_per_sm = {0.03, -0.03};
+    const double model = 1.96 * std::sqrt(2.0) * 0.03;
+    EXPECT_DOUBLE_EQ(e.relative_half_width(1000), model);
+    e.design_bias = 0.04;
+    EXPECT_DOUBLE_EQ(e.relative_half_width(1000), std::sqrt(model * model + 0.04 * 0.04));
+    EXPECT_NEAR(e.relative_half_width(1000), 0.0923, 1e-4);
+    // Alone (a sample that fits its model exactly and has no sampling error), the bias is the interval.
+    e.misfit_per_sm = {0.0};
+    EXPECT_DOUBLE_EQ(e.relative_half_width(1000), 0.04);
+}
+
 // Conservation: with one RT unit, one slot and no shading the slot never idles, so the frame
 // takes exactly the sum of all durations, in any order of warps.
 TEST(ScheduleModel, OneBusySlotTakesTheSumOfAllWork) {

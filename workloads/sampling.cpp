@@ -398,7 +398,8 @@ SampleEstimate SampleEstimator::estimate(const std::vector<WarpRecord>& warps, u
 double SampleEstimate::relative_half_width(double cycles_simulated) const {
     const double t = t95(variance_pairs);
     const double model = 1.96 * std::sqrt(2.0) * model_error(cycles_simulated);
-    return std::sqrt(t * relative_se * t * relative_se + model * model + 1.96 * extrapolation_gap() * 1.96 * extrapolation_gap());
+    const double gap = 1.96 * extrapolation_gap();
+    return std::sqrt(t * relative_se * t * relative_se + model * model + gap * gap + design_bias * design_bias);
 }
 
 }  // namespace rtu

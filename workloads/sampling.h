@@ -274,11 +274,17 @@ struct SampleEstimate {
         for (double m : misfit_per_sm) sq += m * m;
         return std::sqrt(sq / double(misfit_per_sm.size()));
     }
+    // The sample design's bias bound, relative: how far the sample's context (what runs beside
+    // its traces) can carry its estimate from the frame's cycles beyond every term above. Not
+    // measured in the run; the platform sets it from the grids (platforms/configs/
+    // sampling_bias.json, docs/sampling.md "The sample design's bias"); 0 until set.
+    double design_bias = 0;
     // Half-width of the 95 % interval of cycles_estimate, relative to it (docs/sampling.md),
-    // three parts in quadrature: the work's sampling error with Student's t for the collapsed
+    // four parts in quadrature: the work's sampling error with Student's t for the collapsed
     // pairs; with the schedule estimator the model's error, taken to be as large on the frame as
     // on the sample and independent of it (1.96 x sqrt(2) x model_error), and the extrapolation
-    // gap (1.96 x it).
+    // gap (1.96 x it); and the design's bias bound (already a 95 % figure: the largest bias the
+    // grids measured, so taken as it is).
     double relative_half_width(double cycles_simulated) const;
 };
 
