@@ -241,6 +241,38 @@ TEST(SampleDesign, FirstWaveEmptyClustersAndStrataByWork) {
     EXPECT_EQ(all.simulated().size(), 8u);
 }
 
+// A frame that begins with empty clusters (sky above the scene): its first wave is the first
+// cluster that reads a node, where the frame's cold start is; the empty ones before it are empty
+// clusters like any other. Without the pre-pass's work, cluster 0 stays the first wave.
+TEST(SampleDesign, FirstWaveIsTheFirstClusterWithWork) {
+    const std::vector<double> work = {0, 0, 4, 9, 0, 7, 3, 8, 2, 6};
+    for (uint64_t seed = 1; seed <= 10; ++seed) {
+        const rtu::SampleDesign d(40, 4, 0.5, seed, work);
+        EXPECT_EQ(d.first_wave_clusters(), 1u);
+        EXPECT_EQ(d.empty_clusters(), 3u);  // 0, 1 and 4
+        EXPECT_EQ(d.strata(), 4u);          // round(10 x 0.5) - 1
+        const auto& sim = d.simulated();
+        ASSERT_EQ(sim.size(), 5u);
+        EXPECT_EQ(sim[0].cluster, 2u);
+        EXPECT_EQ(sim[0].stratum, rtu::SampledCluster::kCertain);
+        EXPECT_EQ(sim[0].weight, 1.0);
+        double weights = 0;
+        for (size_t i = 1; i < sim.size(); ++i) {
+            EXPECT_NE(sim[i].cluster, 2u);
+            EXPECT_GT(work[sim[i].cluster], 0.0);
+            weights += sim[i].weight;
+        }
+        EXPECT_EQ(weights, 6.0);  // the 6 non-empty clusters beside the first wave
+    }
+    const rtu::SampleDesign all(40, 4, 0.95, 1, work);  // everything asked for: a census of the 7 with work
+    EXPECT_TRUE(all.census());
+    EXPECT_EQ(all.simulated().size(), 7u);
+    const rtu::SampleDesign blind(40, 4, 0.5, 1);  // no pre-pass
+    EXPECT_EQ(blind.simulated()[0].cluster, 0u);
+    EXPECT_EQ(blind.simulated()[0].stratum, rtu::SampledCluster::kCertain);
+    EXPECT_EQ(blind.empty_clusters(), 0u);
+}
+
 // A sample plan (--sample-plan) reads back what was written, an empty warp included (a warp whose
 // rays all miss the root box has no traces; reading it once passed a null pointer to memcpy:
 // found by fuzz_segment); a missing file is no plan; another identity, a file cut short, bytes

@@ -28,8 +28,8 @@ struct PrepassResult;  // below
 // rate < 1 (docs/sampling.md): the frame's shader warps (groups of warp_size neighbouring pixel
 // samples) are cut into clusters of `capacity` consecutive warps (as many as the GPU holds, so
 // that the warps running together are neighbours, as in the full frame; smaller clusters drew
-// more strata but ran 5-80 % off, docs/sampling.md). The first wave (the first cluster, whose
-// warps start together on cold caches) is always simulated;
+// more strata but ran 5-80 % off, docs/sampling.md). The first wave (the first cluster that reads
+// a BVH node, whose warps start together on cold caches) is always simulated;
 // clusters whose traces read no BVH node are never simulated (their RT work is known: none); the
 // rest are sorted by the functional pre-pass's work and split into equal strata, one cluster each
 // drawn by `seed`, and the estimator extrapolates to the whole frame.
@@ -109,9 +109,10 @@ struct SampledCluster {
     static constexpr uint32_t kCertain = ~0u;
 };
 
-// The sample of a frame of `warps` shader warps in clusters of `cluster`, the first of them the
-// first wave. `work`: per cluster, the pre-pass's critical-path node reads (empty: no pre-pass,
-// or not run yet; strata by position and no cluster is known to be empty).
+// The sample of a frame of `warps` shader warps in clusters of `cluster`, the first of them with
+// work the first wave. `work`: per cluster, the pre-pass's critical-path node reads (empty: no
+// pre-pass, or not run yet; strata by position, no cluster is known to be empty, and cluster 0
+// is the first wave).
 class SampleDesign {
 public:
     SampleDesign(uint64_t warps, uint64_t cluster, double rate, uint64_t seed, const std::vector<double>& work = {});
