@@ -53,7 +53,8 @@ def runs_of(d):
 def grid_of(d):
     """What a folder holds: bench_sampling_grid's grid, or speed_error's sampled runs."""
     if os.path.exists(f"{d}/manifest.tsv"):
-        return "scripts/speed_error.sh: path tracing 256x256, mobile, 8 scenes, AT and interval, 10/25/50 %"
+        scenes = sorted({os.path.basename(f)[:-5] for f in glob.glob(f"{d}/*_s*_*/*.json")})
+        return f"scripts/speed_error.sh: path tracing 256x256, mobile, {','.join(scenes)}, AT and interval, 10/25/50 %"
     with open(f"{d}/summary.json") as f:
         g = json.load(f)["grid"]
     return (f"scripts/bench_sampling_grid.py: {g['fidelity']}, {','.join(g['workloads'])}, {','.join(map(str, g['sizes']))}, "
