@@ -154,8 +154,9 @@ double SamplingBias::value(const std::string& workload) const {
 std::string SamplingBias::basis(const std::string& workload) const {
     const bool p = workload == "primary" || (workload != "pt" && primary.value >= other.value);
     const Kind& k = p ? primary : other;
-    std::string s = "the sample design's bias bound " + percent(k.value) + ", the largest of " + std::to_string(k.cells) + " grid cells (" +
-                    std::to_string(k.runs) + " runs of " + (p ? "primary rays" : "path tracing") + ", rtsim " + measured_on + "; " + k.cell + ")";
+    std::string s = "the sample design's bias bound " + percent(k.value) + ", the largest bias beyond the draws' noise among " +
+                    std::to_string(k.cells) + " cells of the sampling grids (" + std::to_string(k.runs) + " runs of " +
+                    (p ? "primary rays" : "path tracing") + ", rtsim " + measured_on + "; " + k.cell + ")";
     if (workload != "primary" && workload != "pt") s += ", taken for " + (workload.empty() ? std::string("a ray file") : workload) + " (not measured)";
     return s;
 }

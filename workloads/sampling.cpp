@@ -43,10 +43,9 @@ double t95(uint32_t pairs) {
 // cluster with work holds half the frame's first reads of BVH nodes and 6.5 % of its work, came
 // out 16-17 % low on the draws that missed it and 15 % high on one that took it; the clusters
 // that first read the other nodes still hold ~10 % of its work, docs/sampling.md, "The first
-// wave".) Empty clusters: no node
-// read, no RT work, nothing to simulate. The other clusters, sorted by their critical-path node
-// reads, fall into equal strata (neighbouring strata alike, as the collapsed pairs of the
-// variance want), and one cluster per stratum is drawn.
+// wave".) Empty clusters: no node read, no RT work, nothing to simulate. The other clusters,
+// sorted by their critical-path node reads, fall into equal strata (neighbouring strata alike,
+// as the collapsed pairs of the variance want), and one cluster per stratum is drawn.
 SampleDesign::SampleDesign(uint64_t warps, uint64_t cluster, double rate, uint64_t seed, const std::vector<double>& work)
     : warps_(warps), cluster_(std::max<uint64_t>(1, cluster)), clusters_((warps + cluster_ - 1) / cluster_) {
     certain_ = std::min<uint64_t>(clusters_, 1);
