@@ -145,15 +145,15 @@ const SamplingBias& SamplingBias::built_in() {
     return b;
 }
 
-double SamplingBias::value(const std::string& workload) const {
-    if (workload == "primary") return primary.value;
-    if (workload == "pt") return other.value;
-    return std::max(primary.value, other.value);
+const SamplingBias::Kind& SamplingBias::of(const std::string& workload) const {
+    if (workload == "primary") return primary;
+    if (workload == "pt") return other;
+    return primary.value >= other.value ? primary : other;  // not measured: the larger
 }
 
 std::string SamplingBias::basis(const std::string& workload) const {
-    const bool p = workload == "primary" || (workload != "pt" && primary.value >= other.value);
-    const Kind& k = p ? primary : other;
+    const Kind& k = of(workload);
+    const bool p = &k == &primary;
     std::string s = "the sample design's bias bound " + percent(k.value) + ", the largest bias beyond the draws' noise among " +
                     std::to_string(k.cells) + " cells of the sampling grids (" + std::to_string(k.runs) + " runs of " +
                     (p ? "primary rays" : "path tracing") + ", rtsim " + measured_on + "; " + k.cell + ")";

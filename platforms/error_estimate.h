@@ -80,10 +80,13 @@ struct SamplingBias {
     Kind primary, other;  // primary rays; every other workload (measured on path tracing)
     // The bound for `workload` (primary, pt, ao, sh; a ray file: empty), and what it rests on.
     // ao, sh and ray files were not measured: the larger of the two kinds.
-    double value(const std::string& workload) const;
+    double value(const std::string& workload) const { return of(workload).value; }
     std::string basis(const std::string& workload) const;
     static SamplingBias parse(const std::string& json);
     static const SamplingBias& built_in();
+
+private:
+    const Kind& of(const std::string& workload) const;  // the kind whose bound `workload` takes
 };
 
 // Why the run lies outside the bounds' regime, or nothing when it lies inside.
