@@ -195,9 +195,9 @@ ErrorEstimate estimate_error(const RunSpec& spec, const TimingResult& t, const s
             return e;
         }
         sampling = t.estimate.relative_half_width(double(t.cycles_simulated));
-        const std::string model = !t.estimate.schedule            ? ""
-                                  : t.estimate.misfit_per_sm.empty() ? ", with the schedule model's error and the extrapolation term"
-                                                                     : ", with the schedule model's error over every SM and the extrapolation term";
+        const std::string model = !t.estimate.schedule ? ""
+                                  : std::string(", with the schedule model's error") + (t.estimate.misfit_per_sm.empty() ? "" : " over every SM") +
+                                        ", the extrapolation term" + (t.estimate.first_reads_gap() > 0 ? ", the first reads' term" : "");
         sampled_basis = "95 % sampling interval over " + std::to_string(t.estimate.design.strata) + " drawn strata" + model +
                         (t.estimate.design_bias > 0 ? " and " + SamplingBias::built_in().basis(spec.rays.empty() ? spec.workload : "") : "") +
                         " (docs/sampling.md)";

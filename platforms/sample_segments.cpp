@@ -80,7 +80,9 @@ void write_segment(StatsOut& out, const TimingResult& r, uint32_t index, uint32_
 }
 
 namespace {
-constexpr char kPlanMagic[8] = {'R', 'T', 'U', 'P', 'L', 'A', 'N', '1'};
+// Version 2 adds the first reads per warp (after the warps); a version-1 plan is refused by name.
+constexpr char kPlanMagic[8] = {'R', 'T', 'U', 'P', 'L', 'A', 'N', '2'};
+constexpr char kPlanMagicV1[8] = {'R', 'T', 'U', 'P', 'L', 'A', 'N', '1'};
 
 void put(std::string& out, uint64_t v, size_t bytes) { out.append(reinterpret_cast<const char*>(&v), bytes); }
 }  // namespace
@@ -110,6 +112,10 @@ void write_plan(const std::string& file, const std::string& identity, const Prep
         put(out, w.size(), 4);
         out.append(reinterpret_cast<const char*>(w.data()), w.size() * sizeof(uint32_t));
     }
+    for (const std::vector<uint32_t>* f : {&p.first_reads_in_rounds, &p.first_reads_by_warp}) {
+        put(out, f->size(), 8);  // 0 or one per warp
+        out.append(reinterpret_cast<const char*>(f->data()), f->size() * sizeof(uint32_t));
+    }
     write_file_atomic(file, out);  // several segment tasks may write the same plan at once: whole files only
 }
 
@@ -131,6 +137,8 @@ std::optional<PrepassResult> read_plan(const std::string& file, const std::strin
         return v;
     };
     need(sizeof kPlanMagic, "header");
+    if (data.compare(0, sizeof kPlanMagicV1, kPlanMagicV1, sizeof kPlanMagicV1) == 0)
+        throw InputError(file + ": a sample plan of an older rtsim (version 1, without the first reads of nodes); remove it, and the next run writes it again");
     if (data.compare(0, sizeof kPlanMagic, kPlanMagic, sizeof kPlanMagic) != 0)
         throw InputError(file + ": not a sample plan (rtsim --sample-plan writes them)");
     at = sizeof kPlanMagic;
@@ -153,7 +161,16 @@ std::optional<PrepassResult> read_plan(const std::string& file, const std::strin
         if (n) std::memcpy(w.data(), data.data() + at, n * sizeof(uint32_t));  // an empty vector's data() may be null
         at += n * sizeof(uint32_t);
     }
-    if (at != data.size()) throw InputError(file + ": " + std::to_string(data.size() - at) + " bytes after the sample plan's last warp");
+    for (std::vector<uint32_t>* f : {&p.first_reads_in_rounds, &p.first_reads_by_warp}) {
+        const uint64_t firsts = get(8, "first reads");
+        if (firsts != 0 && firsts != warps)
+            throw InputError(file + ": a sample plan with first reads of " + std::to_string(firsts) + " warps for its " + std::to_string(warps));
+        need(firsts * sizeof(uint32_t), "first reads");
+        f->resize(firsts);
+        if (firsts) std::memcpy(f->data(), data.data() + at, firsts * sizeof(uint32_t));
+        at += firsts * sizeof(uint32_t);
+    }
+    if (at != data.size()) throw InputError(file + ": " + std::to_string(data.size() - at) + " bytes after the sample plan's first reads");
     p.critical_nodes_total = critical_nodes_total(p.trace_nodes);
     return p;
 }

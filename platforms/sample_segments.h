@@ -39,9 +39,12 @@ void write_segment(StatsOut& out, const TimingResult& r, uint32_t index, uint32_
 // trace's critical path), kept in a file so that the segments of a split sample and their merge,
 // and every sampled run of a sweep over configurations, fidelities or samples of that frame,
 // trace the frame once instead of once each. `identity`: what the pre-pass depends on
-// (prepass_identity in simulation.h); a plan of another is refused. Binary: "RTUPLAN1", the
-// identity's length and text, the warps, per warp its traces and their critical paths (uint32,
-// little-endian as the host).
+// (prepass_identity in simulation.h); a plan of another is refused. Binary, little-endian as the
+// host: "RTUPLAN2", the identity's length (uint64) and text, the warps (uint64), the pre-pass's
+// threads (uint32), per warp its traces (uint32) and their critical paths (uint32 each); then
+// twice (in rounds, then warp by warp) a count (uint64: 0, or the warps) and per warp its first
+// reads of nodes (uint32 each). A plan of version 1 ("RTUPLAN1", no first reads) is refused with
+// a message to remove it.
 // The file of a plan: `given` itself, or where `given` is a folder (it exists, or its name ends
 // in '/'), `given`/plan-HASH.bin with HASH the 64-bit FNV-1a hash of `identity` in hex, so that
 // one folder keeps the plans of a sweep over scenes and frames, one per frame. Empty: empty.

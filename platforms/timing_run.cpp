@@ -11,6 +11,7 @@ SamplingOptions sampling_options(const HwConfig& c, const BvhImage& img, const T
     s.seed = o.sample_seed;
     s.unchecked = o.sample_unchecked;
     s.capacity = gpu_warp_capacity(c);
+    s.node_blocks = (img.size() + kBlockBytes - 1) / kBlockBytes;
     s.make_workload = o.sample_workload;
     s.threads = o.sample_threads;
     s.segments = o.sample_segments;

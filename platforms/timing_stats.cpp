@@ -204,6 +204,15 @@ void write_sampling(StatsOut& out, const SampleEstimate& est, double rate, uint6
             "per SM: the cycle its last simulated trace left / the same in the schedule model of the sample - 1");
     s.value("schedule_model_error", est.model_error(double(cycles_simulated)), "ratio",
             "the model's error as the interval takes it: root mean square of the per-SM misfits (the misfit where there are none)");
+    {
+        StatsOut f = s.child("first_reads", "the frame's first reads of BVH nodes (compulsory L2 misses, pre-pass) against what the draw holds of them (docs/sampling.md, \"First reads\")");
+        f.value("frame_beyond_first_wave", est.first_reads_rest, "nodes", "first read outside the first wave");
+        f.value("estimate", est.first_reads_estimate, "nodes", "the same as the drawn clusters hold them per critical-path node (as the work is estimated)");
+        f.value("cost", est.first_read_cost, "slot-cycles / node", "a first read's residence beyond the fit");
+        f.value("cost_from", est.first_read_cost_of_first_wave ? "first wave" : "drawn clusters", "",
+                "the drawn clusters' slope on first reads, or where they hold none the first wave's residence beyond the fit per first read");
+        f.value("gap", est.first_reads_gap(), "ratio", "cost x |frame - estimate| / the work estimate: its term in the interval");
+    }
     s.value("design_bias", est.design_bias, "ratio",
             "the sample design's bias bound in the interval: the largest bias beyond the draws' noise on the project's grids, for this workload (platforms/configs/sampling_bias.json)");
 }

@@ -625,6 +625,7 @@ TEST(RtsimSampling, FullFrameSampleEqualsTheUnsampledRun) {
         EXPECT_EQ(s["strata"], 15);
         EXPECT_EQ(s["warps_simulated"].get<int>(), 32 * (1 + s["strata"].get<int>()));
         EXPECT_EQ(s["rate_simulated"].get<double>(), 0.5);  // 16 of 32 clusters
+        EXPECT_GT(s["first_reads"]["frame_beyond_first_wave"].get<double>(), 0.0);  // counted, and the same on 1 and 3 threads
         const auto& ci = s["cycles_ci95"];
         ASSERT_TRUE(ci.is_array());
         EXPECT_GE(ci[0].get<double>(), s["cycles_simulated"].get<double>());
@@ -736,7 +737,7 @@ TEST(RtsimSampling, SegmentsMergedEqualTheSingleProcessRun) {
         const Result foreign = rtsim(dir, split + plan + " --seed 9 --segment 0 --stats " + dir.file("f.json"));
         EXPECT_EQ(foreign.status, 2);
         EXPECT_NE(foreign.err.find("a sample plan of another frame or configuration"), std::string::npos) << foreign.err;
-        write_text(dir.file("junk.bin"), "RTUPLAN1\x05");
+        write_text(dir.file("junk.bin"), "RTUPLAN2\x05");
         const Result junk = rtsim(dir, split + " --sample-plan " + dir.file("junk.bin") + " --segment 0 --stats " + dir.file("f.json"));
         EXPECT_EQ(junk.status, 2);
         EXPECT_NE(junk.err.find("cut short"), std::string::npos) << junk.err;

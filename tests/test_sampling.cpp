@@ -112,6 +112,80 @@ TEST(SampleEstimateInterval, DesignBiasJoinsInQuadrature) {
     EXPECT_DOUBLE_EQ(e.relative_half_width(1000), 0.04);
 }
 
+// The first reads' term: the frame's first reads of nodes outside the first wave against the
+// sample's ratio estimate of them (per critical-path node), at their price beyond the fit. A
+// frame of 4 warps of one trace each, critical paths 10, 10, 20, 20 and first reads 3, 0, 2, 0;
+// warp 0 is the first wave (residence 160), warp 1 stratum 0 (weight 1, residence 100), and one
+// of warps 2 and 3 stratum 1 (weight 2). Outside the first wave the frame holds 5 - 3 = 2 first
+// reads and 50 critical-path nodes.
+// - Warp 3 drawn (residence 200): the fit through (10, 100) and (20, 200) is a = 0, b = 10. The
+//   draw holds no first read, so the price is the first wave's: 160 - 100 = 60 beyond the fit
+//   for 3 first reads, 20 each. Estimate 0, work 160 + 100 + 200 + 200 = 660, gap 20 x 2 / 660.
+// - Warp 2 drawn (residence 220): a = -20, b = 12, work 160 + 100 + 220 + 220 = 700. The draw
+//   holds 2 x 2 = 4 first reads over 1 x 10 + 2 x 20 = 50 nodes: 0.08 a node, estimate 4. Work per
+//   node r = (100 + 2 x 220) / 50 = 10.8. Off the lines per stratum: first reads x = -0.8, 0.8,
+//   work y = 100 - 108 = -8, 440 - 432 = 8: the slope 10 is the price. Gap 10 x |2 - 4| / 700.
+// - Warp 2 drawn with residence 180: the slope is -10, and a price below 0 is taken as 0.
+TEST(SampleEstimateInterval, FirstReadsGapHandWorked) {
+    struct Case {
+        uint64_t drawn;
+        double residence, a, b, work, cost, estimate;
+        bool of_first_wave;
+    };
+    for (const Case& c : {Case{3, 200, 0, 10, 660, 20, 0, true}, Case{2, 220, -20, 12, 700, 10, 4, false}, Case{2, 180, 20, 8, 620, 0, 4, false}}) {
+        SampleEstimator est({1, 4, 0, 0}, 4);
+        PrepassResult p;
+        p.trace_nodes = {{10}, {10}, {20}, {20}};
+        p.first_reads_in_rounds = {3, 0, 2, 0};  // every warp resident (the shape's 0): the frame in rounds
+        p.first_reads_by_warp = {9, 9, 9, 9};    // not this frame's order: never read
+        p.critical_nodes_total = 60;
+        est.set_prepass(std::move(p));
+        std::vector<WarpRecord> rec(3);
+        const uint64_t warp[3] = {0, 1, c.drawn};
+        const uint32_t stratum[3] = {SampledCluster::kCertain, 0, 1};
+        const double weight[3] = {1, 1, 2}, residence[3] = {160, 100, c.residence}, first[4] = {3, 0, 2, 0}, nodes[4] = {10, 10, 20, 20};
+        for (int i = 0; i < 3; ++i) {
+            rec[i].frame_warp = warp[i];
+            rec[i].stratum = stratum[i];
+            rec[i].weight = weight[i];
+            rec[i].trace_nodes = {uint32_t(nodes[warp[i]])};
+            rec[i].critical_nodes = nodes[warp[i]];
+            rec[i].first_reads = first[warp[i]];
+            est.on_trace_done(rec[i], residence[i]);
+        }
+        const SampleEstimate e = est.estimate(rec, 4, true);
+        ASSERT_TRUE(e.schedule);
+        EXPECT_NEAR(e.fit_a, c.a, 1e-9);
+        EXPECT_NEAR(e.fit_b, c.b, 1e-9);
+        EXPECT_NEAR(e.work_estimate, c.work, 1e-9);
+        EXPECT_NEAR(e.first_read_cost, c.cost, 1e-9) << c.drawn << " " << c.residence;
+        EXPECT_EQ(e.first_read_cost_of_first_wave, c.of_first_wave);
+        EXPECT_DOUBLE_EQ(e.first_reads_rest, 2.0);
+        EXPECT_NEAR(e.first_reads_estimate, c.estimate, 1e-12);
+        EXPECT_NEAR(e.first_reads_gap(), c.cost * std::fabs(2 - c.estimate) / c.work, 1e-12);
+        // It joins the interval in quadrature, taken as it is.
+        SampleEstimate without = e;
+        without.first_read_cost = 0;
+        EXPECT_NEAR(e.relative_half_width(0) * e.relative_half_width(0),
+                    without.relative_half_width(0) * without.relative_half_width(0) + e.first_reads_gap() * e.first_reads_gap(), 1e-12);
+    }
+    // Without first reads counted (a pre-pass without the image's size): no term.
+    SampleEstimator est({1, 4, 0, 0}, 4);
+    PrepassResult p;
+    p.trace_nodes = {{10}, {10}};
+    p.critical_nodes_total = 20;
+    est.set_prepass(std::move(p));
+    std::vector<WarpRecord> rec(2);
+    for (int i = 0; i < 2; ++i) {
+        rec[i].frame_warp = uint64_t(i);
+        rec[i].stratum = i == 0 ? SampledCluster::kCertain : 0;
+        rec[i].trace_nodes = {10};
+        rec[i].critical_nodes = 10;
+        est.on_trace_done(rec[i], 100 + 10 * i);
+    }
+    EXPECT_DOUBLE_EQ(est.estimate(rec, 2, true).first_reads_gap(), 0.0);
+}
+
 // Conservation: with one RT unit, one slot and no shading the slot never idles, so the frame
 // takes exactly the sum of all durations, in any order of warps.
 TEST(ScheduleModel, OneBusySlotTakesTheSumOfAllWork) {
@@ -276,11 +350,14 @@ TEST(SampleDesign, FirstWaveIsTheFirstClusterWithWork) {
 // A sample plan (--sample-plan) reads back what was written, an empty warp included (a warp whose
 // rays all miss the root box has no traces; reading it once passed a null pointer to memcpy:
 // found by fuzz_segment); a missing file is no plan; another identity, a file cut short, bytes
-// after the last warp and a count beyond the file are bad input.
+// after the last warp and a count beyond the file are bad input. A plan of version 1 (no first
+// reads) is refused with a message to remove it.
 TEST(SamplePlan, RoundTripsAndRefusesBadFiles) {
     rtu::test::TempDir dir;
     rtu::PrepassResult p;
     p.trace_nodes = {{3, 5, 0}, {}, {7}};
+    p.first_reads_in_rounds = {4, 0, 1};
+    p.first_reads_by_warp = {5, 0, 0};
     p.threads = 2;
     const std::string file = dir.file("plan.bin"), id = "scene=cornell\nframe=64x64\n";
     EXPECT_FALSE(rtu::read_plan(file, id).has_value());
@@ -290,6 +367,8 @@ TEST(SamplePlan, RoundTripsAndRefusesBadFiles) {
     EXPECT_EQ(back->trace_nodes, p.trace_nodes);
     EXPECT_EQ(back->threads, 2u);
     EXPECT_EQ(back->critical_nodes_total, 15.0);
+    EXPECT_EQ(back->first_reads_in_rounds, p.first_reads_in_rounds);
+    EXPECT_EQ(back->first_reads_by_warp, p.first_reads_by_warp);
     EXPECT_THROW(rtu::read_plan(file, "scene=wknd\n"), rtu::InputError);
     std::string bytes;
     {
@@ -305,10 +384,103 @@ TEST(SamplePlan, RoundTripsAndRefusesBadFiles) {
     };
     for (size_t cut : {size_t(0), size_t(5), size_t(12), bytes.size() - 1}) refused(bytes.substr(0, cut));
     refused(bytes + "x");
+    std::string v1 = bytes;
+    v1[7] = '1';
+    try {
+        refused(v1);
+        (void)rtu::read_plan(dir.file("bad.bin"), id);
+    } catch (const rtu::InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("older rtsim"), std::string::npos) << e.what();
+    }
+    std::string few = bytes;  // first reads (warp by warp) of 1 warp for 3
+    few[bytes.size() - 3 * 4 - 8] = char(1);
+    refused(few);
     std::string huge = bytes;
     huge[8 + 8 + id.size()] = char(0xff);  // the warp count's low byte: far more warps than bytes
     huge[8 + 8 + id.size() + 5] = char(0x7f);
     refused(huge);
+}
+
+// The pre-pass's first reads, against a count made here: every node the frame reads is first
+// read once, by the earliest warp that reads it. Primary rays (one trace per warp) of cornell at
+// 64x48, 1 spp (96 shader warps of 32 pixels): tracing the warps in frame order and counting the
+// nodes not read before gives each warp's first reads; the pre-pass must give the same on 1 and
+// on 3 threads, in rounds and warp by warp (one trace a warp: the same order). Path tracing: the
+// nodes first read are the same in either order, so the totals agree, while the warps that read
+// them first differ (in rounds a bounce of warp 0 comes after the camera rays of every warp).
+struct PathWarps : FrameWarps {
+    std::vector<std::vector<WorkRay>> w;  // per shader warp, its threads' first rays in path order
+    explicit PathWarps(Workload& workload) {
+        std::vector<WorkRay> first;
+        workload.begin(first);
+        std::stable_sort(first.begin(), first.end(), [](const WorkRay& a, const WorkRay& b) { return a.path < b.path; });
+        for (size_t i = 0; i < first.size(); ++i) {
+            if (i % 32 == 0) w.emplace_back();
+            w.back().push_back(first[i]);
+        }
+    }
+    size_t warps() const override { return w.size(); }
+    uint32_t sm(size_t warp) const override { return uint32_t(warp % 2); }
+    void threads(size_t warp, std::vector<uint32_t>& paths, std::vector<RayQueue>& first) const override {
+        paths.resize(w[warp].size());
+        first.assign(std::max(first.size(), w[warp].size()), RayQueue{});
+        for (size_t i = 0; i < w[warp].size(); ++i) {
+            paths[i] = w[warp][i].path;
+            first[i] = RayQueue{};
+            first[i].push_back(w[warp][i]);
+        }
+    }
+};
+
+TEST(SamplePrepass, FirstReadsCountEachNodeOnceAtItsFirstReader) {
+    const Scene scene = load_scene("cornell", "");
+    const BvhImage img = build_bvh_image(scene);
+    WorkloadParams p;
+    p.width = 64;
+    p.height = 48;
+    p.spp = 1;
+    auto prepass = [&](WorkloadKind kind, unsigned threads) {
+        SamplingOptions s;
+        s.threads = threads;
+        s.node_blocks = (img.size() + kBlockBytes - 1) / kBlockBytes;
+        s.make_workload = [&] { return make_scene_workload(kind, scene, p); };
+        s.trace = [&](const Ray& r, std::vector<StackEntry>* fetched) { return trace_ray(img, r, TraversalOrder::DFS, nullptr, fetched); };
+        const std::unique_ptr<Workload> workload = s.make_workload();
+        const PathWarps frame(*workload);
+        PrepassWorkloads workloads(s);
+        return run_prepass(frame, s, workloads);
+    };
+    // The count made here, primary rays in frame order.
+    const std::unique_ptr<Workload> workload = make_scene_workload(WorkloadKind::Primary, scene, p);
+    const PathWarps frame(*workload);
+    ASSERT_EQ(frame.warps(), 96u);
+    std::vector<bool> read((img.size() + kBlockBytes - 1) / kBlockBytes, false);
+    std::vector<uint32_t> expected;
+    std::vector<StackEntry> fetched;
+    for (const auto& warp : frame.w) {
+        expected.push_back(0);
+        for (const WorkRay& r : warp) {
+            fetched.clear();
+            if (is_valid_ray(r.ray)) trace_ray(img, r.ray, TraversalOrder::DFS, nullptr, &fetched);
+            for (const StackEntry& e : fetched)
+                if (!read[e.addr / kBlockBytes]) read[e.addr / kBlockBytes] = true, ++expected.back();
+        }
+    }
+    const double nodes_read = double(std::count(read.begin(), read.end(), true));
+    EXPECT_GT(nodes_read, 10);
+    for (const unsigned threads : {1u, 3u}) {
+        const PrepassResult r = prepass(WorkloadKind::Primary, threads);
+        EXPECT_EQ(r.first_reads_by_warp, expected) << threads << " threads";
+        EXPECT_EQ(r.first_reads_in_rounds, expected) << threads << " threads";
+    }
+    const PrepassResult pt = prepass(WorkloadKind::PathTrace, 1), pt3 = prepass(WorkloadKind::PathTrace, 3);
+    EXPECT_EQ(pt3.first_reads_in_rounds, pt.first_reads_in_rounds);
+    EXPECT_EQ(pt3.first_reads_by_warp, pt.first_reads_by_warp);
+    EXPECT_EQ(first_reads_total(pt.first_reads_by_warp), first_reads_total(pt.first_reads_in_rounds));
+    EXPECT_GE(first_reads_total(pt.first_reads_by_warp), nodes_read);  // the bounces read the camera rays' nodes and more
+    EXPECT_NE(pt.first_reads_by_warp, pt.first_reads_in_rounds);
+    EXPECT_EQ(&pt.first_reads(true), &pt.first_reads_in_rounds);
+    EXPECT_EQ(&pt.first_reads(false), &pt.first_reads_by_warp);
 }
 
 // The hand-driven warming tests' frame: cornell at 64x48 and 1 spp (3072 paths: 96 shader warps,

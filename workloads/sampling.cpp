@@ -181,14 +181,30 @@ PrepassResult run_prepass(const FrameWarps& frame, const SamplingOptions& opt, P
     PrepassResult result;
     result.threads = threads;
     result.trace_nodes.resize(n_warps);
+    // First reads: per thread and per 64-byte block of the image, the earliest read of the node
+    // there, in each of the two orders the GPU may run the frame's traces: in rounds (key: trace,
+    // then warp) and warp by warp (key: the warp). The threads' tables are merged by their
+    // minimum, so the counts do not depend on the number of threads.
+    const bool count_first = opt.node_blocks > 0 && n_warps < (uint64_t(1) << 32);
+    constexpr uint64_t kUnread = ~uint64_t(0);
+    std::vector<std::vector<uint64_t>> in_rounds(count_first ? threads : 0), by_warp(count_first ? threads : 0);
     std::atomic<size_t> done{0};
     on_threads(threads, workloads, [&](unsigned t, Workload& workload) {
         WarpTracer tracer{frame, opt, {}, {}, {}, {}};
+        std::vector<WarmFetch> fetches;
+        if (count_first) in_rounds[t].assign(opt.node_blocks, kUnread), by_warp[t].assign(opt.node_blocks, kUnread);
         auto last = t0;
         bool printed = false;
         for (size_t wi = n_warps * t / threads, hi = n_warps * (t + 1) / threads; wi < hi; ++wi) {
             if (opt.stop.requested()) throw Interrupted{opt.stop.signal()};
-            tracer.trace(workload, wi, result.trace_nodes[wi], nullptr);
+            fetches.clear();
+            tracer.trace(workload, wi, result.trace_nodes[wi], count_first ? &fetches : nullptr);
+            for (const WarmFetch& f : fetches) {
+                const uint64_t b = f.addr / kBlockBytes;
+                if (b >= opt.node_blocks) continue;
+                in_rounds[t][b] = std::min(in_rounds[t][b], (uint64_t(f.trace) << 32) | wi);
+                by_warp[t][b] = std::min<uint64_t>(by_warp[t][b], wi);
+            }
             const size_t d = ++done;
             if (opt.progress && t == 0 && (d & 63) == 0) {
                 const auto now = std::chrono::steady_clock::now();
@@ -204,7 +220,23 @@ PrepassResult run_prepass(const FrameWarps& frame, const SamplingOptions& opt, P
         if (printed) std::cerr << "\n";
     });
     result.critical_nodes_total = critical_nodes_total(result.trace_nodes);
+    if (count_first) {
+        result.first_reads_in_rounds.assign(n_warps, 0);
+        result.first_reads_by_warp.assign(n_warps, 0);
+        for (uint64_t b = 0; b < opt.node_blocks; ++b) {
+            uint64_t r = kUnread, w = kUnread;
+            for (unsigned t = 0; t < threads; ++t) r = std::min(r, in_rounds[t][b]), w = std::min(w, by_warp[t][b]);
+            if (r != kUnread) ++result.first_reads_in_rounds[r & 0xffffffffu];
+            if (w != kUnread) ++result.first_reads_by_warp[w];
+        }
+    }
     return result;
+}
+
+double first_reads_total(const std::vector<uint32_t>& first_reads) {
+    double total = 0;
+    for (uint32_t n : first_reads) total += n;
+    return total;
 }
 
 double critical_nodes_total(const std::vector<std::vector<uint32_t>>& trace_nodes) {
@@ -249,6 +281,7 @@ std::vector<std::vector<WarmFetch>> warming_fetches(const FrameWarps& frame, con
 void SampleEstimator::set_prepass(PrepassResult&& p) {
     frame_traces_ = std::move(p.trace_nodes);
     critical_nodes_total_ = p.critical_nodes_total;
+    first_reads_total_ = first_reads_total(p.first_reads(shape_.resident == 0));
     prepass_threads_ = p.threads;
 }
 
@@ -281,17 +314,21 @@ SampleEstimate SampleEstimator::estimate(const std::vector<WarpRecord>& warps, u
     e.prepass_threads = prepass_threads_;
     // Per drawn stratum (one cluster each, weighted by the stratum's size): work, critical-path
     // nodes and the weight. The first wave is known exactly, the empty clusters do no RT work.
-    std::vector<double> work, nodes, weight;
-    double certain_work = 0, certain_nodes = 0, drawn_work = 0, drawn_nodes = 0;
+    std::vector<double> work, nodes, weight, firsts;
+    double certain_work = 0, certain_nodes = 0, drawn_work = 0, drawn_nodes = 0, certain_first = 0, drawn_first = 0;
     for (const WarpRecord& w : warps) {
         e.work_simulated += w.work;
         if (w.stratum == SampledCluster::kCertain) {
             certain_work += w.work;
             certain_nodes += w.critical_nodes;
+            certain_first += w.first_reads;
             continue;
         }
-        if (work.size() <= w.stratum) work.resize(w.stratum + 1, 0.0), nodes.resize(w.stratum + 1, 0.0), weight.resize(w.stratum + 1, 0.0);
+        drawn_first += w.weight * w.first_reads;
+        if (work.size() <= w.stratum)
+            work.resize(w.stratum + 1, 0.0), nodes.resize(w.stratum + 1, 0.0), weight.resize(w.stratum + 1, 0.0), firsts.resize(w.stratum + 1, 0.0);
         work[w.stratum] += w.weight * w.work;
+        firsts[w.stratum] += w.weight * w.first_reads;
         nodes[w.stratum] += w.weight * w.critical_nodes;
         weight[w.stratum] = w.weight;
         drawn_work += w.weight * w.work;
@@ -342,6 +379,38 @@ SampleEstimate SampleEstimator::estimate(const std::vector<WarpRecord>& warps, u
         }
         for (const WarpRecord& w : warps) sample.push_back(durations(w.frame_warp));
         e.model_frame = schedule_cycles(frame, shape_);
+        // First reads (SampleEstimate::first_reads_gap). The work estimate takes the frame's
+        // first reads as the drawn clusters hold them per critical-path node; the pre-pass knows
+        // how many there are. Their price beyond what the fit gives their critical paths: the
+        // drawn strata's slope of work off the ratio line on first reads off theirs, where the
+        // drawn clusters hold first reads (never below 0: party's and sprng's come out negative,
+        // as noise); where they hold none (a small BVH whose first reads a few clusters hold:
+        // cornell's primary rays), the first wave's traces, the only simulated ones that hold
+        // any, beyond the fit per first read. That price also takes the first wave's other cold
+        // misses (each SM's L1), so it errs high rather than low: on the large scenes, whose
+        // draws always hold first reads, it is 10 to 400 times the drawn clusters' slope
+        // (measured on the primary-ray grid, docs/sampling.md "First reads").
+        if (first_reads_total_ > 0 && sampled && drawn_nodes > 0) {
+            e.first_reads_rest = std::max(0.0, first_reads_total_ - certain_first);
+            const double rf = drawn_first / drawn_nodes;  // first reads per critical-path node, drawn
+            e.first_reads_estimate = rf * rest_nodes;
+            double sxy = 0, sxx = 0;
+            for (size_t h = 0; h < work.size(); ++h) {
+                const double x = firsts[h] - rf * nodes[h], y = work[h] - r * nodes[h];
+                sxy += x * y, sxx += x * x;
+            }
+            if (sxx > 0) {
+                e.first_read_cost = std::max(0.0, sxy / sxx);
+            } else {
+                double excess = 0;
+                for (const WarpRecord& w : warps)
+                    if (w.stratum == SampledCluster::kCertain)
+                        for (size_t k = 0; k < std::min(w.residences.size(), w.trace_nodes.size()); ++k)
+                            excess += w.residences[k] - duration(w.trace_nodes[k]);
+                e.first_read_cost = certain_first > 0 ? std::max(0.0, excess) / certain_first : 0.0;
+                e.first_read_cost_of_first_wave = true;
+            }
+        }
         // The sample's model: with segments, each ran alone from its own start, so its ramp and
         // tail are in the simulated cycles (their sum) and in the model of the sample too. Per SM,
         // the cycle its last trace left, simulated and modelled, summed over the segments in the
@@ -406,8 +475,8 @@ SampleEstimate SampleEstimator::estimate(const std::vector<WarpRecord>& warps, u
 double SampleEstimate::relative_half_width(double cycles_simulated) const {
     const double t = t95(variance_pairs);
     const double model = 1.96 * std::sqrt(2.0) * model_error(cycles_simulated);
-    const double gap = 1.96 * extrapolation_gap();
-    return std::sqrt(t * relative_se * t * relative_se + model * model + gap * gap + design_bias * design_bias);
+    const double gap = 1.96 * extrapolation_gap(), first = first_reads_gap();
+    return std::sqrt(t * relative_se * t * relative_se + model * model + gap * gap + first * first + design_bias * design_bias);
 }
 
 }  // namespace rtu

@@ -51,6 +51,9 @@ struct SamplingOptions {
     // Functional warming: before each simulated cluster, the last `warm_window` node fetches of
     // the clusters skipped before it are replayed into the caches (WorkloadDriver::on_warm).
     size_t warm_window = 0;
+    // The BVH image's 64-byte blocks (every node starts on one): the pre-pass counts each warp's
+    // first reads of a node over the frame in tables of this size (0: none counted).
+    uint64_t node_blocks = 0;
     bool progress = false;  // report the pre-pass's progress on stderr every 2 s
     StopRequest stop;       // requested: the pre-pass throws Interrupted between warps
     // Segments (docs/sampling.md, "Segments"): > 1 splits the simulated clusters, in frame order,
@@ -176,9 +179,19 @@ private:
 struct PrepassResult {
     std::vector<std::vector<uint32_t>> trace_nodes;  // per warp of the frame: per trace, its critical path
     double critical_nodes_total = 0;                 // their sum over the frame
+    // Per warp of the frame: the BVH nodes it reads before any other warp of the frame does (the
+    // frame's compulsory misses of the L2, each counted at the warp that pays it), in either
+    // order the GPU may run the traces: in rounds, where every warp is resident at once
+    // (workload.resident_warps 0: an SM takes the first traces of all its warps before any
+    // second one, docs/sampling.md "Warming the first traces apart"), and warp by warp. Both
+    // are kept, so that a sample plan serves either. Empty: not counted (no node_blocks).
+    std::vector<uint32_t> first_reads_in_rounds, first_reads_by_warp;
+    const std::vector<uint32_t>& first_reads(bool rounds) const { return rounds ? first_reads_in_rounds : first_reads_by_warp; }
     unsigned threads = 0;
 };
 PrepassResult run_prepass(const FrameWarps& frame, const SamplingOptions& opt, PrepassWorkloads& workloads);
+// The sum of first reads over the frame's warps.
+double first_reads_total(const std::vector<uint32_t>& first_reads);
 // The sum of every trace's critical path, in frame order (the one order, so that a pre-pass read
 // back from a sample plan sums to the same double as the one that ran).
 double critical_nodes_total(const std::vector<std::vector<uint32_t>>& trace_nodes);
@@ -198,6 +211,7 @@ struct WarpRecord {
     double nodes = 0, l1_miss_nodes = 0, dram_nodes = 0;  // over its retired rays
     std::vector<uint32_t> trace_nodes;  // pre-pass: per trace, the most nodes one of its rays visits
     double critical_nodes = 0;          // their sum
+    double first_reads = 0;             // pre-pass: the nodes the frame reads first in this warp
     std::vector<double> residences;     // per trace simulated so far, its residence
     uint32_t traces_done = 0;
     uint32_t sm = 0;        // the SM its simulated traces ran on
@@ -280,12 +294,27 @@ struct SampleEstimate {
     // measured in the run; the platform sets it from the grids (platforms/configs/
     // sampling_bias.json, docs/sampling.md "The sample design's bias"); 0 until set.
     double design_bias = 0;
+    // The first reads of BVH nodes (pre-pass): a first read is a compulsory miss of the L2 that
+    // the draw either took or left. The frame's first reads outside the first wave, and the
+    // sample's ratio estimate of them (per critical-path node, as the work is estimated); their
+    // price in slot-cycles beyond the fit, from the drawn clusters, or from the first wave where
+    // the drawn clusters hold none (first_read_cost_of_first_wave). Where the draw holds more or
+    // fewer than its share (a small BVH first read by a few clusters: cornell's primary rays),
+    // the work is off by about their difference at that price, and no other term sees it: the
+    // sampling variance comes from the drawn strata, and where none of them holds a first read it
+    // holds nothing of them (docs/sampling.md, "First reads").
+    double first_reads_rest = 0, first_reads_estimate = 0, first_read_cost = 0;
+    bool first_read_cost_of_first_wave = false;
+    double first_reads_gap() const {
+        return work_estimate > 0 ? first_read_cost * std::fabs(first_reads_rest - first_reads_estimate) / work_estimate : 0.0;
+    }
     // Half-width of the 95 % interval of cycles_estimate, relative to it (docs/sampling.md),
-    // four parts in quadrature: the work's sampling error with Student's t for the collapsed
+    // five parts in quadrature: the work's sampling error with Student's t for the collapsed
     // pairs; with the schedule estimator the model's error, taken to be as large on the frame as
-    // on the sample and independent of it (1.96 x sqrt(2) x model_error), and the extrapolation
-    // gap (1.96 x it); and the design's bias bound (already a 95 % figure: the largest bias the
-    // grids measured, so taken as it is).
+    // on the sample and independent of it (1.96 x sqrt(2) x model_error), the extrapolation
+    // gap (1.96 x it) and the first reads' gap (a bias estimate, taken as it is); and the
+    // design's bias bound (already a 95 % figure: the largest bias the grids measured, so taken
+    // as it is).
     double relative_half_width(double cycles_simulated) const;
 };
 
@@ -312,6 +341,7 @@ private:
     uint64_t capacity_;
     std::vector<std::vector<uint32_t>> frame_traces_;  // pre-pass: every warp of the frame, in frame order
     double critical_nodes_total_ = 0;
+    double first_reads_total_ = 0;  // pre-pass: the frame's first reads of nodes (0: not counted)
     unsigned prepass_threads_ = 0;
     // Least-squares sums of residence = a + b x critical path, over the drawn clusters' traces.
     struct FitSums {

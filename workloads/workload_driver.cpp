@@ -187,6 +187,8 @@ WorkloadDriver::WorkloadDriver(Workload& workload, uint32_t sms, uint32_t warp_s
                 if (traced) {
                     rec.trace_nodes = prepass.trace_nodes[w];  // the estimator keeps the frame's
                     for (uint32_t n : rec.trace_nodes) rec.critical_nodes += n;
+                    const std::vector<uint32_t>& first = prepass.first_reads(resident_warps == 0);  // the order the frame runs in
+                    if (w < first.size()) rec.first_reads = first[w];
                 }
                 if (design.segments() > 1) {
                     segment_ends_[design.segment_of(i)] = ++drawn;
