@@ -387,9 +387,9 @@ SampleEstimate SampleEstimator::estimate(const std::vector<WarpRecord>& warps, u
         // as noise); where they hold none (a small BVH whose first reads a few clusters hold:
         // cornell's primary rays), the first wave's traces, the only simulated ones that hold
         // any, beyond the fit per first read. That price also takes the first wave's other cold
-        // misses (each SM's L1), so it errs high rather than low: on the large scenes, whose
-        // draws always hold first reads, it is 10 to 400 times the drawn clusters' slope
-        // (measured on the primary-ray grid, docs/sampling.md "First reads").
+        // misses (each SM's L1), so it errs high rather than low, far high on large scenes, whose
+        // draws always hold first reads: sprng, the bunny and the bunny mesh 2,300-6,200
+        // slot-cycles a first read against drawn slopes of 0-120 (docs/sampling.md "First reads").
         if (first_reads_total_ > 0 && sampled && drawn_nodes > 0) {
             e.first_reads_rest = std::max(0.0, first_reads_total_ - certain_first);
             const double rf = drawn_first / drawn_nodes;  // first reads per critical-path node, drawn
