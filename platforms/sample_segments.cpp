@@ -108,14 +108,13 @@ void write_plan(const std::string& file, const std::string& identity, const Prep
     out += identity;
     put(out, p.trace_nodes.size(), 8);
     put(out, p.threads, 4);
-    for (const std::vector<uint32_t>& w : p.trace_nodes) {
-        put(out, w.size(), 4);
-        out.append(reinterpret_cast<const char*>(w.data()), w.size() * sizeof(uint32_t));
-    }
-    for (const std::vector<uint32_t>* f : {&p.first_reads_in_rounds, &p.first_reads_by_warp}) {
-        put(out, f->size(), 8);  // 0 or one per warp
-        out.append(reinterpret_cast<const char*>(f->data()), f->size() * sizeof(uint32_t));
-    }
+    // Each list of uint32 after its length, in `bytes` bytes.
+    auto put_words = [&](const std::vector<uint32_t>& v, size_t bytes) {
+        put(out, v.size(), bytes);
+        out.append(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(uint32_t));
+    };
+    for (const std::vector<uint32_t>& w : p.trace_nodes) put_words(w, 4);
+    for (const std::vector<uint32_t>* f : {&p.first_reads_in_rounds, &p.first_reads_by_warp}) put_words(*f, 8);  // 0 or one per warp
     write_file_atomic(file, out);  // several segment tasks may write the same plan at once: whole files only
 }
 
@@ -153,22 +152,19 @@ std::optional<PrepassResult> read_plan(const std::string& file, const std::strin
     const uint64_t warps = get(8, "header");
     p.threads = unsigned(get(4, "header"));
     if (warps > (data.size() - at) / 4) throw InputError(file + ": a sample plan of " + std::to_string(warps) + " warps in " + std::to_string(data.size()) + " bytes");
-    p.trace_nodes.resize(warps);
-    for (std::vector<uint32_t>& w : p.trace_nodes) {
-        const uint64_t n = get(4, "warps");
-        need(n * sizeof(uint32_t), "warps");
-        w.resize(n);
-        if (n) std::memcpy(w.data(), data.data() + at, n * sizeof(uint32_t));  // an empty vector's data() may be null
+    auto get_words = [&](std::vector<uint32_t>& v, uint64_t n, const char* what) {  // n uint32 into v
+        need(n * sizeof(uint32_t), what);
+        v.resize(n);
+        if (n) std::memcpy(v.data(), data.data() + at, n * sizeof(uint32_t));  // an empty vector's data() may be null
         at += n * sizeof(uint32_t);
-    }
+    };
+    p.trace_nodes.resize(warps);
+    for (std::vector<uint32_t>& w : p.trace_nodes) get_words(w, get(4, "warps"), "warps");
     for (std::vector<uint32_t>* f : {&p.first_reads_in_rounds, &p.first_reads_by_warp}) {
         const uint64_t firsts = get(8, "first reads");
         if (firsts != 0 && firsts != warps)
             throw InputError(file + ": a sample plan with first reads of " + std::to_string(firsts) + " warps for its " + std::to_string(warps));
-        need(firsts * sizeof(uint32_t), "first reads");
-        f->resize(firsts);
-        if (firsts) std::memcpy(f->data(), data.data() + at, firsts * sizeof(uint32_t));
-        at += firsts * sizeof(uint32_t);
+        get_words(*f, firsts, "first reads");
     }
     if (at != data.size()) throw InputError(file + ": " + std::to_string(data.size() - at) + " bytes after the sample plan's first reads");
     p.critical_nodes_total = critical_nodes_total(p.trace_nodes);
