@@ -3,6 +3,7 @@
 // --sample-plan) when it is odd; the rest of the input is the file.
 #include "fuzz_util.h"
 #include "platforms/sample_segments.h"
+#include "sampling/plan.h"
 #include "workloads/input_error.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {

@@ -72,6 +72,7 @@ struct GpuPlatform::Impl {
     const BvhImage& image;
     TimingOptions opt;
     std::unique_ptr<Treelets> treelets;  // before the driver: its pre-pass traverses with them
+    std::unique_ptr<FrameSample> sample;  // before the driver, which takes it as its warp selection
     WorkloadDriver driver;
     RtComplex gpu;
     const ClockDomain &core, &mem;
@@ -100,7 +101,8 @@ struct GpuPlatform::Impl {
         : cfg(c), image(img), opt(o),
           // Treelet traversal (and with it the Treelet prefetcher, which needs it) works on treelets.
           treelets(traversal_treelets(c, img, o.order)),
-          driver(w, c.sms, c.warp_size, c.shade_latency, c.resident_warps, sampling_options(c, img, o, treelets.get())),
+          sample(frame_sample(c, img, o, treelets.get())),
+          driver(w, c.sms, c.warp_size, c.shade_latency, c.resident_warps, sample.get()),
           gpu("gpu", c, img, o.order, driver, o.fidelity, treelets.get(), o.check_protocol),
           core(gpu.core_clock()),
           mem(gpu.memory_clock()) {}
@@ -115,11 +117,12 @@ GpuPlatform::GpuPlatform(const HwConfig& cfg, const BvhImage& image, Workload& w
     m.driver.keep_rays(opt.keep_rays);
     // Sampled run: when an SM starts a simulated cluster, its caches are warmed with its node
     // fetches of the clusters skipped before it (its L1, then L2 on an L1 miss).
-    m.driver.on_warm = [impl = impl_.get(), sector = cfg.l1.sector](const std::vector<WarmFetch>& fetches) {
-        for (const WarmFetch& f : fetches)
-            for (uint32_t o = 0; o < f.bytes; o += sector)
-                impl->gpu.warm(f.sm, (impl->treelets ? impl->treelets->placed(f.addr) : f.addr) + o);
-    };
+    if (m.sample)
+        m.sample->on_warm = [impl = impl_.get(), sector = cfg.l1.sector](const std::vector<WarmFetch>& fetches) {
+            for (const WarmFetch& f : fetches)
+                for (uint32_t o = 0; o < f.bytes; o += sector)
+                    impl->gpu.warm(f.sm, (impl->treelets ? impl->treelets->placed(f.addr) : f.addr) + o);
+        };
 
     if (!opt.vcd.empty()) {
         m.tf = sc_create_vcd_trace_file(opt.vcd.c_str());
@@ -254,8 +257,7 @@ TimingResult GpuPlatform::run() {
     r.cycles_simulated = r.cycles = m.driver.last_progress();
     r.interrupted = m.monitor->interrupted;
     if (r.interrupted) r.cycles_simulated = r.cycles = std::max(r.cycles, m.monitor->stopped_at);
-    const WorkloadDriver::Estimate est = m.driver.estimate();
-    if (m.driver.sampled() && !r.interrupted) r.cycles = uint64_t(std::llround(est.cycles_estimate(double(r.cycles_simulated))));
+    take_estimate(r, m.sample.get(), m.driver);
     r.stuck = m.monitor->stuck;
     r.stuck_report = m.monitor->report;
     if (!r.stuck && !r.interrupted && !m.driver.finished()) {
@@ -275,9 +277,6 @@ TimingResult GpuPlatform::run() {
     for (const auto& c : m.gpu.l1()) r.counts.l1.push_back(c->tags().counts());
     for (const auto& c : m.gpu.l2()) r.counts.l2.push_back(c->tags().counts());
     r.counts.dram = m.gpu.dram().stats();
-    r.sampled = m.driver.sampled();
-    r.estimate = est;
-    if (m.driver.segment_run()) r.segment_records = m.driver.warp_records();
     r.payloads_allocated = m.gpu.pool().allocated();
     for (const auto& c : m.gpu.checkers()) {
         r.protocol_transactions += c->transactions();

@@ -9,14 +9,16 @@ namespace rtu {
 
 TimingResult run_interval(const HwConfig& cfg, const BvhImage& image, Workload& workload, const TimingOptions& opt) {
     IntervalGpu gpu(cfg, image, opt.order);
-    WorkloadDriver driver(workload, cfg.sms, cfg.warp_size, cfg.shade_latency, cfg.resident_warps, sampling_options(cfg, image, opt, nullptr));
-    driver.keep_rays(opt.keep_rays);
+    const std::unique_ptr<FrameSample> sample = frame_sample(cfg, image, opt, nullptr);
     // Sampled run: when an SM starts a simulated cluster, its caches are warmed with its node
     // fetches of the clusters skipped before it (its L1, then L2 on an L1 miss).
-    driver.on_warm = [&gpu, sector = cfg.l1.sector](const std::vector<WarmFetch>& fetches) {
-        for (const WarmFetch& f : fetches)
-            for (uint32_t o = 0; o < f.bytes; o += sector) gpu.warm(f.sm, f.addr + o);
-    };
+    if (sample)
+        sample->on_warm = [&gpu, sector = cfg.l1.sector](const std::vector<WarmFetch>& fetches) {
+            for (const WarmFetch& f : fetches)
+                for (uint32_t o = 0; o < f.bytes; o += sector) gpu.warm(f.sm, f.addr + o);
+        };
+    WorkloadDriver driver(workload, cfg.sms, cfg.warp_size, cfg.shade_latency, cfg.resident_warps, sample.get());
+    driver.keep_rays(opt.keep_rays);
 
     // Warp-buffer slots by the cycle they are free (then by SM: deterministic order). A slot whose
     // SM has no trace ready and none coming yet idles until one of the SM's traces retires.
@@ -67,8 +69,8 @@ TimingResult run_interval(const HwConfig& cfg, const BvhImage& image, Workload& 
 
     TimingResult r;
     r.cycles = r.cycles_simulated = end;  // the frame ends when its last ray retires
-    const WorkloadDriver::Estimate est = driver.estimate();
-    if (driver.sampled() && !interrupted) r.cycles = uint64_t(std::llround(est.cycles_estimate(double(end))));
+    r.interrupted = interrupted;
+    take_estimate(r, sample.get(), driver);
     r.rays = driver.results();
     r.summary = driver.summary();
     r.counts.rt = gpu.rt_stats();
@@ -78,10 +80,6 @@ TimingResult run_interval(const HwConfig& cfg, const BvhImage& image, Workload& 
     r.counts.cycles_simulated = end;
     r.counts.core_period_fs = double(gpu.core_period_fs());
     r.counts.memory_cycles = double(gpu.memory_cycle(end));
-    r.sampled = driver.sampled();
-    r.estimate = est;
-    if (driver.segment_run()) r.segment_records = driver.warp_records();
-    r.interrupted = interrupted;
     if (interrupted) return r;  // rays are in flight: the invariants of a whole frame do not hold
     if (!driver.finished() || driver.rays_retired() != driver.rays_issued()) r.invariant_failures.push_back("not every ray retired");
     for (const std::string& f : counter_invariants(r.counts, r.summary)) r.invariant_failures.push_back(f);

@@ -31,6 +31,7 @@
 
 #include "output.h"
 #include "model/prefetcher.h"
+#include "sampling/plan.h"
 #include "simulation.h"
 #include "workloads/input_error.h"
 #include "workloads/verify.h"

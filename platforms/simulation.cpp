@@ -22,6 +22,8 @@
 #include "workloads/embree_reference.h"
 #include "workloads/input_error.h"
 #include "workloads/scenes.h"
+#include "sampling/bias.h"
+#include "sampling/plan.h"
 
 namespace rtu {
 namespace {

@@ -1,7 +1,10 @@
 #include "timing_run.h"
 
+#include <cmath>
+
 #include "model/treelet.h"
-#include "sample_segments.h"
+#include "output.h"
+#include "sampling/plan.h"
 
 namespace rtu {
 
@@ -18,7 +21,8 @@ SamplingOptions sampling_options(const HwConfig& c, const BvhImage& img, const T
     s.segment = o.sample_segment;
     if (!o.sample_plan.empty()) {
         s.load_prepass = [file = o.sample_plan, id = o.plan_identity] { return read_plan(file, id); };
-        s.save_prepass = [file = o.sample_plan, id = o.plan_identity](const PrepassResult& p) { write_plan(file, id, p); };
+        // Several segment tasks may write the same plan at once: whole files only.
+        s.save_prepass = [file = o.sample_plan, id = o.plan_identity](const PrepassResult& p) { write_file_atomic(file, plan_bytes(id, p)); };
     }
     s.progress = o.progress;
     s.stop = o.stop;
@@ -30,6 +34,23 @@ SamplingOptions sampling_options(const HwConfig& c, const BvhImage& img, const T
         return trace_ray(img, r, order, treelets, fetched, next_node_register);
     };
     return s;
+}
+
+std::unique_ptr<FrameSample> frame_sample(const HwConfig& c, const BvhImage& img, const TimingOptions& o, const Treelets* treelets) {
+    if (o.sample_rate >= 1.0) return nullptr;
+    return std::make_unique<FrameSample>(sampling_options(c, img, o, treelets), c.sms, c.shade_latency, c.resident_warps);
+}
+
+void take_estimate(TimingResult& r, const FrameSample* sample, const WorkloadDriver& driver) {
+    if (!sample || !sample->sampled()) {
+        r.estimate = SampleEstimate{};
+        r.estimate.warps_total = r.estimate.warps_simulated = driver.warps_total();
+        return;
+    }
+    r.sampled = true;
+    r.estimate = sample->estimate();
+    if (!r.interrupted) r.cycles = uint64_t(std::llround(r.estimate.cycles_estimate(double(r.cycles_simulated))));
+    if (sample->segment_run()) r.segment_records = sample->warp_records();
 }
 
 std::unique_ptr<Treelets> traversal_treelets(const HwConfig& c, const BvhImage& img, TraversalOrder order) {

@@ -14,7 +14,7 @@
 #include "model/stop_request.h"
 #include "model/traversal.h"
 #include "timing_stats.h"
-#include "workloads/sampling.h"
+#include "sampling/frame_sample.h"
 #include "workloads/workload_driver.h"
 
 namespace rtu {
@@ -40,7 +40,7 @@ struct TimingOptions {
     uint32_t sample_segments = 1;
     uint32_t sample_segment = SamplingOptions::kAllSegments;
     // --sample-plan: the pre-pass read from this file if it exists, else run and written to it;
-    // `plan_identity` (sample_segments.h) is what the plan must match.
+    // `plan_identity` (prepass_identity, simulation.h) is what the plan must match.
     std::string sample_plan, plan_identity;
     // Keep every ray with its hit for TimingResult::rays (hits files, verification); without,
     // memory holds only the rays in flight.
@@ -73,10 +73,17 @@ struct TimingResult {
 // Shader warps the GPU keeps in flight at once (SMs x warp-buffer slots): a sampled run's cluster.
 inline uint32_t gpu_warp_capacity(const HwConfig& c) { return c.sms * c.warp_buffer; }
 
-// The workload driver's sampling options for a timing run (docs/sampling.md): clusters of as
-// many warps as the GPU holds, the functional pre-pass on `image`, warming enough to refill
-// every cache twice. `treelets` as for the run's traversal (may be null).
+// A timing run's sample (docs/sampling.md), or null for a run of the whole frame: clusters of as
+// many warps as the GPU holds, the functional pre-pass on `image`, warming enough to refill every
+// cache twice. `treelets` as for the run's traversal (may be null). The run's driver takes it as
+// its warp selection; the run sets its on_warm.
+std::unique_ptr<FrameSample> frame_sample(const HwConfig& cfg, const BvhImage& image, const TimingOptions& opt, const Treelets* treelets);
+// The sampling options frame_sample uses (the merge of a split sample draws with them too).
 SamplingOptions sampling_options(const HwConfig& cfg, const BvhImage& image, const TimingOptions& opt, const Treelets* treelets);
+// Puts the sample's estimate into `r` (r.cycles_simulated and r.interrupted set): a sampled run's
+// frame cycles, estimate and (one segment) records; a run of the whole frame gets an estimate of
+// the frame's warps only.
+void take_estimate(TimingResult& r, const FrameSample* sample, const WorkloadDriver& driver);
 
 // The treelets a traversal order works on (AT, LT: treelet traversal and the Treelet prefetcher);
 // null for the others.

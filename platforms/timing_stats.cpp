@@ -182,7 +182,7 @@ void write_sampling(StatsOut& out, const SampleEstimate& est, double rate, uint6
         f.value("traces", est.fit_traces, "traces", "fitted on");
     }
     {
-        StatsOut m = s.child("schedule_model_cycles", "the schedule model (model/trace_schedule.h) on the fitted durations");
+        StatsOut m = s.child("schedule_model_cycles", "the schedule model (sampling/schedule_model.h) on the fitted durations");
         m.value("frame", est.model_frame, "cycles", "of the whole frame");
         m.value("sample", est.model_sample, "cycles", "of the simulated sample");
     }

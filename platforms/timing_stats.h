@@ -12,7 +12,7 @@
 #include "model/rt_unit_stats.h"
 #include "model/sector_cache.h"
 #include "model/stats.h"
-#include "workloads/sampling.h"
+#include "sampling/estimator.h"
 #include "workloads/workload_driver.h"
 
 namespace rtu {

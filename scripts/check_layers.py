@@ -1,8 +1,10 @@
 #!/usr/bin/env python3
-"""Checks the layering of the source tree (README, Layout): model <- workloads <- tlm <- platforms.
+"""Checks the layering of the source tree (README, Layout): model <- workloads <- sampling <- platforms,
+and model <- tlm <- platforms.
 
 - model/ includes only model/ (and no SystemC); workloads/ includes model/ and workloads/;
-  tlm/ includes model/ and tlm/ (never workloads/); platforms/ may include all;
+  sampling/ includes model/, workloads/ and sampling/ (no SystemC: it is plain C++);
+  tlm/ includes model/ and tlm/ (never workloads/ or sampling/); platforms/ may include all;
 - the files named in PLAIN include no SystemC header (directly or through project headers);
 - the project's include graph has no cycle.
 Prints what breaks a rule and exits 1, else prints a one-line summary. Usage: check_layers.py"""
@@ -11,9 +13,9 @@ import re
 import sys
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
-LAYERS = ["model", "workloads", "tlm", "platforms"]
-ALLOWED = {"model": {"model"}, "workloads": {"model", "workloads"}, "tlm": {"model", "tlm"},
-           "platforms": {"model", "workloads", "tlm", "platforms"}}
+LAYERS = ["model", "workloads", "sampling", "tlm", "platforms"]
+ALLOWED = {"model": {"model"}, "workloads": {"model", "workloads"}, "sampling": {"model", "workloads", "sampling"},
+           "tlm": {"model", "tlm"}, "platforms": {"model", "workloads", "sampling", "tlm", "platforms"}}
 PLAIN = ["platforms/interval_run.h", "platforms/interval_run.cpp", "platforms/timing_run.h", "platforms/simulation.h"]
 INCLUDE = re.compile(r'^\s*#\s*include\s*([<"])([^>"]+)[>"]', re.M)
 SYSTEMC = re.compile(r"^(systemc|tlm|tlm_utils/|sysc/)")
@@ -39,8 +41,8 @@ def main():
             target = resolve(f, name) if kind == '"' else None
             if target is None:
                 system[f].append(name)
-                if layer == "model" and SYSTEMC.match(name):
-                    errors.append(f"{f.relative_to(ROOT)}: model/ includes SystemC <{name}>")
+                if layer in ("model", "workloads", "sampling") and SYSTEMC.match(name):
+                    errors.append(f"{f.relative_to(ROOT)}: {layer}/ includes SystemC <{name}>")
                 continue
             graph[f].append(target)
             to = target.relative_to(ROOT).parts[0]
@@ -77,7 +79,7 @@ def main():
     if errors:
         sys.exit(1)
     print(f"layers: {len(files)} files, {sum(len(v) for v in graph.values())} project includes, no cycle, "
-          "model <- workloads <- tlm <- platforms respected")
+          "model <- workloads <- sampling <- platforms and model <- tlm <- platforms respected")
 
 
 if __name__ == "__main__":

@@ -27,6 +27,7 @@
 #include "model/dram.h"
 #include "model/stats.h"
 #include "platforms/error_estimate.h"
+#include "sampling/bias.h"
 #include "platforms/timing_stats.h"
 #include "dram_driver.h"
 #include "test_util.h"

@@ -4,8 +4,9 @@
 
 #include "model/config.h"
 #include "model/sector_cache.h"
-#include "model/trace_schedule.h"
-#include "workloads/sampling.h"
+#include "sampling/frame_sample.h"
+#include "sampling/plan.h"
+#include "sampling/schedule_model.h"
 #include "workloads/workload_driver.h"
 #include "workloads/bvh_builder.h"
 #include "workloads/scenes.h"
@@ -226,7 +227,7 @@ TEST(SectorCacheWarm, ValidatesWithoutStatisticsAndRespectsPending) {
     EXPECT_EQ(c.stats(ReqKind::Demand).evictions + c.stats(ReqKind::Prefetch).evictions, 3u);  // the reads' (0x100, 0x200, line 0), not the warming's
 }
 
-// The sample design (workloads/sampling.h) by hand: 10 clusters of 4 warps (the first wave is
+// The sample design (sampling/design.h) by hand: 10 clusters of 4 warps (the first wave is
 // cluster 0), clusters 3 and 7 empty, a half of the frame: round(10 x 0.5) = 5
 // clusters simulated, the first wave and 4 strata over the 7 other non-empty clusters sorted by
 // work. Every stratum's weight is its size, the weights and the first wave and the empty
@@ -361,7 +362,10 @@ TEST(SamplePlan, RoundTripsAndRefusesBadFiles) {
     p.threads = 2;
     const std::string file = dir.file("plan.bin"), id = "scene=cornell\nframe=64x64\n";
     EXPECT_FALSE(rtu::read_plan(file, id).has_value());
-    rtu::write_plan(file, id, p);
+    {
+        std::ofstream out(file, std::ios::binary);
+        out << rtu::plan_bytes(id, p);
+    }
     const auto back = rtu::read_plan(file, id);
     ASSERT_TRUE(back.has_value());
     EXPECT_EQ(back->trace_nodes, p.trace_nodes);
@@ -498,7 +502,8 @@ struct WarmingFrame {
         s.make_workload = [this, kind] { return make_scene_workload(kind, scene, p); };
         s.trace = [this](const Ray& r, std::vector<StackEntry>* fetched) { return trace_ray(img, r, TraversalOrder::DFS, nullptr, fetched); };
         workload = s.make_workload();
-        driver = std::make_unique<WorkloadDriver>(*workload, 2, 32, 0, 0, s);  // 2 SMs, no shading latency, every warp resident
+        sample = std::make_unique<FrameSample>(s, 2, 0, 0);
+        driver = std::make_unique<WorkloadDriver>(*workload, 2, 32, 0, 0, sample.get());  // 2 SMs, no shading latency, every warp resident
     }
     WarmingFrame(const WarmingFrame&) = delete;
     const Scene scene;
@@ -506,6 +511,7 @@ struct WarmingFrame {
     WorkloadParams p;
     SamplingOptions s;
     std::unique_ptr<Workload> workload;
+    std::unique_ptr<FrameSample> sample;
     std::unique_ptr<WorkloadDriver> driver;
 };
 
@@ -519,10 +525,10 @@ struct WarmingFrame {
 TEST(SampleWarming, EachSmIsWarmedWhenItStartsTheCluster) {
     WarmingFrame frame(WorkloadKind::Primary);
     WorkloadDriver& driver = *frame.driver;
-    ASSERT_TRUE(driver.sampled());
+    ASSERT_TRUE(frame.sample->sampled());
     uint32_t caller = 0;
     std::vector<std::map<uint32_t, size_t>> calls[2];  // per SM taking traces: each warming's fetches per SM
-    driver.on_warm = [&](const std::vector<WarmFetch>& fetches) {
+    frame.sample->on_warm = [&](const std::vector<WarmFetch>& fetches) {
         std::map<uint32_t, size_t> by_sm;
         for (const WarmFetch& f : fetches) ++by_sm[f.sm];
         calls[caller].push_back(by_sm);
@@ -547,18 +553,18 @@ TEST(SampleWarming, EachSmIsWarmedWhenItStartsTheCluster) {
 // second trace: the frame runs in rounds. A simulated cluster's first traces therefore run where
 // the other warps have run their first traces only, and warming them with the skipped warps' every
 // trace put bounces' nodes in the L1 of camera rays and gave the cluster's bounces' first touches
-// to the skipped warps (docs/sampling.md, "Warming the first traces apart"). Here the driver is run
+// to the skipped warps (docs/sampling.md, "Warming"). Here the driver is run
 // in rounds by hand (path tracing, each trace retired at the next cycle): the warmings taken in the
 // first round hold the skipped warps' first traces only, the later ones their later traces only,
 // each SM's own, one of each per cluster and SM at most.
 TEST(SampleWarming, FirstTracesWarmTheFirstRoundLaterTracesTheLater) {
     WarmingFrame frame(WorkloadKind::PathTrace);
     WorkloadDriver& driver = *frame.driver;
-    ASSERT_TRUE(driver.sampled());
+    ASSERT_TRUE(frame.sample->sampled());
     uint64_t now = 0;
     uint32_t caller = 0;
     size_t first_warmings[2] = {0, 0}, later_warmings[2] = {0, 0};
-    driver.on_warm = [&](const std::vector<WarmFetch>& fetches) {
+    frame.sample->on_warm = [&](const std::vector<WarmFetch>& fetches) {
         ASSERT_FALSE(fetches.empty());
         for (const WarmFetch& f : fetches) {
             ASSERT_EQ(f.sm, caller);

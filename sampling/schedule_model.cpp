@@ -1,4 +1,4 @@
-#include "trace_schedule.h"
+#include "schedule_model.h"
 
 #include <algorithm>
 #include <functional>

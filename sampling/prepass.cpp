@@ -1,0 +1,202 @@
+#include "prepass.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <exception>
+#include <iostream>
+#include <thread>
+
+#include "model/node_format.h"
+
+namespace rtu {
+namespace {
+
+// Runs body(thread, workload) on `threads` threads, each with its own workload, and rethrows the
+// first exception any of them threw.
+void on_threads(unsigned threads, PrepassWorkloads& workloads, const std::function<void(unsigned, Workload&)>& body) {
+    auto run = [&](unsigned t) { body(t, workloads.of_thread(t)); };
+    std::vector<std::thread> pool;
+    std::vector<std::exception_ptr> failed(threads);
+    for (unsigned t = 1; t < threads; ++t)
+        pool.emplace_back([&, t] {
+            try {
+                run(t);
+            } catch (...) {
+                failed[t] = std::current_exception();
+            }
+        });
+    try {
+        run(0);
+    } catch (...) {
+        failed[0] = std::current_exception();
+    }
+    for (std::thread& th : pool) th.join();
+    for (const std::exception_ptr& e : failed)
+        if (e) std::rethrow_exception(e);
+}
+
+// Traces shader warp `wi` functionally: per trace, the most nodes one of its rays visits (a
+// trace costs its longest ray, since the warp waits for its last thread); with `rec`, every node
+// fetch is appended to it.
+struct WarpTracer {
+    const FrameWarps& frame;
+    const SamplingOptions& opt;
+    std::vector<WorkRay> follow;
+    std::vector<RayQueue> pending;  // per thread of the warp being traced (reused)
+    std::vector<uint32_t> paths;
+    std::vector<StackEntry> fetched;
+
+    void trace(Workload& workload, size_t wi, std::vector<uint32_t>& trace_nodes, std::vector<WarmFetch>* rec) {
+        const uint32_t sm = frame.sm(wi);
+        frame.threads(wi, paths, pending);
+        for (uint32_t k = 0;; ++k) {
+            uint32_t longest = 0;
+            bool any = false;
+            for (size_t i = 0; i < paths.size(); ++i) {
+                auto& q = pending[i];
+                if (q.empty()) continue;
+                any = true;
+                const WorkRay w = q.front();
+                q.pop_front();
+                TraceResult r;
+                fetched.clear();
+                if (is_valid_ray(w.ray)) r = opt.trace(w.ray, rec ? &fetched : nullptr);  // invalid rays never reach the RT unit: a miss
+                if (rec)
+                    for (const StackEntry& e : fetched) rec->push_back({sm, e.addr, node_bytes(e.type), k});
+                longest = std::max(longest, r.nodes_visited);
+                follow.clear();
+                workload.complete(w, r.hit, follow);
+                for (const WorkRay& f : follow) {  // a follow-up ray belongs to a path of this warp
+                    size_t k = paths[i] == f.path ? i : 0;
+                    while (paths[k] != f.path) ++k;
+                    pending[k].push_back(f);
+                }
+            }
+            if (!any) break;
+            trace_nodes.push_back(longest);
+        }
+    }
+};
+
+}  // namespace
+
+PrepassWorkloads::PrepassWorkloads(const SamplingOptions& opt) : opt_(opt), made_(std::max(1u, opt.threads)) {}
+
+// Set up as the driver's workload was; its first rays are in the driver's queues.
+Workload& PrepassWorkloads::of_thread(unsigned t) {
+    if (!made_.at(t)) {
+        made_[t] = opt_.make_workload();
+        std::vector<WorkRay> ignored;
+        made_[t]->begin(ignored);
+    }
+    return *made_[t];
+}
+
+// Contiguous ranges of warps go to the threads; the results are put together in frame order, so
+// they do not depend on the number of threads.
+PrepassResult run_prepass(const FrameWarps& frame, const SamplingOptions& opt, PrepassWorkloads& workloads) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const size_t n_warps = frame.warps();
+    const unsigned threads = unsigned(std::max<size_t>(1, std::min<size_t>(opt.threads, (n_warps + 63) / 64)));
+    PrepassResult result;
+    result.threads = threads;
+    result.trace_nodes.resize(n_warps);
+    // First reads: per thread and per 64-byte block of the image, the earliest read of the node
+    // there, in each of the two orders the GPU may run the frame's traces: in rounds (key: trace,
+    // then warp) and warp by warp (key: the warp). The threads' tables are merged by their
+    // minimum, so the counts do not depend on the number of threads.
+    const bool count_first = opt.node_blocks > 0 && n_warps < (uint64_t(1) << 32);
+    constexpr uint64_t kUnread = ~uint64_t(0);
+    std::vector<std::vector<uint64_t>> in_rounds(count_first ? threads : 0), by_warp(count_first ? threads : 0);
+    std::atomic<size_t> done{0};
+    on_threads(threads, workloads, [&](unsigned t, Workload& workload) {
+        WarpTracer tracer{frame, opt, {}, {}, {}, {}};
+        std::vector<WarmFetch> fetches;
+        if (count_first) in_rounds[t].assign(opt.node_blocks, kUnread), by_warp[t].assign(opt.node_blocks, kUnread);
+        auto last = t0;
+        bool printed = false;
+        for (size_t wi = n_warps * t / threads, hi = n_warps * (t + 1) / threads; wi < hi; ++wi) {
+            if (opt.stop.requested()) throw Interrupted{opt.stop.signal()};
+            fetches.clear();
+            tracer.trace(workload, wi, result.trace_nodes[wi], count_first ? &fetches : nullptr);
+            for (const WarmFetch& f : fetches) {
+                const uint64_t b = f.addr / kBlockBytes;
+                if (b >= opt.node_blocks) continue;
+                in_rounds[t][b] = std::min(in_rounds[t][b], (uint64_t(f.trace) << 32) | wi);
+                by_warp[t][b] = std::min<uint64_t>(by_warp[t][b], wi);
+            }
+            const size_t d = ++done;
+            if (opt.progress && t == 0 && (d & 63) == 0) {
+                const auto now = std::chrono::steady_clock::now();
+                if (std::chrono::duration<double>(now - last).count() > 2.0) {
+                    last = now;
+                    const double f = double(d) / double(n_warps), wall = std::chrono::duration<double>(now - t0).count();
+                    std::cerr << "\r  sampling pre-pass: " << d << " of " << n_warps << " shader warps traced (" << threads
+                              << " threads), ETA " << int(wall * (1.0 - f) / std::max(f, 1e-9)) << " s   " << std::flush;
+                    printed = true;
+                }
+            }
+        }
+        if (printed) std::cerr << "\n";
+    });
+    result.critical_nodes_total = critical_nodes_total(result.trace_nodes);
+    if (count_first) {
+        result.first_reads_in_rounds.assign(n_warps, 0);
+        result.first_reads_by_warp.assign(n_warps, 0);
+        for (uint64_t b = 0; b < opt.node_blocks; ++b) {
+            uint64_t r = kUnread, w = kUnread;
+            for (unsigned t = 0; t < threads; ++t) r = std::min(r, in_rounds[t][b]), w = std::min(w, by_warp[t][b]);
+            if (r != kUnread) ++result.first_reads_in_rounds[r & 0xffffffffu];
+            if (w != kUnread) ++result.first_reads_by_warp[w];
+        }
+    }
+    return result;
+}
+
+double first_reads_total(const std::vector<uint32_t>& first_reads) {
+    double total = 0;
+    for (uint32_t n : first_reads) total += n;
+    return total;
+}
+
+double critical_nodes_total(const std::vector<std::vector<uint32_t>>& trace_nodes) {
+    double total = 0;
+    for (const std::vector<uint32_t>& trace : trace_nodes)
+        for (uint32_t n : trace) total += n;
+    return total;
+}
+
+// Only the last `window` fetches before a simulated cluster warm the caches: the warps it feeds
+// are traced backwards (warps are independent), recording whole warps until `window` fetches are
+// there. Simulated clusters are shared out among the threads; each result lands in its own slot.
+std::vector<std::vector<WarmFetch>> warming_fetches(const FrameWarps& frame, const SamplingOptions& opt, const SampleDesign& design,
+                                                    PrepassWorkloads& workloads) {
+    const auto& sim = design.simulated();
+    std::vector<std::vector<WarmFetch>> warm(sim.size());
+    if (opt.warm_window == 0 || sim.empty()) return warm;
+    const unsigned threads = unsigned(std::max<size_t>(1, std::min<size_t>(opt.threads, sim.size())));
+    on_threads(threads, workloads, [&](unsigned t, Workload& workload) {
+        WarpTracer tracer{frame, opt, {}, {}, {}, {}};
+        std::vector<uint32_t> ignored;
+        std::vector<std::vector<WarmFetch>> by_warp;  // the recorded warps, last first
+        for (size_t i = t; i < sim.size(); i += threads) {
+            if (opt.stop.requested()) throw Interrupted{opt.stop.signal()};
+            if (design.segments() > 1 && design.segment_of(i) != opt.segment) continue;  // simulated in another run
+            const uint64_t from = design.warm_from(i);
+            size_t recorded = 0;
+            by_warp.clear();
+            for (uint64_t w = design.first_warp(i); w-- > from && recorded < opt.warm_window;) {
+                by_warp.emplace_back();
+                ignored.clear();
+                tracer.trace(workload, size_t(w), ignored, &by_warp.back());
+                recorded += by_warp.back().size();
+            }
+            for (auto it = by_warp.rbegin(); it != by_warp.rend(); ++it) warm[i].insert(warm[i].end(), it->begin(), it->end());
+            if (warm[i].size() > opt.warm_window) warm[i].erase(warm[i].begin(), warm[i].end() - long(opt.warm_window));
+        }
+    });
+    return warm;
+}
+
+}  // namespace rtu

@@ -1,0 +1,42 @@
+// The one hook through which a sampled run (sampling/frame_sample.h) works on the workload
+// driver: it sees the frame's shader warps once, picks the ones to simulate, and is told as each
+// of them starts a trace, retires a ray, ends a trace and finishes. The driver itself knows
+// nothing of strata, estimates or warming. Plain C++ (no SystemC).
+#pragma once
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "model/trace_source.h"
+#include "ray_queue.h"
+
+namespace rtu {
+
+// The frame's shader warps, as the driver packed them, in frame order.
+class FrameWarps {
+public:
+    virtual ~FrameWarps() = default;
+    virtual size_t warps() const = 0;
+    virtual uint32_t sm(size_t warp) const = 0;
+    // The warp's threads' paths and first rays, in thread order (resized to its thread count).
+    virtual void threads(size_t warp, std::vector<uint32_t>& paths, std::vector<RayQueue>& first) const = 0;
+};
+
+class WarpSelection {
+public:
+    virtual ~WarpSelection() = default;
+    // Once, before anything runs: the frame warps to simulate, in the order they run (indices
+    // into `frame`). The driver numbers them 0, 1, ... in that order ("kept" below).
+    virtual std::vector<uint64_t> select(const FrameWarps& frame) = 0;
+    // Kept warp `kept` takes its trace number `trace` (0: its first) on SM `sm`, before any of
+    // its rays is issued.
+    virtual void trace_starts(uint32_t kept, uint32_t sm, uint32_t trace) = 0;
+    // One of its rays left the RT unit.
+    virtual void ray_retired(uint32_t kept, const RetiredRay& ray) = 0;
+    // Its trace left the RT unit of SM `sm` at cycle `now` after `residence` cycles there.
+    virtual void trace_done(uint32_t kept, uint32_t sm, uint64_t now, uint64_t residence) = 0;
+    // A kept warp finished its last trace at `now`, leaving `unfinished` warps.
+    virtual void warp_finished(uint64_t unfinished, uint64_t now) = 0;
+};
+
+}  // namespace rtu
