@@ -1,8 +1,6 @@
 // The four fidelities of the model (docs/timing.md): one type for the run entry point, the
 // SystemC modules (which take AT or LT) and the reports. Plain C++ (no SystemC).
 #pragma once
-#include <stdexcept>
-#include <string>
 
 namespace rtu {
 
@@ -23,13 +21,7 @@ inline const char* fidelity_name(Fidelity f) {
     return "?";
 }
 
-// Throws std::invalid_argument naming the allowed values.
-inline Fidelity parse_fidelity(const std::string& name) {
-    for (Fidelity f : {Fidelity::Functional, Fidelity::AT, Fidelity::LT, Fidelity::Interval})
-        if (name == fidelity_name(f)) return f;
-    throw std::invalid_argument("--fidelity '" + name + "': allowed are functional, at, lt, interval");
-}
-
+// Parsed by parse_fidelity (platforms/fidelity_run.h), with the engine that runs each.
 inline bool is_timing(Fidelity f) { return f != Fidelity::Functional; }
 
 }  // namespace rtu

@@ -127,10 +127,10 @@ const ErrorBounds& ErrorBounds::built_in() {
 }
 
 std::optional<std::string> outside_regime(const RunSpec& spec, const ErrorBounds& bounds) {
-    const std::string fid = fidelity_name(spec.fidelity);
+    const std::string fid = fidelity_name(spec.run.fidelity);
     if (!spec.rays.empty()) return "a ray file (the grid measured scene workloads)";
     if (!bounds.bound(fid, spec.workload)) return "no " + fid + " runs of the " + spec.workload + " workload in the grid";
-    if (spec.order != TraversalOrder::DFS) return "traversal other than dfs";
+    if (spec.run.order != TraversalOrder::DFS) return "traversal other than dfs";
     const auto& sizes = bounds.sizes(spec.workload);
     // The frame's size as its number of pixel samples, within the grid's smallest and largest.
     const auto [lo, hi] = std::minmax_element(sizes.begin(), sizes.end());
@@ -168,8 +168,8 @@ ErrorEstimate estimate_error(const RunSpec& spec, const TimingResult& t, const s
                         " (docs/sampling.md)";
         sampled_basis += few_strata(t.estimate);
     }
-    const std::string fid = fidelity_name(spec.fidelity);
-    if (spec.fidelity == Fidelity::AT) {
+    const std::string fid = fidelity_name(spec.run.fidelity);
+    if (spec.run.fidelity == Fidelity::AT) {
         e.value = sampling;
         e.kind = t.sampled ? "interval" : "reference";
         e.basis = t.sampled ? sampled_basis : "AT is the reference timing model (docs/accuracy.md)";

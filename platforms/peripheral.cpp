@@ -10,7 +10,7 @@
 #include <stdexcept>
 #include <utility>
 
-#include "interval_run.h"
+#include "fidelity_run.h"
 #include "job_feeder.h"
 #include "model/interval_gpu.h"
 #include "model/config.h"
@@ -144,12 +144,6 @@ TraversalOrder parse_order(const std::string& t) {
     throw std::invalid_argument("peripheral traversal '" + t + "': allowed are dfs, bfs (treelet traversal needs the image's treelets)");
 }
 
-Fidelity parse_peripheral_fidelity(const std::string& f) {
-    for (Fidelity fid : {Fidelity::Functional, Fidelity::Interval, Fidelity::LT, Fidelity::AT})
-        if (f == fidelity_name(fid)) return fid;
-    throw std::invalid_argument("peripheral fidelity '" + f + "': allowed are functional, interval, lt, at");
-}
-
 // Whether the memory path is shared (L2 misses on `mem`); checked against the fidelity.
 bool parse_memory_path(const std::string& m, Fidelity f) {
     if (m != "private" && m != "shared") throw std::invalid_argument("peripheral memory '" + m + "': allowed are private, shared");
@@ -270,12 +264,15 @@ struct RtUnitPeripheral::Impl {
 RtUnitPeripheral::RtUnitPeripheral(sc_module_name name, const PeripheralConfig& cfg)
     : sc_module(name), regs("regs"), mem("mem"), irq("irq"), rst("rst") {
     const TraversalOrder order = parse_order(cfg.traversal);
-    const Fidelity fidelity = parse_peripheral_fidelity(cfg.fidelity);
+    const Fidelity fidelity = parse_fidelity(cfg.fidelity, "peripheral fidelity");
     const bool shared = parse_memory_path(cfg.memory, fidelity);
     impl_.reset(new Impl(cfg, order, resolve_config(cfg, order), fidelity, shared));
     Impl& m = *impl_;
-    if (fidelity == Fidelity::Interval) IntervalGpu(m.hw, m.image, order);  // throws for what the fidelity does not model
-    if (fidelity == Fidelity::LT || fidelity == Fidelity::AT) {
+    // The fidelity's engine (platforms/fidelity_run.h): the interval fidelity runs each job on its
+    // own, without the kernel; AT and LT on an RT complex elaborated here, inside the platform.
+    const Engine engine = engine_of(fidelity);
+    if (engine == Engine::Interval) IntervalGpu(m.hw, m.image, order);  // throws for what the fidelity does not model
+    if (engine == Engine::SystemC) {
         if (shared) m.shared_memory.reset(new SharedMemory(mem, m.regs));
         m.gpu.reset(new RtComplex("rt_complex", m.hw, m.image, order, m.feeder, fidelity, nullptr, false, m.shared_memory.get()));
         // The private path: nothing outside sees the complex's work before the job's end, so its
@@ -521,13 +518,14 @@ JobResult JobRun::run(const Job& j) {
     for (size_t i = 0; i < entries.size(); ++i) entries[i].ray = ray_of_record(rays[i], entries[i].valid);
     const std::unique_ptr<Workload> workload = make_ray_file_workload(entries);
     std::vector<TracedRay> traced;
-    if (m_.fidelity == Fidelity::Interval) {
+    if (engine_of(m_.fidelity) == Engine::Interval) {
         // The whole job at once, without the kernel (a fresh interval GPU: cold caches and DRAM),
         // then the job's simulated time waited out; ABORT ends the wait and the job.
         TimingOptions to;
+        to.fidelity = m_.fidelity;
         to.order = m_.order;
         to.keep_rays = true;
-        TimingResult t = run_interval(m_.hw, m_.image, *workload, to);
+        TimingResult t = run_timing(m_.hw, m_.image, *workload, to);
         if (!t.invariant_failures.empty()) throw std::logic_error("interval fidelity: " + t.invariant_failures.front());
         r.traversal_cycles = t.cycles;
         const JobResult model = totals(t.counts.rt, t.counts.l1, t.counts.l2, t.counts.dram);

@@ -20,52 +20,46 @@
 #include "model/stats.h"
 #include "model/stop_request.h"
 #include "model/traversal.h"
+#include "timing_run.h"
 #include "workloads/rays.h"
 #include "workloads/workload_driver.h"
 
 namespace rtu {
 
 struct RunSpec {
+    RunSpec() { run.fidelity = Fidelity::Functional; }
     std::string scene = "wknd", assets;
     bool flatten = false;
     std::string workload = "pt";  // primary, pt, ao or sh
     std::string rays;             // a ray file, in place of the workload
     WorkloadParams params;
-    TraversalOrder order = TraversalOrder::DFS;
-    Fidelity fidelity = Fidelity::Functional;
     // Timing fidelities: the configuration (resolved into `hw`; written into the statistics).
     Config config;
     HwConfig hw{};
-    double sample_rate = 1.0;  // < 1: sampled simulation (docs/sampling.md)
-    uint64_t sample_seed = 1;
-    bool sample_unchecked = false;  // --sample-unchecked
-    // --sample-segments K (docs/sampling.md, "Segments"): the sample as K independent segments.
-    // `segment` < K: simulate that one and write its "segment" section; else merge the K
-    // segments' statistics, from `merge_segments` (files) or from `run_segments` (rtsim runs
-    // each segment as a child process and returns their statistics, read back).
-    uint32_t sample_segments = 1;
-    uint32_t segment = ~0u;
+    // The run's fidelity (functional too) and its options: traversal order, progress, waveforms,
+    // the sample (rate, seed, segments, plan, the pre-pass's threads), whether to keep every ray
+    // (--hits, --verify) and the stop request. The functional fidelity reads the order, the
+    // progress and the stop; run_simulation fills in the sample's workload maker and the plan's
+    // identity.
+    TimingOptions run;
+    // --sample-segments K (docs/sampling.md, "Segments"): run.sample_segment < K simulates that
+    // one and writes its "segment" section; else the K segments' statistics are merged, from
+    // `merge_segments` (files) or from `run_segments` (rtsim runs each segment as a child process
+    // and returns their statistics, read back; platforms/child_runs.h).
     std::vector<std::string> merge_segments;
     std::function<std::vector<SegmentRun>()> run_segments;
-    std::string sample_plan;  // --sample-plan FILE: the pre-pass kept between runs of one frame
-    unsigned threads = 1;      // the sampling pre-pass's threads
-    std::string vcd;           // AT, LT: waveforms into this file (without the .vcd SystemC adds)
-    int trace_sm = -1, trace_warp = -1;
     bool verify = false;       // every ray against Embree (robust mode)
-    bool keep_rays = false;    // return every ray with its hit (for a hits file)
     // The SoC peripheral's inputs (docs/peripheral.md): the BVH image's bytes, the workload's
     // first rays as 48-byte ray records, and their golden 48-byte hit records (RunResult::files).
     std::string dump_bvh, dump_rays, dump_hits;
-    bool progress = false;     // progress on stderr
     // --check-error N (LT, interval): N clusters drawn besides the first wave simulated in the
     // run's fidelity and in AT; run_check simulates a sample of the frame at `rate` (1: the
     // whole frame) in both (rtsim runs child processes) and returns the two cycle counts.
     uint64_t check_error = 0;
     std::function<ErrorCheck(double rate)> run_check;
-    // Requested (rtsim: SIGINT, SIGTERM): the run stops at its next clean point and returns what
-    // it simulated so far (RunResult::interrupted); before the simulation starts, Interrupted is
-    // thrown instead (model/stop_request.h).
-    StopRequest stop;
+    // A stop requested through run.stop (rtsim: SIGINT, SIGTERM) ends the run at its next clean
+    // point with what it simulated so far (RunResult::interrupted); before the simulation
+    // starts, Interrupted is thrown instead (model/stop_request.h).
 };
 
 struct RunResult {

@@ -22,7 +22,7 @@ namespace rtu {
 struct Treelets;
 
 struct TimingOptions {
-    Fidelity fidelity = Fidelity::AT;  // AT or LT on the SystemC platform; the interval run ignores it
+    Fidelity fidelity = Fidelity::AT;  // run_timing dispatches on it (platforms/fidelity_run.h)
     TraversalOrder order = TraversalOrder::DFS;
     bool progress = false;
     std::string vcd;                  // VCD file (without the .vcd suffix SystemC adds)

@@ -1,0 +1,132 @@
+#include "child_runs.h"
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <nlohmann/json.hpp>
+
+#include "workloads/input_error.h"
+
+extern char** environ;
+
+namespace rtu {
+
+TempFolder::TempFolder(const char* what) {
+    namespace fs = std::filesystem;
+    std::string tmpl = (fs::temp_directory_path() / "rtsim-XXXXXX").string();
+    if (!mkdtemp(tmpl.data())) throw std::runtime_error(std::string(what) + ": cannot make a temporary folder in " + fs::temp_directory_path().string());
+    path = tmpl;
+}
+
+TempFolder::~TempFolder() {
+    std::error_code ec;
+    std::filesystem::remove_all(path, ec);
+}
+
+std::string exact(double v) {
+    char r[32];
+    std::snprintf(r, sizeof r, "%.17g", v);
+    return r;
+}
+
+void run_child(std::vector<std::string> args, const std::string& err, const std::string& what) {
+    args.insert(args.begin(), "rtsim");
+    std::vector<char*> argv;
+    for (std::string& s : args) argv.push_back(s.data());
+    argv.push_back(nullptr);
+    posix_spawn_file_actions_t fa;
+    posix_spawn_file_actions_init(&fa);
+    posix_spawn_file_actions_addopen(&fa, 1, "/dev/null", O_WRONLY, 0);
+    posix_spawn_file_actions_addopen(&fa, 2, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    pid_t pid = 0;
+    const int rc = posix_spawn(&pid, "/proc/self/exe", &fa, nullptr, argv.data(), environ);
+    posix_spawn_file_actions_destroy(&fa);
+    if (rc != 0) throw std::runtime_error(what + ": cannot start rtsim: " + std::string(std::strerror(rc)));
+    int status = 0;
+    while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+    }
+    if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+        std::ifstream in(err);
+        std::stringstream msg;
+        msg << in.rdbuf();
+        const std::string text = what + " failed (" + (WIFEXITED(status) ? "exit " + std::to_string(WEXITSTATUS(status)) : std::string("a signal")) +
+                                 "): " + msg.str();
+        if (WIFEXITED(status) && WEXITSTATUS(status) == 2) throw InputError(text);
+        throw std::runtime_error(text);
+    }
+}
+
+ErrorCheck run_error_check(const std::vector<std::string>& frame_args, const std::string& fidelity, std::optional<uint64_t> quantum,
+                           double rate, uint64_t sample_seed, bool quiet) {
+    const TempFolder dir("--check-error");
+    std::vector<std::string> base = frame_args;
+    if (rate < 1.0) base.insert(base.end(), {"--sample", exact(rate), "--sample-seed", std::to_string(sample_seed), "--sample-unchecked"});
+    struct Child {
+        uint64_t cycles;
+        double seconds;
+        uint64_t warps, warps_total, clusters;  // sampled: simulated warps, the frame's, simulated clusters
+    };
+    auto child = [&](const std::string& fid) {
+        std::vector<std::string> args = base;
+        const std::string stats = (dir.path / (fid + ".json")).string(), err = (dir.path / (fid + ".err")).string();
+        args.insert(args.end(), {"--fidelity", fid, "--stats", stats});
+        if (fid == "lt" && quantum) args.insert(args.end(), {"--quantum", std::to_string(*quantum)});
+        try {
+            run_child(args, err, "--check-error: the " + fid + " run of the check");
+        } catch (const InputError& e) {
+            throw std::runtime_error(e.what());  // the run itself was accepted: not the user's input
+        }
+        const nlohmann::json j = nlohmann::json::parse(std::ifstream(stats));
+        const bool sampled = j["timing"].contains("sampling");
+        Child c;
+        c.cycles = sampled ? j["timing"]["sampling"]["cycles_simulated"].get<uint64_t>() : j["cycles"].get<uint64_t>();
+        c.seconds = j["time_s"]["run"].get<double>();
+        c.warps = sampled ? j["timing"]["sampling"]["warps_simulated"].get<uint64_t>() : 1;
+        c.warps_total = sampled ? j["timing"]["sampling"]["warps_total"].get<uint64_t>() : 1;
+        c.clusters = sampled ? j["timing"]["sampling"]["strata"].get<uint64_t>() + j["timing"]["sampling"]["first_wave_clusters"].get<uint64_t>() : 0;
+        return c;
+    };
+    if (!quiet) std::cerr << "checking the error: the same " << (rate < 1.0 ? "sample" : "frame") << " in " << fidelity << " and in AT\n";
+    const Child f = child(fidelity), at = child("at");
+    ErrorCheck c;
+    c.share = double(f.warps) / double(std::max<uint64_t>(1, f.warps_total));
+    c.clusters = f.clusters;  // 0 for the whole frame: the caller knows its clusters
+    c.fidelity_cycles = f.cycles;
+    c.at_cycles = at.cycles;
+    c.fidelity_s = f.seconds;
+    c.at_s = at.seconds;
+    return c;
+}
+
+std::vector<SegmentRun> run_segment_children(const std::vector<std::string>& segment_args, uint32_t segments, const StopRequest& stop,
+                                             bool quiet) {
+    const TempFolder dir("--sample-segments");
+    std::vector<SegmentRun> runs;
+    for (uint32_t i = 0; i < segments; ++i) {
+        if (stop.requested()) throw Interrupted{stop.signal()};
+        if (!quiet) std::cerr << "segment " << i + 1 << " of " << segments << "\n";
+        std::vector<std::string> args = segment_args;
+        const std::string stats = (dir.path / ("segment" + std::to_string(i) + ".json")).string();
+        args.insert(args.end(), {"--segment", std::to_string(i), "--stats", stats});
+        try {
+            run_child(args, (dir.path / ("segment" + std::to_string(i) + ".err")).string(), "segment " + std::to_string(i));
+        } catch (...) {
+            if (stop.requested()) throw Interrupted{stop.signal()};  // the child got the signal too
+            throw;
+        }
+        runs.push_back(read_segment(stats));
+    }
+    return runs;
+}
+
+}  // namespace rtu

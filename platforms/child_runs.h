@@ -1,0 +1,47 @@
+// rtsim run as child processes of itself (SystemC elaborates one platform per process): the
+// segments of a split sample run one after another (--sample-segments K alone), and
+// --check-error's two runs of the same clusters in the run's fidelity and in AT. Each child gets
+// the parent's frame, workload and configuration options (`frame_args`).
+#pragma once
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "error_estimate.h"
+#include "model/stop_request.h"
+#include "sample_segments.h"
+
+namespace rtu {
+
+// A temporary folder, removed with everything in it when this goes out of scope.
+struct TempFolder {
+    std::filesystem::path path;
+    explicit TempFolder(const char* what);
+    ~TempFolder();
+    TempFolder(const TempFolder&) = delete;
+    TempFolder& operator=(const TempFolder&) = delete;
+};
+
+// Runs rtsim itself with `args`, its standard error into the file `err`; throws, with that error
+// text, if it does not exit 0 (InputError for its exit status 2).
+void run_child(std::vector<std::string> args, const std::string& err, const std::string& what);
+
+// --check-error: the frame sampled at `rate` with `sample_seed` (the same clusters, the same
+// functional warming), or whole at rate 1, once in `fidelity` and once in AT; their simulated
+// cycles and times. `quantum`: LT's, passed on.
+ErrorCheck run_error_check(const std::vector<std::string>& frame_args, const std::string& fidelity, std::optional<uint64_t> quantum,
+                           double rate, uint64_t sample_seed, bool quiet);
+
+// --sample-segments K without --segment: each segment simulated by a child rtsim, one after
+// another, and their statistics read back for the merge (the same files an array of cluster
+// tasks would write, so the estimate is the same, bit for bit). `segment_args`: the frame's and
+// the sample's options; a stop requested ends it between segments (Interrupted).
+std::vector<SegmentRun> run_segment_children(const std::vector<std::string>& segment_args, uint32_t segments, const StopRequest& stop,
+                                             bool quiet);
+
+// A double as rtsim reads it back exactly.
+std::string exact(double v);
+
+}  // namespace rtu
