@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "config_presets.h"  // generated from platforms/configs/*.json
+#include "replacement.h"
 
 namespace rtu {
 namespace {
@@ -47,6 +48,7 @@ const Key kSchema[] = {
     {"l1.sector", "bytes", Type::Int, 16, 4096, true, "sector bytes"},
     {"l1.mshrs", "MSHRs", Type::Int, 1, 1 << 16, false, "miss status holding registers"},
     {"l1.mshr_merge", "requests", Type::Int, 1, 1024, false, "requests merged into one MSHR"},
+    {"l1.replacement", "", Type::Text, 0, 0, false, "which line a new line replaces: lru, fifo, or a policy registered in code (model/replacement.h)"},
     {"l2.slices", "slices", Type::Int, 1, 256, false, "L2 slices"},
     {"l2.slice_kb", "KiB", Type::Int, 1, 1 << 22, false, "capacity of one slice"},
     {"l2.assoc", "ways", Type::Int, 0, 1 << 16, false, "ways (0: fully associative)"},
@@ -55,6 +57,7 @@ const Key kSchema[] = {
     {"l2.mshrs", "MSHRs", Type::Int, 1, 1 << 16, false, "MSHRs per slice"},
     {"l2.mshr_merge", "requests", Type::Int, 1, 1024, false, "requests merged into one MSHR"},
     {"l2.latency", "core cycles", Type::Int, 0, 100000, false, "L2 hit latency (core cycles)"},
+    {"l2.replacement", "", Type::Text, 0, 0, false, "which line a new line replaces: lru, fifo, or a policy registered in code (model/replacement.h)"},
     {"l2.set_index", "", Type::Text, 0, 0, false, "how a slice picks a line's set from the slice's own address: linear, or ipoly (GPGPU-Sim's IPOLY hash; 16, 32 or 64 sets)"},
     {"xbar.latency", "core cycles", Type::Int, 0, 10000, false, "crossbar latency each way (core cycles)"},
     {"dram.channels", "channels", Type::Int, 1, 256, false, "channels"},
@@ -66,7 +69,7 @@ const Key kSchema[] = {
     {"dram.frontend_latency", "core cycles", Type::Int, 0, 1e6, false, "cycles a request waits between the L2 and the DRAM scheduler's queue (GPGPU-Sim's dram_latency queue)"},
     {"dram.queue", "requests", Type::Int, 1, 1 << 16, false, "scheduler queue entries per channel"},
     {"dram.row_bytes", "bytes", Type::Int, 128, 1 << 20, true, "row (page) size"},
-    {"dram.scheduler", "", Type::Text, 0, 0, false, "frfcfs_banks (GPGPU-Sim's FR-FCFS: every bank serves a request of its own, a command a cycle), frfcfs_channel (one request at a time per channel, rtunit's scheduler until 2026-11-27) or fcfs (one at a time, oldest first); model/dram.h"},
+    {"dram.scheduler", "", Type::Text, 0, 0, false, "frfcfs_banks (GPGPU-Sim's FR-FCFS: every bank serves a request of its own, a command a cycle), frfcfs_channel (one request at a time per channel, open row first) or fcfs (one at a time, oldest first), or a scheduler registered in code; model/dram_scheduler.h"},
     {"dram.tCL", "memory cycles", Type::Int, 1, 1000, false, "CAS latency (memory cycles)"},
     {"dram.tRCD", "memory cycles", Type::Int, 1, 1000, false, "ACT to column command"},
     {"dram.tRP", "memory cycles", Type::Int, 1, 1000, false, "precharge"},
@@ -298,6 +301,12 @@ HwConfig Config::resolve() const {
         c.mshrs = u32((p + ".mshrs").c_str());
         c.mshr_merge = u32((p + ".mshr_merge").c_str());
         c.latency = latency;
+        c.replacement = values_.at(p + ".replacement").get<std::string>();
+        try {
+            replacement_kind(c.replacement);
+        } catch (const std::invalid_argument& e) {
+            throw ConfigError("key '" + p + ".replacement': " + e.what());
+        }
         if (c.sector > c.line) throw ConfigError("key '" + p + ".sector' (" + std::to_string(c.sector) + ") must not exceed '" + p + ".line' (" + std::to_string(c.line) + ")");
         const uint64_t lines = c.size_bytes / c.line;
         if (lines == 0 || c.size_bytes % c.line) throw ConfigError("key '" + p + ".size' must be a multiple of '" + p + ".line'");
@@ -328,10 +337,11 @@ HwConfig Config::resolve() const {
     if (sched == "frfcfs")  // its meaning until 2026-11-27; a silent change would mislabel results
         throw ConfigError("key 'dram.scheduler' = 'frfcfs': since 2026-11-27 say which: frfcfs_banks (GPGPU-Sim's, every bank serving its "
                           "own request; the presets') or frfcfs_channel (one request at a time per channel, what 'frfcfs' was)");
-    if (sched == "frfcfs_banks") d.scheduler = DramScheduler::FrfcfsBanks;
-    else if (sched == "frfcfs_channel") d.scheduler = DramScheduler::FrfcfsChannel;
-    else if (sched == "fcfs") d.scheduler = DramScheduler::Fcfs;
-    else throw ConfigError("key 'dram.scheduler' = '" + sched + "': allowed are frfcfs_banks, frfcfs_channel, fcfs");
+    try {
+        d.set_scheduler(sched);
+    } catch (const std::invalid_argument& e) {
+        throw ConfigError(std::string("key 'dram.scheduler': ") + e.what());
+    }
     d.tCL = u32("dram.tCL");
     d.tRCD = u32("dram.tRCD");
     d.tRP = u32("dram.tRP");

@@ -5,6 +5,7 @@
 #pragma once
 #include <cstdint>
 #include <map>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -12,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "address_map.h"
+#include "dram_scheduler.h"
 #include "prefetch_config.h"
 
 namespace rtu {
@@ -27,22 +29,22 @@ struct CacheConfig {
     uint32_t latency;  // a hit's latency to the requester (L1: rt.l1_hit_latency)
     SliceLocal local{};  // an L2 slice: its sets are indexed with the slice's own address
     bool ipoly = false;  // sets by GPGPU-Sim's IPOLY hash (l2.set_index) instead of linearly
-};
-
-// dram.scheduler: which request a DRAM channel serves next (model/dram.h, docs/paper-preset.md).
-enum class DramScheduler {
-    FrfcfsBanks,    // frfcfs_banks: GPGPU-Sim's; each bank takes its own request, open row first
-    FrfcfsChannel,  // frfcfs_channel: one request at a time per channel, open row first
-    Fcfs,           // fcfs: one request at a time per channel, in arrival order
+    std::string replacement = "lru";  // the replacement policy's name (model/replacement.h)
 };
 
 struct DramConfig {
     uint32_t channels, banks, bus_bytes, burst, beats_per_cycle, queue, row_bytes;
     uint32_t frontend_latency;  // core cycles between the L2 and the scheduler's queue
     std::string address_map;    // "line" or a GPGPU-Sim mapping (model/address_map.h)
-    DramScheduler scheduler = DramScheduler::FrfcfsBanks;
-    bool per_bank() const { return scheduler == DramScheduler::FrfcfsBanks; }
-    bool frfcfs() const { return scheduler != DramScheduler::Fcfs; }  // an open row's requests first
+    // dram.scheduler (model/dram_scheduler.h): its name and the policy, shared by every channel.
+    std::string scheduler_name = "frfcfs_banks";
+    std::shared_ptr<const DramSchedulerPolicy> scheduler = dram_scheduler_kind("frfcfs_banks").make();
+    bool per_bank() const { return scheduler->per_bank(); }
+    // Takes the scheduler registered as `name` (std::invalid_argument for an unknown one).
+    void set_scheduler(const std::string& name) {
+        scheduler = dram_scheduler_kind(name).make();
+        scheduler_name = name;
+    }
     uint32_t tCL, tRCD, tRP, tRAS, tRC, tRRD, tCCD, tWL, tWR;  // memory clock cycles
 };
 

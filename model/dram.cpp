@@ -54,40 +54,40 @@ bool DramChannel::schedule_banks(uint64_t now, DramRequest* out, uint64_t* done)
     return finished;
 }
 
-// GPGPU-Sim's frfcfs_scheduler::schedule for the first bank, in priority order, without a
-// request: the oldest request to the row it last took (which is the bank's row: a bank takes its
-// next request only once the last has had its columns), else its oldest. One bank a cycle.
+// The first bank, in priority order, without a request takes one (GPGPU-Sim's
+// frfcfs_scheduler::schedule; one bank a cycle): the scheduler picks among the bank's requests
+// in arrival order, those to the row it last took (which is the bank's row: a bank takes its next
+// request only once the last has had its columns) marked as row hits.
 void DramChannel::take_request() {
     const uint32_t n = uint32_t(banks_.size());
-    bool any = false;
-    for (const Bank& b : banks_) any = any || (!b.serving && b.queued);
-    if (!any) return;
-    hit_.assign(n, -1);
-    oldest_.assign(n, -1);
-    for (size_t q = 0; q < queue_.size(); ++q) {
-        const DramRequest& r = queue_[q];
-        const Bank& b = banks_[r.at.bank];
-        if (b.serving) continue;
-        if (oldest_[r.at.bank] < 0) oldest_[r.at.bank] = long(q);
-        if (hit_[r.at.bank] < 0 && b.activated && b.row == r.at.row) hit_[r.at.bank] = long(q);
-    }
-    for (uint32_t i = 0; i < n; ++i) {
-        const uint32_t j = (i + prio_) % n;
-        const long q = hit_[j] >= 0 ? hit_[j] : oldest_[j];
-        if (q < 0) continue;
-        Bank& b = banks_[j];
-        b.req = queue_[size_t(q)];
-        queue_.erase(queue_.begin() + q);
-        --b.queued;
-        if (!b.open) ++stats_.row_misses;  // closed only before its first ACT: no request pending now
-        else if (b.row == b.req.at.row) ++stats_.row_hits;
-        else ++stats_.row_conflicts;
-        b.columns_left = columns(b.req.bytes);
-        b.serving = true;
-        ++serving_;
-        prio_ = (prio_ + 1) % n;
-        return;
-    }
+    uint32_t j = n;
+    for (uint32_t i = 0; i < n && j == n; ++i)
+        if (!banks_[(i + prio_) % n].serving && banks_[(i + prio_) % n].queued) j = (i + prio_) % n;
+    if (j == n) return;
+    Bank& b = banks_[j];
+    candidates_.clear();
+    bool* hit = row_hits(b.queued);
+    for (size_t q = 0; q < queue_.size(); ++q)
+        if (queue_[q].at.bank == j) {
+            hit[candidates_.size()] = b.activated && b.row == queue_[q].at.row;
+            candidates_.push_back(q);
+        }
+    const size_t q = candidates_[cfg_.scheduler->pick(candidates_.size(), hit)];
+    b.req = queue_[q];
+    queue_.erase(queue_.begin() + long(q));
+    --b.queued;
+    if (!b.open) ++stats_.row_misses;  // closed only before its first ACT: no request pending now
+    else if (b.row == b.req.at.row) ++stats_.row_hits;
+    else ++stats_.row_conflicts;
+    b.columns_left = columns(b.req.bytes);
+    b.serving = true;
+    ++serving_;
+    prio_ = (prio_ + 1) % n;
+}
+
+bool* DramChannel::row_hits(size_t n) {
+    if (row_hit_size_ < n) row_hit_.reset(new bool[row_hit_size_ = std::max<size_t>(n, 2 * row_hit_size_)]);
+    return row_hit_.get();
 }
 
 // A column command for the bank's request if its row is open, tRCD has passed since the ACT
@@ -144,16 +144,12 @@ bool DramChannel::row_command(uint64_t now, Bank& b, uint32_t j) {
 
 bool DramChannel::schedule_channel(uint64_t now, DramRequest* out, uint64_t* done) {
     if (queue_.empty()) return false;
-    size_t pick = 0;
-    if (cfg_.frfcfs()) {
-        for (size_t i = 0; i < queue_.size(); ++i) {
-            const Bank& b = banks_[queue_[i].at.bank];
-            if (b.open && b.row == queue_[i].at.row) {
-                pick = i;
-                break;
-            }
-        }
+    bool* hit = row_hits(queue_.size());
+    for (size_t i = 0; i < queue_.size(); ++i) {
+        const Bank& b = banks_[queue_[i].at.bank];
+        hit[i] = b.open && b.row == queue_[i].at.row;
     }
+    const size_t pick = cfg_.scheduler->pick(queue_.size(), hit);
     DramRequest r = queue_[pick];
     queue_.erase(queue_.begin() + long(pick));
     Bank& b = banks_[r.at.bank];
@@ -198,7 +194,8 @@ bool DramChannel::schedule_channel(uint64_t now, DramRequest* out, uint64_t* don
 
 DramBookings::DramBookings(const DramConfig& c, const AddressMap& map)
     : cfg_(c), map_(map), banks_(c.channels, std::vector<Bank>(c.banks)), bus_(c.channels), commands_(c.channels),
-      activations_(c.channels), stats_(c.channels), act_gap_(std::max<uint64_t>(c.tRC, uint64_t(c.tRAS) + c.tRP)) {}
+      activations_(c.channels), stats_(c.channels), act_gap_(std::max<uint64_t>(c.tRC, uint64_t(c.tRAS) + c.tRP)),
+      row_hits_first_(c.scheduler->row_hits_first()) {}
 
 uint64_t DramBookings::access(uint64_t addr, uint32_t bytes, uint64_t now, uint64_t horizon) {
     const DramCoord at = map_.dram(addr);
@@ -208,11 +205,12 @@ uint64_t DramBookings::access(uint64_t addr, uint32_t bytes, uint64_t now, uint6
     // Epochs closed by the horizon cannot take a read any more (no read comes before it); the
     // last stays, as the bank's open row.
     while (epochs.size() > 1 && epochs.front().until <= horizon) epochs.pop_front();
-    // FR-FCFS: the earliest epoch of this row open at or after the read's arrival serves it.
-    // FCFS (dram.scheduler fcfs): only the bank's last epoch, as reads are served in turn.
+    // A scheduler that takes a row hit ahead of older requests (FR-FCFS): the earliest epoch of
+    // this row open at or after the read's arrival serves it. Else (FCFS) only the bank's last
+    // epoch, as reads are served in turn.
     const Epoch* open = nullptr;
     for (const Epoch& e : epochs) {
-        if (e.row == at.row && e.until > now && (cfg_.frfcfs() || e.until == ~0ull)) {
+        if (e.row == at.row && e.until > now && (row_hits_first_ || e.until == ~0ull)) {
             open = &e;
             break;
         }

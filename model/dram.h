@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <deque>
+#include <memory>
 #include <vector>
 
 #include "address_map.h"
@@ -58,7 +59,8 @@ struct DramStats {
     };
 };
 
-// One channel's scheduler, by dram.scheduler:
+// One channel's DRAM controller, shaped by its scheduler policy (dram.scheduler,
+// model/dram_scheduler.h: per_bank() and pick()); the built-in ones:
 // - frfcfs_channel / fcfs: one request at a time per channel (rtunit's only scheduler until
 //   2026-11-27). The scheduler picks a request (the oldest row hit, else the oldest; fcfs: the
 //   oldest) and issues its commands at their earliest legal cycles; it picks the next tRCD before
@@ -137,7 +139,11 @@ private:
     bool ran_ = false;
     uint64_t channel_act_ok_ = 0;
     uint32_t prio_ = 0;
-    std::vector<long> hit_, oldest_;  // take_request's scratch, per bank
+    // The scheduler's candidates (queue positions) and their row hits: scratch.
+    std::vector<size_t> candidates_;
+    std::unique_ptr<bool[]> row_hit_;
+    size_t row_hit_size_ = 0;
+    bool* row_hits(size_t n);  // room for n flags
     DramStats stats_;
 };
 
@@ -192,6 +198,7 @@ private:
     std::vector<Calendar> activations_;     // per channel: [ACT, ACT + tRRD) per activation
     std::vector<DramStats> stats_;
     uint64_t act_gap_;  // a bank's ACT to its next ACT: max(tRC, tRAS + tRP)
+    bool row_hits_first_;  // the scheduler's: a row hit goes ahead of older requests (FR-FCFS)
 };
 
 }  // namespace rtu

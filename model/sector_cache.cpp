@@ -15,6 +15,7 @@ SectorCache::SectorCache(const CacheConfig& c)
     if (ipoly_ && sets_ != 16 && sets_ != 32 && sets_ != 64) throw std::invalid_argument("IPOLY set index needs 16, 32 or 64 sets");
     ways_.resize(lines);
     set_.resize(sets_);
+    policy_ = replacement_kind(c.replacement).make(sets_, assoc_);
     where_.reserve(lines * 2);
 }
 
@@ -27,27 +28,14 @@ uint64_t SectorCache::memory_bytes(const CacheConfig& c, uint64_t lines_used) {
     while (slots * 7 < 2 * lines * 8) slots *= 2;
     const uint64_t slot_bytes = sizeof(std::pair<uint64_t, uint32_t>);
     const uint64_t used = std::min(lines, lines_used);
-    return lines * sizeof(Way) + sets * sizeof(Set) + slots + (lines ? used * slot_bytes * slots / lines : 0);
-}
-
-void SectorCache::link_front(Set& s, uint32_t i) {
-    Way& w = ways_[i];
-    w.prev = kNone;
-    w.next = s.head;
-    if (s.head != kNone) ways_[s.head].prev = i;
-    s.head = i;
-    if (s.tail == kNone) s.tail = i;
+    const ReplacementKind& policy = replacement_kind(c.replacement);
+    return lines * (sizeof(Way) + policy.bytes_per_way) + sets * (sizeof(Set) + policy.bytes_per_set) + slots +
+           (lines ? used * slot_bytes * slots / lines : 0);
 }
 
 void SectorCache::touch(Way& w) {
     const uint32_t i = uint32_t(&w - ways_.data());
-    Set& s = set_[i / assoc_];
-    if (s.head == i) return;
-    // Unlink, then put in front (most recently used).
-    ways_[w.prev].next = w.next;
-    if (w.next != kNone) ways_[w.next].prev = w.prev;
-    else s.tail = w.prev;
-    link_front(s, i);
+    policy_->touched(i / assoc_, i);
 }
 
 // An L2 slice indexes with its own address (the slice's digits taken out), so that every set
@@ -119,27 +107,28 @@ CacheOutcome SectorCache::read(uint64_t addr, uint64_t token, ReqKind kind) {
     return out;
 }
 
-// The LRU victim among the set's ways that have no pending sector, emptied and given to `line`;
-// null if every way has a pending sector. Counts the eviction into `st` when given.
+// The replacement policy's victim among the set's ways that have no pending sector, emptied and
+// given to `line`; null if every way has a pending sector. Counts the eviction into `st` when
+// given.
 SectorCache::Way* SectorCache::allocate(uint64_t line, CacheAccessCounts* st) {
     // Ways are taken into use in index order and never invalidated, so an unused way, if any, is
-    // the set's next one; else the victim is the least recently used way, from the recency
-    // list's tail, that has no pending sector.
-    const uint64_t set = set_of(line);
+    // the set's next one; else the victim is the first way, in the policy's order, that has no
+    // pending sector.
+    const uint32_t set = set_of(line);
     Set& s = set_[set];
     Way* victim = nullptr;
     if (s.unused < assoc_) {
         const uint32_t i = uint32_t(set * assoc_ + s.unused++);
         victim = &ways_[i];
-        link_front(s, i);
     } else {
-        for (uint32_t i = s.tail; i != kNone; i = ways_[i].prev)
+        for (uint32_t i = policy_->first_victim(set); i != kNone; i = policy_->next_victim(set, i))
             if (!ways_[i].pending) {
                 victim = &ways_[i];
                 break;
             }
     }
     if (!victim) return nullptr;
+    policy_->inserted(set, uint32_t(victim - ways_.data()));
     if (victim->line != ~0ull) {
         where_.erase(victim->line);
         if (st) {
@@ -165,6 +154,7 @@ void SectorCache::invalidate() {
         w.way_accessed = accessed;
     }
     for (Set& s : set_) s = Set{};
+    policy_->clear();
     where_.clear();
 }
 

@@ -1,6 +1,7 @@
-// Tag, LRU and MSHR logic of a sector cache (L1 per SM, L2 slices): 128 B lines of 32 B
-// sectors, N-way or fully associative, LRU replacement, MSHRs that merge requests to a pending
-// sector up to a limit, and reservation fails when no MSHR or no replaceable line is left.
+// Tag and MSHR logic of a sector cache (L1 per SM, L2 slices): 128 B lines of 32 B sectors,
+// N-way or fully associative, a replacement policy chosen by configuration (model/replacement.h;
+// the presets' LRU), MSHRs that merge requests to a pending sector up to a limit, and reservation
+// fails when no MSHR or no replaceable line is left.
 // Plain C++ (no SystemC); the tlm/ cache module drives it.
 #pragma once
 #include <array>
@@ -10,6 +11,7 @@
 #include <vector>
 
 #include "config.h"
+#include "replacement.h"
 #include "stats.h"
 
 namespace rtu {
@@ -25,7 +27,7 @@ enum class CacheOutcome : uint8_t {
     Hit,              // sector present
     MshrHit,          // sector pending: merged into its MSHR
     SectorMiss,       // line present, sector absent: MSHR allocated, sector must be fetched
-    LineMiss,         // line absent: line allocated (LRU victim evicted), MSHR allocated, fetch
+    LineMiss,         // line absent: line allocated (the policy's victim evicted), MSHR allocated, fetch
     ReservationFail,  // no MSHR, merge limit reached, or every way of the set has pending sectors
 };
 
@@ -130,15 +132,12 @@ private:
         // prefetch's; a hit found the line so marked. The second is never cleared, as theirs
         // (set only in the constructor), so it stays with the way across lines.
         bool line_prefetched = false, way_accessed = false;
-        uint32_t prev = kNone, next = kNone;  // recency list of the set (front: most recently used)
     };
     struct Set {
-        uint32_t head = kNone, tail = kNone;  // way indices
-        uint32_t unused = 0;                  // ways [unused, assoc) were never taken
+        uint32_t unused = 0;  // ways [unused, assoc) were never taken
     };
-    static constexpr uint32_t kNone = ~0u;
-    void touch(Way& w);  // most recently used now
-    void link_front(Set& s, uint32_t way);
+    static constexpr uint32_t kNone = ReplacementPolicy::kNone;
+    void touch(Way& w);  // used now (the replacement policy is told)
     struct Mshr {
         Tokens tokens;
         bool prefetch = false;   // allocated by a prefetch
@@ -153,6 +152,7 @@ private:
     bool ipoly_;
     std::vector<Way> ways_;  // set-major: set s owns ways [s*assoc, (s+1)*assoc)
     std::vector<Set> set_;
+    std::unique_ptr<ReplacementPolicy> policy_;
     absl::flat_hash_map<uint64_t, uint32_t> where_;  // line address -> way index
     absl::flat_hash_map<uint64_t, Mshr> mshr_;       // sector address -> waiting tokens
     CacheCounts counts_;

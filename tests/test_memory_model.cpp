@@ -78,6 +78,27 @@ TEST(SectorCache, FullyAssociativeLru) {
     EXPECT_EQ(c.read(0, 9, ReqKind::Demand), CacheOutcome::Hit);
 }
 
+// FIFO (l1.replacement fifo, GPGPU-Sim's F): set 0 of tiny_cache takes lines 0x000 then 0x100;
+// line 0 is read again, which LRU counts and FIFO does not, so 0x200 evicts line 0 (the first in)
+// where LRU evicts 0x100.
+TEST(SectorCache, FifoEvictsTheFirstLineInWhateverItsUse) {
+    CacheConfig cfg = tiny_cache();
+    cfg.replacement = "fifo";
+    SectorCache c(cfg);
+    for (uint64_t line : {0x000, 0x100}) {
+        ASSERT_EQ(c.read(line, 1, ReqKind::Demand), CacheOutcome::LineMiss);
+        c.fill(line);
+    }
+    ASSERT_EQ(c.read(0x000, 2, ReqKind::Demand), CacheOutcome::Hit);
+    ASSERT_EQ(c.read(0x200, 3, ReqKind::Demand), CacheOutcome::LineMiss);
+    c.fill(0x200);
+    EXPECT_EQ(c.read(0x100, 4, ReqKind::Demand), CacheOutcome::Hit);
+    EXPECT_EQ(c.read(0x000, 5, ReqKind::Demand), CacheOutcome::LineMiss);  // evicts 0x100, in before 0x200
+    c.fill(0x000);
+    EXPECT_EQ(c.read(0x200, 6, ReqKind::Demand), CacheOutcome::Hit);
+    EXPECT_EQ(c.read(0x100, 7, ReqKind::Demand), CacheOutcome::LineMiss);
+}
+
 // A transfer moves whole bursts: 2 B x 8 beats = 16 B per burst, two beats per memory cycle.
 TEST(Dram, TransfersAreWholeBursts) {
     DramConfig c{};
@@ -111,7 +132,7 @@ DramConfig dram() {
     d.beats_per_cycle = 2;
     d.queue = 8;
     d.row_bytes = 2048;
-    d.scheduler = DramScheduler::FrfcfsChannel;  // the scheduler these tests work by hand
+    d.set_scheduler("frfcfs_channel");  // the scheduler these tests work by hand
     d.tCL = 20, d.tRCD = 20, d.tRP = 20, d.tRAS = 50, d.tRC = 62, d.tRRD = 10, d.tCCD = 4, d.tWL = 8, d.tWR = 20;
     return d;
 }
@@ -205,7 +226,7 @@ std::map<uint64_t, uint64_t> run_channel(const DramConfig& cfg, const AddressMap
 // 128 (tRCD before the column bus frees at 148), column 148, data 168..176.
 TEST(Dram, PerBankSchedulerLetsOtherBanksPassAConflict) {
     DramConfig cfg = dram();
-    cfg.scheduler = DramScheduler::FrfcfsBanks;
+    cfg.set_scheduler("frfcfs_banks");
     AddressMap map("line", cfg.channels, cfg.banks, cfg.row_bytes, cfg.channels, 128);
     const uint64_t a = 0, b = 16 * 128, c = 16ull * 128 * 4, d = 16 * 128 + 256;
     ASSERT_EQ(map.dram(b).bank, 1u);
@@ -220,7 +241,7 @@ TEST(Dram, PerBankSchedulerLetsOtherBanksPassAConflict) {
         EXPECT_EQ(done.at(c), 168u);
         EXPECT_EQ(done.at(d), 133u);
     }
-    cfg.scheduler = DramScheduler::FrfcfsChannel;
+    cfg.set_scheduler("frfcfs_channel");
     const auto channel = run_channel(cfg, map, arrivals, false);
     EXPECT_EQ(channel.at(c), 168u);
     EXPECT_EQ(channel.at(d), 176u);
@@ -235,7 +256,7 @@ TEST(Dram, PerBankSchedulerLetsOtherBanksPassAConflict) {
 //   after the ACT at 70), ACT 140, columns 160, 164: ends 188.
 TEST(Dram, PerBankSchedulerKeepsActivationSpacing) {
     DramConfig cfg = dram();
-    cfg.scheduler = DramScheduler::FrfcfsBanks;
+    cfg.set_scheduler("frfcfs_banks");
     AddressMap map("line", cfg.channels, cfg.banks, cfg.row_bytes, cfg.channels, 128);
     const uint64_t row = 16ull * 128 * 4;
     const uint64_t b1 = 16 * 128, b2 = 2 * 16 * 128;
@@ -561,7 +582,7 @@ TEST(DramBookings, RowHitsFollowTimeNotCallOrder) {
     // FCFS serves reads in turn: only the bank's last row is a hit. F finds C's row 1 open, K
     // then F's row 0, G then K's row 1: conflicts; L follows G in row 0.
     HwConfig fcfs = hw;
-    fcfs.dram.scheduler = DramScheduler::Fcfs;
+    fcfs.dram.set_scheduler("fcfs");
     DramBookings f(fcfs.dram, fcfs.address_map());
     for (auto [addr, now] : {std::pair<uint64_t, uint64_t>{0, 0}, {131072, 0}, {32, 10}, {131104, 50}, {32, 60}, {0, 70}})
         f.access(addr, 32, now, 0);
@@ -616,7 +637,7 @@ TEST(DramBookings, ActivationsKeepAtsSpacing) {
 // for C's ACT; Dram.PerBankSchedulerLetsOtherBanksPassAConflict).
 TEST(DramBookings, PerBankConflictHoldsOnlyItsBank) {
     const HwConfig hw = Config::load("mobile").resolve();
-    ASSERT_EQ(hw.dram.scheduler, DramScheduler::FrfcfsBanks);
+    ASSERT_EQ(hw.dram.scheduler_name, "frfcfs_banks");
     const AddressMap map = hw.address_map();
     const uint64_t a = 0, b = 8192, c = 131072, d = 8704;
     ASSERT_EQ(map.dram(b).channel, 0u);
@@ -740,4 +761,101 @@ TEST(CacheBookings, HandWorkedSequence) {
     EXPECT_EQ(p.reservation_fails, 1u);  // H
     EXPECT_EQ(pf.useful, 1u);
     EXPECT_EQ(pf.late, 1u);
+}
+
+// Memory policies (docs/timing.md, "Memory policies"): a new replacement policy or DRAM scheduler
+// is one class and one registration. Each test below writes one that no preset has, registers it
+// and checks it by hand where the cache or the DRAM uses it.
+namespace {
+// Evicts the most recently used way: the opposite of LRU, so that a hand-worked sequence tells
+// the two apart. Ways are kept in a per-set list, most recent first.
+class MostRecentlyUsed : public ReplacementPolicy {
+public:
+    MostRecentlyUsed(uint32_t sets, uint32_t) : order_(sets) {}
+    void touched(uint32_t set, uint32_t way) override {
+        auto& o = order_[set];
+        o.erase(std::remove(o.begin(), o.end(), way), o.end());
+        o.insert(o.begin(), way);
+    }
+    uint32_t first_victim(uint32_t set) const override { return order_[set].empty() ? kNone : order_[set].front(); }
+    uint32_t next_victim(uint32_t set, uint32_t way) const override {
+        const auto& o = order_[set];
+        const auto it = std::find(o.begin(), o.end(), way);
+        return it == o.end() || it + 1 == o.end() ? kNone : *(it + 1);
+    }
+    void clear() override {
+        for (auto& o : order_) o.clear();
+    }
+
+private:
+    std::vector<std::vector<uint32_t>> order_;
+};
+}  // namespace
+
+// Set 0 of tiny_cache (2 ways) holds lines 0x000 and 0x100; line 0 is then read again, so it is
+// the most recently used. 0x200 evicts line 0 under the test's policy (LRU evicts 0x100): line 0
+// then misses (and evicts 0x200, the most recent) and 0x100 hits; under LRU the other way round.
+TEST(MemoryPolicies, AReplacementPolicyIsOneClassAndOneRegistration) {
+    register_replacement({"test-mru", "evicts the most recently used way", 0, 0,
+                          [](uint32_t sets, uint32_t assoc) { return std::make_unique<MostRecentlyUsed>(sets, assoc); }});
+    for (const std::string policy : {"lru", "test-mru"}) {
+        CacheConfig cfg = tiny_cache();
+        cfg.replacement = policy;
+        SectorCache c(cfg);
+        for (uint64_t line : {0x000, 0x100}) {
+            ASSERT_EQ(c.read(line, 1, ReqKind::Demand), CacheOutcome::LineMiss);
+            c.fill(line);
+        }
+        ASSERT_EQ(c.read(0x000, 2, ReqKind::Demand), CacheOutcome::Hit);
+        ASSERT_EQ(c.read(0x200, 3, ReqKind::Demand), CacheOutcome::LineMiss);
+        c.fill(0x200);
+        const bool mru = policy == "test-mru";
+        EXPECT_EQ(c.read(0x000, 4, ReqKind::Demand), mru ? CacheOutcome::LineMiss : CacheOutcome::Hit) << policy;
+        if (mru) c.fill(0x000);
+        EXPECT_EQ(c.read(0x100, 5, ReqKind::Demand), mru ? CacheOutcome::Hit : CacheOutcome::LineMiss) << policy;
+    }
+    // The configuration takes it by name; an unknown one is refused naming the known ones.
+    Config config = Config::load("mobile");
+    config.set("l1.replacement=test-mru");
+    EXPECT_EQ(config.resolve().l1.replacement, "test-mru");
+    config.set("l2.replacement=nope");
+    try {
+        config.resolve();
+        ADD_FAILURE() << "an unknown replacement policy was accepted";
+    } catch (const ConfigError& e) {
+        EXPECT_NE(std::string(e.what()).find("allowed are fifo, lru"), std::string::npos) << e.what();
+    }
+}
+
+// A scheduler that serves the newest waiting request first, one per channel. Requests A (row 0),
+// B (row 1) and C (row 2) of bank 0 arrive together at cycle 0: FCFS serves A, B, C; this one
+// picks C first (a closed bank: tRCD + tCL + 8 = 48), then B (a conflict: precharge at tRAS = 50,
+// ACT at max(50 + tRP, tRC) = 70, data at 70 + 20 + 20 + 8 = 118), then A. The bookings of LT
+// and the interval fidelity ask the same policy whether its picks follow row hits: these follow
+// age, so the bookings serve a bank's reads in turn.
+TEST(MemoryPolicies, ADramSchedulerIsOneClassAndOneRegistration) {
+    class NewestFirst : public DramSchedulerPolicy {
+    public:
+        bool per_bank() const override { return false; }
+        size_t pick(size_t n, const bool*) const override { return n - 1; }
+    };
+    register_dram_scheduler({"test-newest-first", "the newest request first", [] { return std::make_shared<const NewestFirst>(); }});
+    DramConfig cfg = dram();
+    const AddressMap map("line", cfg.channels, cfg.banks, cfg.row_bytes, cfg.channels, 128);
+    const uint64_t row = uint64_t(cfg.row_bytes) * cfg.banks;  // the next row of bank 0
+    const std::vector<std::pair<uint64_t, uint64_t>> arrivals = {{0, 0}, {0, row}, {0, 2 * row}};
+    cfg.set_scheduler("fcfs");
+    const auto fcfs = run_channel(cfg, map, arrivals, false);
+    cfg.set_scheduler("test-newest-first");
+    const auto newest = run_channel(cfg, map, arrivals, false);
+    EXPECT_LT(fcfs.at(0), fcfs.at(row));
+    EXPECT_LT(fcfs.at(row), fcfs.at(2 * row));
+    EXPECT_EQ(newest.at(2 * row), 48u);
+    EXPECT_EQ(newest.at(row), 118u);
+    EXPECT_GT(newest.at(0), newest.at(row));
+    EXPECT_FALSE(cfg.scheduler->row_hits_first());
+    EXPECT_TRUE(dram_scheduler_kind("frfcfs_banks").make()->row_hits_first());
+    Config config = Config::load("mobile");
+    config.set("dram.scheduler=test-newest-first");
+    EXPECT_EQ(config.resolve().dram.scheduler_name, "test-newest-first");
 }

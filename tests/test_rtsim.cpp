@@ -1311,7 +1311,7 @@ TEST(RtsimConfig, EveryKeyOfEveryPresetIsRead) {
         {{"rt.latency.header=40"}}, {{"rt.latency.ray_box=40"}}, {{"rt.latency.transform=40"}},
         {{"rt.latency.leaf_descriptor=40"}}, {{"rt.latency.ray_triangle=40"}}, {{"rt.latency.triangle_hit=40"}},
         {{"rt.latency.procedural=40"}, "--scene wknd"}, {{"workload.shade_latency=5000"}}, {{"workload.resident_warps=1"}, "--set gpu.sms=2"},
-        {{"l1.size_kb=2"}}, {{"l1.assoc=4"}}, {{"l1.line=64", "l2.line=64", "l2.set_index=linear"}}, {{"l1.sector=64", "l2.sector=64"}},
+        {{"l1.size_kb=2"}}, {{"l1.assoc=4"}}, {{"l1.replacement=fifo"}, "--set l1.size_kb=2"}, {{"l2.replacement=fifo"}, "--set l2.slice_kb=2 --set l2.assoc=4 --set l2.set_index=linear"}, {{"l1.line=64", "l2.line=64", "l2.set_index=linear"}}, {{"l1.sector=64", "l2.sector=64"}},
         {{"l1.mshrs=2", "l1.mshr_merge=2"}}, {{"l1.mshr_merge=1"}},
         {{"l2.slices=1", "dram.address_map=line"}}, {{"l2.slice_kb=16", "l2.set_index=linear"}}, {{"l2.assoc=1"}, "--set l2.slice_kb=16 --set l2.set_index=linear"}, {{"l2.mshrs=2", "l2.mshr_merge=2"}}, {{"l2.mshr_merge=1"}},
         {{"l2.latency=20"}}, {{"l2.set_index=ipoly", "l2.slice_kb=16", "l2.assoc=2"}}, {{"xbar.latency=30"}},
