@@ -1,4 +1,4 @@
-// DRAM channel timing: banks with open rows, the command timing of DESIGN.md section 5 (tCL,
+// DRAM channel timing: banks with open rows, the command timing of the paper's Table 2 (docs/paper-preset.md: tCL,
 // tRCD, tRP, tRAS, tRC, tRRD, tCCD, tWL, tWR, in memory clock cycles), a shared data bus of
 // bus_bytes x 2 (double data rate) per memory cycle, and an FR-FCFS (or FCFS) scheduler over a
 // bounded request queue. Plain C++ (no SystemC); the tlm/ DRAM module drives it.

@@ -1,4 +1,4 @@
-// A node fetch as the RT unit sends it to memory (paper section 2.3, DESIGN.md section 5): a node
+// A node fetch as the RT unit sends it to memory (paper section 2.3; docs/paper-preset.md): a node
 // larger than 32 B leaves as consecutive 32 B chunks, and the threads of one warp that fetch the
 // same node in one scheduling share one fetch (intra-warp coalescing). Used by every fidelity.
 // Plain C++ (no SystemC).

@@ -1,4 +1,4 @@
-// The BVH memory image: byte layout of every node the RT unit fetches (DESIGN.md section 6).
+// The BVH memory image: byte layout of every node the RT unit fetches (docs/foundation.md, "BVH images and functional speed").
 //
 // All nodes live in 64 B blocks; addresses are byte addresses into the image and always
 // 64 B aligned. Siblings are contiguous: an internal node stores one base address and the

@@ -1,4 +1,4 @@
-// The RT unit's per-cycle logic (paper section 2.3, DESIGN.md section 5) for the AT and LT
+// The RT unit's per-cycle logic (paper section 2.3; docs/paper-preset.md) for the AT and LT
 // fidelities, independent of how time advances: the warp buffer of threads (model/rt_thread.h;
 // plain data, never one process per thread), the warp scheduler (model/warp_scheduler.h), the
 // memory access queue with the prefetch queue beside it (model/memory_access_queue.h), the

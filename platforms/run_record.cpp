@@ -65,7 +65,7 @@ void write_stats(StatsOut& out, const RunRecord& r) {
     out.value("nodes_per_ray", r.rays > r.invalid ? double(r.nodes_visited) / double(r.rays - r.invalid) : 0.0, "node reads / ray",
               "nodes_visited per valid ray");
     {
-        StatsOut b = out.child("bvh", "the BVH image (DESIGN.md section 6)");
+        StatsOut b = out.child("bvh", "the BVH image (model/node_format.h)");
         b.value("two_level", r.two_level, "", "a TLAS over instanced BLASes (false: one single-level BVH)");
         b.value("image_bytes", r.bvh.image_bytes, "bytes", "the BVH image in simulated memory");
         b.value("internal_nodes", r.bvh.internal_nodes, "nodes", "64 B internal nodes");

@@ -1,7 +1,7 @@
 // The register block of the RT-unit peripheral (include/rtunit/rtu_regs.h): the registers'
 // values and the access rules of a 32-bit register block on a TLM bus, without side effects of
 // its own: it reports commands (START, ABORT, SOFT_RESET, ...) to the peripheral that owns it.
-// Rules (../shared/soc-vp.md 5.2, the VCML convention): 4-byte aligned accesses, or one aligned
+// Rules (docs/peripheral.md; the VCML convention): 4-byte aligned accesses, or one aligned
 // 8-byte access to a 64-bit LO/HI pair; any other length or an unaligned one is a burst error, a
 // byte-enable mask a byte-enable error, an unmapped offset an address error, a write to a
 // read-only or a read of a write-only register a command error. Debug accesses follow the same

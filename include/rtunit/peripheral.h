@@ -1,6 +1,6 @@
 // The RT unit as an SoC peripheral: the RT complex of the timing model (RT units, L1s, crossbar,
 // L2 slices, DRAM) behind a register block, a system-memory master and a level interrupt, as
-// accelerators are integrated in virtual platforms (../shared/soc-vp.md; docs/peripheral.md).
+// accelerators are integrated in virtual platforms (docs/peripheral.md).
 //
 //   regs  target socket, 32-bit registers in a 4 KiB aperture (rtunit/rtu_regs.h); b_transport
 //         and transport_dbg, LT; errors as TLM response statuses

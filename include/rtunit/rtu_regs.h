@@ -4,7 +4,7 @@
  * are 32-bit little-endian in a 4 KiB aperture; the block decodes address & 0xFFF, so it works
  * behind routers that pass absolute or relative addresses. 64-bit values are LO/HI pairs (an
  * aligned 8-byte access reads or writes a pair at once). Reading a performance counter's LO
- * latches its HI. Layouts follow ../shared/soc-vp.md section 3 (docs/peripheral.md says where
+ * latches its HI. Layouts follow the reference design of an SoC peripheral (docs/peripheral.md says where
  * this implementation differs); they are version 1.0 of the interface (RTU_VERSION).
  */
 #ifndef RTUNIT_RTU_REGS_H
