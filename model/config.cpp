@@ -33,13 +33,13 @@ const Key kSchema[] = {
     {"rt.leaf_descriptor_read", "", Type::Bool, 0, 0, false, "a primitive leaf is read in two dependent steps, its 8 B descriptor (one 32 B chunk) then the 64 B leaf, as in the TTP authors' simulator (false: both chunks at once)"},
     {"rt.warp_scheduler", "", Type::Text, 0, 0, false, "which warp with ready threads the RT unit schedules each cycle: round_robin, or oldest_first (the TTP authors' RT unit)"},
     {"rt.response_fifo", "entries", Type::Int, 0, 1 << 20, false, "response FIFO entries (0: unbounded, as in Vulkan-sim); a full FIFO holds the L1's responses back"},
-    {"rt.latency.header", "core cycles", Type::Int, 0, 1000, false, "BVH node header decode"},
     {"rt.latency.ray_box", "core cycles", Type::Int, 0, 1000, false, "ray-box tests of an internal node"},
     {"rt.latency.transform", "core cycles", Type::Int, 0, 1000, false, "instance transform"},
     {"rt.latency.leaf_descriptor", "core cycles", Type::Int, 0, 1000, false, "leaf descriptor"},
     {"rt.latency.ray_triangle", "core cycles", Type::Int, 0, 1000, false, "ray-triangle test"},
     {"rt.latency.triangle_hit", "core cycles", Type::Int, 0, 1000, false, "triangle hit update"},
     {"rt.latency.procedural", "core cycles", Type::Int, 0, 1000, false, "procedural (sphere) test"},
+    {"rt.latency.structure", "core cycles", Type::Int, 0, 1000, false, "a BVH header's record: the TLAS's at a ray's start, a BLAS's after an instance leaf (Vulkan-sim's STRUCTURE)"},
     {"workload.resident_warps", "shader warps", Type::Int, 0, 1 << 20, false, "shader warps an SM holds at once (CTAs of one warp); a finished warp's place goes to the next warp of the frame (0: every warp at once)"},
     {"workload.shade_latency", "core cycles", Type::Int, 0, 1e7, false, "cycles to shade a hit and issue the next ray"},
     {"l1.size_kb", "KiB", Type::Int, 1, 1 << 20, true, "L1 data cache per SM"},
@@ -106,6 +106,8 @@ const Key kSchema[] = {
 // Keys that earlier versions had, with why they are gone (a configuration naming one is refused
 // with this reason rather than as unknown).
 const std::pair<const char*, const char*> kRemoved[] = {
+    {"rt.latency.header", "an internal node costs rt.latency.ray_box (Vulkan-sim's INTERNAL, one latency per record); the BVH header's "
+                          "latency (Vulkan-sim's STRUCTURE) is rt.latency.structure, charged on the header's own read"},
     {"l1.latency", "the L1's load/store hit latency (Table 2: 20 cycles) applies to the shader core's loads, "
                    "which are not modelled; the RT unit's L1 hit latency is rt.l1_hit_latency (0: Vulkan-sim's RT unit reads L1 directly)"},
     {"dram.bank_groups", "bank groups only matter through a longer column-to-column delay within a group (tCCDL); "
@@ -286,9 +288,9 @@ HwConfig Config::resolve() const {
     h.warp_order = order == "oldest_first" ? WarpOrder::OldestFirst : WarpOrder::RoundRobin;
     h.next_node_register = values_.at("rt.next_node_register").get<bool>();
     h.leaf_descriptor_read = values_.at("rt.leaf_descriptor_read").get<bool>();
-    h.lat = {u32("rt.latency.header"), u32("rt.latency.ray_box"), u32("rt.latency.transform"),
+    h.lat = {u32("rt.latency.ray_box"), u32("rt.latency.transform"),
              u32("rt.latency.leaf_descriptor"), u32("rt.latency.ray_triangle"), u32("rt.latency.triangle_hit"),
-             u32("rt.latency.procedural")};
+             u32("rt.latency.procedural"), u32("rt.latency.structure")};
     h.shade_latency = u32("workload.shade_latency");
     h.resident_warps = u32("workload.resident_warps");
     // `latency`: what a hit costs the cache's requester (the RT unit at an L1).

@@ -52,7 +52,8 @@ struct DramConfig {
 enum class WarpOrder { RoundRobin, OldestFirst };
 
 struct RtLatency {
-    uint32_t header, ray_box, transform, leaf_descriptor, ray_triangle, triangle_hit, procedural;
+    uint32_t ray_box, transform, leaf_descriptor, ray_triangle, triangle_hit, procedural;
+    uint32_t structure;  // a BVH header's record (the image's at a ray's start, a BLAS's after its instance leaf)
 };
 
 // Per-event energies (see docs/energy.md for the figures and where they come from).

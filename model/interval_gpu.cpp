@@ -266,8 +266,7 @@ void IntervalGpu::run_event(const Event& ev, std::vector<Finished>& finished) {
             pq.scheduled = true;
             events_.push({t.ready + 1, next_seq_++, sm, kPrefetch});
         }
-        ++rt_[sm].node_fetches;
-        ++rt_[sm].pop_streak[t.fetch_class].node_fetches;
+        t.rt.count_fetch(rt_[sm], t.fetch_class);
         t.fetch_l1_miss = t.fetch_dram = false;
     }
     const bool descriptor = !leaf_after_descriptor && read_in_two_steps(e.type, cfg_.leaf_descriptor_read);

@@ -89,6 +89,7 @@ const char* node_type_name(NodeType t) {
         case NodeType::Triangle: return "triangle";
         case NodeType::Procedural: return "procedural";
         case NodeType::Instance: return "instance";
+        case NodeType::Header: return "header";
     }
     return "?";
 }
@@ -266,7 +267,7 @@ void encode_header(const ImageHeader& h, uint8_t out[kBlockBytes]) {
         put(out + 20 + 4 * a, h.root_box.hi[a]);
     }
     put(out + 32, uint32_t(h.root / kBlockBytes));
-    put(out + 36, uint32_t((h.has_instances ? 1u : 0u) | (h.has_procedural ? 2u : 0u)));
+    put(out + 36, uint32_t((h.has_instances ? 1u : 0u) | (h.has_procedural ? 2u : 0u) | (h.has_headers ? 4u : 0u)));
     put(out + 40, h.leaves);
 }
 
@@ -281,6 +282,7 @@ ImageHeader decode_header(const uint8_t* bytes) {
     const uint32_t flags = get<uint32_t>(bytes + 36);
     h.has_instances = flags & 1u;
     h.has_procedural = flags & 2u;
+    h.has_headers = flags & 4u;
     h.leaves = get<uint32_t>(bytes + 40);
     return h;
 }

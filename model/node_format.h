@@ -20,7 +20,15 @@
 // Instance leaf, 128 B:  float world_to_object[3][4], object_to_world[3][4]; uint32 blas_root
 //                        (block index), uint32 instance id, uint32 geom (mesh of the BLAS).
 // Image header at address 0, 64 B: "RTUBVH01", float root box lo[3] hi[3], uint32 root block,
-//                        uint32 flags (bit 0 instances, bit 1 procedural), uint32 leaf count.
+//                        uint32 flags (bit 0 instances, bit 1 procedural, bit 2 headers),
+//                        uint32 leaf count. It is the TLAS's (or the single-level BVH's) header.
+// BLAS header, 64 B, the block before each BLAS's root (flag bit 2): the same layout, of that BLAS
+//                        (its root box and root block; flags 0; its leaf count).
+// With flag bit 2 the RT unit reads the image header at the start of every ray and a BLAS's
+// header after each instance leaf that leads into it, as the TTP authors' simulator reads the
+// acceleration structures' 64 B headers (vulkan_ray_tracing.cc traceRay_BFS l.1667, l.1901).
+// A header read is a fetch (NodeType::Header), not a node visit: it is not a pop and is not
+// counted in the nodes a ray visits.
 #pragma once
 #include <array>
 #include <cstddef>
@@ -37,7 +45,7 @@ namespace rtu {
 constexpr uint32_t kBlockBytes = 64;
 constexpr int kMaxChildren = 6;
 
-enum class NodeType : uint8_t { Empty = 0, Internal = 1, Triangle = 2, Procedural = 3, Instance = 4 };
+enum class NodeType : uint8_t { Empty = 0, Internal = 1, Triangle = 2, Procedural = 3, Instance = 4, Header = 5 };
 
 // Size of a node of this type in bytes (what the RT unit fetches for it).
 uint32_t node_bytes(NodeType t);
@@ -101,6 +109,7 @@ struct ImageHeader {
     Aabb root_box;
     uint64_t root = 0;  // byte address of the root internal node
     bool has_instances = false, has_procedural = false;
+    bool has_headers = false;  // the TLAS and every BLAS have a header the RT unit reads (flag bit 2)
     uint32_t leaves = 0;
 };
 void encode_header(const ImageHeader& h, uint8_t out[kBlockBytes]);

@@ -26,6 +26,12 @@ struct Hit {
     uint32_t prim = kNoId;  // triangle / procedural primitive index within that mesh
     float u = 0.0f, v = 0.0f;  // barycentrics of v1 and v2 (triangles only)
     glm::vec3 ng{0.0f};        // geometric normal in world space (unnormalised)
+    // The hit's t as the TTP authors' simulator and application compute it, in float: a
+    // triangle's by Moller-Trumbore on the object-space ray of unit direction, a sphere's by
+    // LumiBench's intersection shader (model/traversal.h). It orders the hits (which of two
+    // coincident triangles wins, as in their traversal) and is what the shaders see; `t` is the
+    // robust one (hits files, verification).
+    float app_t = -1.0f;
 };
 
 // What the ray-file contract calls a valid ray: finite origin and direction, direction not

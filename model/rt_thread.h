@@ -43,15 +43,30 @@ struct RtThread {
         return c;
     }
 
+    // The fetch of trav.peek() counted: a node read under its class, or a header read apart (a
+    // header is not a node visit).
+    void count_fetch(RtUnitStats& st, uint8_t fetch_class) const {
+        if (trav.peek().type == NodeType::Header) {
+            ++st.header_fetches;
+            return;
+        }
+        ++st.pop_streak[fetch_class].node_fetches;
+        ++st.node_fetches;
+    }
+
     // The fetch's node arrived whole (`l1_miss`: some chunk was not served by L1; `dram`: some
     // chunk came from DRAM): counts it under the fetch's class and runs the node's tests.
     StepInfo complete_fetch(RtUnitStats& st, uint8_t fetch_class, bool l1_miss, bool dram, const BvhImage& image,
                             Prefetcher& prefetcher) {
-        st.pop_streak[fetch_class].l1_misses += l1_miss;
-        st.pop_streak[fetch_class].dram_misses += dram;
-        st.l1_misses_with_next_queued += l1_miss && next_queued;
-        l1_miss_nodes += l1_miss;
-        dram_nodes += dram;
+        if (trav.peek().type == NodeType::Header) {
+            st.header_l1_misses += l1_miss;
+        } else {
+            st.pop_streak[fetch_class].l1_misses += l1_miss;
+            st.pop_streak[fetch_class].dram_misses += dram;
+            st.l1_misses_with_next_queued += l1_miss && next_queued;
+            l1_miss_nodes += l1_miss;
+            dram_nodes += dram;
+        }
         const StepInfo info = trav.step(image);
         if (info.pushed > 0) {
             streak.push();

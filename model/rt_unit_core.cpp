@@ -107,10 +107,11 @@ uint32_t rt_math_latency(const RtLatency& lat, const StepInfo& s, bool leaf_desc
     const uint32_t descriptor = leaf_descriptor_read ? 0 : lat.leaf_descriptor;  // else paid by the first read
     uint32_t l = 0;
     switch (s.type) {
-        case NodeType::Internal: l = lat.header + lat.ray_box; break;
+        case NodeType::Internal: l = lat.ray_box; break;
         case NodeType::Triangle: l = descriptor + lat.ray_triangle + (s.hit ? lat.triangle_hit : 0); break;
         case NodeType::Procedural: l = descriptor + lat.procedural; break;
         case NodeType::Instance: l = descriptor + lat.transform; break;
+        case NodeType::Header: l = lat.structure; break;
         case NodeType::Empty: break;
     }
     return std::max<uint32_t>(l, 1);
@@ -275,8 +276,7 @@ void RtUnitCore::schedule_warp(uint64_t now) {
             sink_.warp = wi;
             sink_.thread = ti;
             t.fetch_class = t.rt.begin_fetch(*prefetcher_, sink_);
-            ++stats_.pop_streak[t.fetch_class].node_fetches;
-            ++stats_.node_fetches;
+            t.rt.count_fetch(stats_, t.fetch_class);
             t.fetch_l1_miss = t.fetch_dram = false;
             t.descriptor_read = read_in_two_steps(e.type, cfg_.leaf_descriptor_read);
             t.chunks_left = t.descriptor_read ? kDescriptorChunks : chunks_of(e.type);

@@ -72,6 +72,7 @@ struct RtUnitStats {
     uint64_t warps = 0, rays = 0, node_fetches = 0, chunk_requests = 0, coalesced_fetches = 0, responses = 0;
     uint64_t limit_study_hits = 0, max_response_fifo = 0, max_memory_access_queue = 0;
     uint64_t l1_misses_with_next_queued = 0;
+    uint64_t header_fetches = 0, header_l1_misses = 0;
     ThreadCycles thread_cycles;
     PrefetchQueueCounts prefetch_queue;
     PopStreakStats pop_streak;
@@ -80,6 +81,9 @@ struct RtUnitStats {
         {"warps", &RtUnitStats::warps, "traces", "traces (a shader warp's trace_ray) taken into the warp buffer"},
         {"rays", &RtUnitStats::rays, "rays", "rays taken into the warp buffer"},
         {"node_fetches", &RtUnitStats::node_fetches, "node reads", "node reads of all threads (coalesced ones included)"},
+        {"header_fetches", &RtUnitStats::header_fetches, "header reads",
+         "64 B BVH header reads: the TLAS's at each ray's start and a BLAS's after each instance leaf (not node reads, not pops)"},
+        {"header_l1_misses", &RtUnitStats::header_l1_misses, "header reads", "of them, not served by L1"},
         {"chunk_requests", &RtUnitStats::chunk_requests, "requests", "32 B demand requests of node reads (sent to L1, or answered by a limit study)"},
         {"coalesced_fetches", &RtUnitStats::coalesced_fetches, "node reads", "node reads that shared another thread's read of the same node in one scheduling (intra-warp coalescing)"},
         {"responses", &RtUnitStats::responses, "responses", "demand responses drained from the response FIFO"},

@@ -15,6 +15,44 @@
 
 namespace rtu {
 
+namespace {
+
+// Float arithmetic as the authors' simulator writes it (vulkan_ray_tracing.cc), each operation
+// in its order: the hit t's it computes decide which of two coincident triangles wins and where
+// the application's next ray starts, so rtunit computes them the same way beside its robust tests.
+float dotf(glm::vec3 a, glm::vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+glm::vec3 crossf(glm::vec3 a, glm::vec3 b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
+
+}  // namespace
+
+bool moller_trumbore_t(const glm::vec3& o, const glm::vec3& dir, const TriangleLeaf& tl, float* t) {
+    const float mult = std::sqrt(dir.x * dir.x + dir.y * dir.y + dir.z * dir.z);
+    const glm::vec3 d(dir.x / mult, dir.y / mult, dir.z / mult);
+    const glm::vec3 v0v1 = tl.v1 - tl.v0, v0v2 = tl.v2 - tl.v0;
+    const glm::vec3 pvec = crossf(d, v0v2);
+    const float idet = 1 / dotf(v0v1, pvec);
+    const glm::vec3 tvec = o - tl.v0;
+    const glm::vec3 qvec = crossf(tvec, v0v1);
+    *t = dotf(v0v2, qvec) * idet / mult;
+    return std::isfinite(*t);
+}
+
+namespace {
+
+// LumiBench's sphere intersection shader (RayTracing.Procedural.rint l.24-39) in float: the
+// entry root if it is at or beyond tmin, else the exit root; `robust` where the float
+// discriminant says the ray misses (a graze the robust test takes).
+float shader_sphere_t(const glm::vec3& o, const glm::vec3& d, const SphereLeaf& s, float tmin, float robust) {
+    const glm::vec3 oc = o - s.center;
+    const float a = dotf(d, d), b = dotf(oc, d), c = dotf(oc, oc) - s.radius * s.radius;
+    const float disc = b * b - a * c;
+    if (!(disc >= 0)) return robust;
+    const float t1 = (-b - std::sqrt(disc)) / a, t2 = (-b + std::sqrt(disc)) / a;
+    return tmin <= t1 ? t1 : t2;
+}
+
+}  // namespace
+
 uint32_t TraversalThread::next_treelet() const {
     if (!treelets_) return ~0u;
     if (!has_next_ && stack_.empty() && !deferred_.empty()) return treelets_->treelet_of(deferred_.back().addr);
@@ -24,7 +62,9 @@ uint32_t TraversalThread::next_treelet() const {
 void TraversalThread::start(const Ray& ray, const ImageHeader& header, TraversalOrder order, const Treelets* treelets,
                             bool next_node_register) {
     ray_ = ray;
+    tmax_ = ray.tfar;
     order_ = order;
+    headers_ = header.has_headers;
     register_ = next_node_register && order != TraversalOrder::BFS;
     treelets_ = order == TraversalOrder::Treelet ? treelets : nullptr;
     if (order == TraversalOrder::Treelet && !treelets_) throw std::logic_error("treelet traversal needs treelets");
@@ -38,6 +78,14 @@ void TraversalThread::start(const Ray& ray, const ImageHeader& header, Traversal
     org_ = ray.org;
     dir_ = ray.dir;
     world_box_ray_ = box_ray_ = make_box_test_ray(org_, dir_);
+    if (header.has_headers) {
+        // The image header is read first (not a pop); its step tests the root box.
+        next_ = StackEntry{0, NodeType::Header, kNoId};
+        has_next_ = true;
+        root_box_ = header.root_box;
+        root_ = header.root;
+        return;
+    }
     if (intersect_box(world_box_ray_, header.root_box, ray_.tnear, ray_.tfar, nullptr)) {
         const StackEntry root{header.root, NodeType::Internal, kNoId};
         if (register_) {
@@ -47,6 +95,32 @@ void TraversalThread::start(const Ray& ray, const ImageHeader& header, Traversal
             stack_.push_back(root);  // the first read is a pop too (Algorithm 1, lines 1-2)
         }
     }
+}
+
+void TraversalThread::push_next(const StackEntry& e, StepInfo& info) {
+    if (treelets_ && treelets_->treelet_of(e.addr) != current_treelet_) {
+        deferred_.push_back(e);
+        ++info.pushed;
+    } else if (register_) {
+        next_ = e;
+        has_next_ = true;
+    } else {
+        stack_.push_back(e);
+        ++info.pushed;
+    }
+}
+
+bool TraversalThread::take_hit(float t, float app_t, float u, float v, uint32_t geom, uint32_t prim, const glm::vec3& ng) {
+    if (hit_.hit && !(app_t < hit_.app_t)) return false;
+    hit_.hit = true;
+    hit_.t = t;
+    hit_.app_t = app_t;
+    hit_.u = u;
+    hit_.v = v;
+    hit_.geom = geom;
+    hit_.prim = prim;
+    hit_.ng = ng;
+    return true;
 }
 
 void TraversalThread::select_space(const BvhImage& image, uint32_t inst_block) {
@@ -155,6 +229,18 @@ StepInfo TraversalThread::step(const BvhImage& image) {
         info.from_stack = true;
     }
     info.type = e.type;
+    if (e.type == NodeType::Header) {
+        image.at(e.addr, node_bytes(e.type));  // in the image, as every fetch
+        if (e.addr == 0) {
+            // The image header: the root, if its box is hit.
+            if (intersect_box(world_box_ray_, root_box_, ray_.tnear, ray_.tfar, nullptr))
+                push_next(StackEntry{root_, NodeType::Internal, kNoId}, info);
+        } else {
+            // A BLAS's header: its root follows it, entered without a box test.
+            push_next(StackEntry{e.addr + kBlockBytes, NodeType::Internal, e.inst_block}, info);
+        }
+        return info;
+    }
     ++nodes_visited_;
     select_space(image, e.inst_block);
     const uint8_t* bytes = image.at(e.addr, node_bytes(e.type));
@@ -174,51 +260,46 @@ StepInfo TraversalThread::step(const BvhImage& image) {
         }
         case NodeType::Instance: {
             const InstanceLeaf inst = decode_instance(bytes);
-            StackEntry root{inst.blas_root, NodeType::Internal, uint32_t(e.addr / kBlockBytes)};
-            if (treelets_ && treelets_->treelet_of(root.addr) != current_treelet_) {
-                deferred_.push_back(root);
-                ++info.pushed;
-            } else if (register_) {
-                next_ = root;
+            const uint32_t block = uint32_t(e.addr / kBlockBytes);
+            if (headers_) {
+                // The BLAS's header is read next, by this same pop (not a pop of its own).
+                if (inst.blas_root < kBlockBytes) throw std::runtime_error("instance leaf's BLAS root has no header before it");
+                next_ = StackEntry{inst.blas_root - kBlockBytes, NodeType::Header, block};
                 has_next_ = true;
             } else {
-                stack_.push_back(root);
-                ++info.pushed;
+                push_next(StackEntry{inst.blas_root, NodeType::Internal, block}, info);
             }
             break;
         }
         case NodeType::Triangle: {
             const TriangleLeaf t = decode_triangle(bytes);
             TriangleHit th;
-            if (intersect_triangle(org_, dir_, t.v0, t.v1, t.v2, ray_.tnear, ray_.tfar, &th)) {
+            float app_t;
+            // The robust test decides the hit (as Embree would); the simulator's arithmetic
+            // gives its t, by which it is accepted (t >= tmin, closer than the closest triangle
+            // hit so far, strictly: of coincident triangles the first visited wins) and culls.
+            if (intersect_triangle(org_, dir_, t.v0, t.v1, t.v2, ray_.tnear, tmax_, &th) && moller_trumbore_t(org_, dir_, t, &app_t) &&
+                app_t >= ray_.tnear && app_t < ray_.tfar) {
                 info.hit = true;
-                ray_.tfar = th.t;
-                hit_.hit = true;
-                hit_.t = th.t;
-                hit_.u = th.u;
-                hit_.v = th.v;
-                hit_.geom = t.geom;
-                hit_.prim = t.prim;
-                hit_.ng = normal_to_world(image, glm::cross(t.v1 - t.v0, t.v2 - t.v0));
+                ray_.tfar = app_t;  // culls from now on
+                take_hit(th.t, app_t, th.u, th.v, t.geom, t.prim, normal_to_world(image, glm::cross(t.v1 - t.v0, t.v2 - t.v0)));
             }
             break;
         }
         case NodeType::Procedural: {
+            // Recorded for the intersection shader, which runs after the traversal: its hit is
+            // taken if it is the closest, but culls nothing (see the file comment).
             const SphereLeaf s = decode_sphere(bytes);
             float th;
-            if (intersect_sphere(org_, dir_, s.center, s.radius, ray_.tnear, ray_.tfar, &th)) {
-                info.hit = true;
-                ray_.tfar = th;
-                hit_.hit = true;
-                hit_.t = th;
-                hit_.u = hit_.v = 0.0f;
-                hit_.geom = s.geom;
-                hit_.prim = s.prim;
-                hit_.ng = normal_to_world(image, (org_ + th * dir_) - s.center);  // outward
+            float app_t = 0.0f;
+            if (intersect_sphere(org_, dir_, s.center, s.radius, ray_.tnear, tmax_, &th)) {
+                app_t = shader_sphere_t(org_, dir_, s, ray_.tnear, th);
+                take_hit(th, app_t, 0.0f, 0.0f, s.geom, s.prim, normal_to_world(image, (org_ + th * dir_) - s.center));  // outward
             }
             break;
         }
         case NodeType::Empty:
+        case NodeType::Header:
             break;
     }
     if (info.hit && ray_.query == Query::Any) finish();
@@ -240,7 +321,10 @@ TraceResult trace_ray(const BvhImage& image, const Ray& ray, TraversalOrder orde
             throw std::length_error("traversal visited more than " + std::to_string(max_nodes) + " nodes (a cycle in the image?)");
     }
     r.hit = th.hit();
-    if (r.hit.hit) r.hit.t = std::ldexp(r.hit.t, -k);
+    if (r.hit.hit) {
+        r.hit.t = std::ldexp(r.hit.t, -k);
+        r.hit.app_t = std::ldexp(r.hit.app_t, -k);
+    }
     r.nodes_visited = th.nodes_visited();
     return r;
 }

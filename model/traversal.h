@@ -8,6 +8,23 @@
 // first hit child is taken next from the register instead and the others are pushed: that read
 // is not a pop. A child whose entry distance is beyond the closest hit so far is culled. BFS
 // keeps a FIFO queue: every hit child is appended in child order.
+//
+// As in the TTP authors' simulator (vulkan_ray_tracing.cc traceRay_BFS):
+// - With an image whose headers are read (ImageHeader::has_headers), a ray first reads the image
+//   header (its fetch), tests the root box it holds and pushes the root if hit; an instance leaf
+//   is followed by its BLAS's header, after which the BLAS root is pushed without a box test
+//   (the instance's box in its parent was the test). A header read is not a pop and not a node
+//   visit.
+// - A procedural leaf's hit does not cull: the simulator runs intersection shaders after the
+//   traversal, so only triangle hits shorten the ray for the box tests that decide what is pushed
+//   (l.1801, l.1966, and procedural leaves are recorded, never accepted, l.2189). The hit
+//   reported is still the closest of all, procedural or not. An any-hit ray stops at its first
+//   triangle hit; a procedural hit is kept and the traversal goes on.
+// - Robust tests decide whether a primitive is hit; the simulator's and the application's float
+//   arithmetic give the t by which hits are ordered and accepted (Hit::app_t): a triangle's
+//   Moller-Trumbore t must be at or beyond tmin and strictly closer than the closest triangle
+//   hit so far, so that of two coincident triangles (the ship's double-sided sails) the one the
+//   simulator takes wins.
 #pragma once
 #include <cstdint>
 #include <deque>
@@ -22,6 +39,12 @@ namespace rtu {
 enum class TraversalOrder : uint8_t { DFS, BFS, Treelet };
 
 struct Treelets;
+
+// The TTP authors' simulator's t of a triangle hit, in its float arithmetic: Moller-Trumbore
+// (vulkan_ray_tracing.cc mt_ray_triangle_test, l.2350-2379) on the ray with its direction made
+// unit (make_transformed_ray, l.148-161), back in the ray's own units (l.2078). False where it
+// is not a number (a ray parallel to the triangle's plane). It orders hits (Hit::app_t).
+bool moller_trumbore_t(const glm::vec3& o, const glm::vec3& dir, const TriangleLeaf& tl, float* t);
 
 struct StackEntry {
     uint64_t addr = 0;
@@ -80,9 +103,15 @@ private:
         stack_.clear();
         deferred_.clear();
     }
+    // Pushes an entry taken after the current step: the stack (or deferred stack), or with the
+    // next-node register the register.
+    void push_next(const StackEntry& e, StepInfo& info);
+    // Takes `t` (ray parameter) at primitive (geom, prim) as the hit if it is the closest so far.
+    bool take_hit(float t, float app_t, float u, float v, uint32_t geom, uint32_t prim, const glm::vec3& ng);
     glm::vec3 normal_to_world(const BvhImage& image, const glm::vec3& n) const;
 
-    Ray ray_;
+    Ray ray_;  // tfar: the closest triangle hit so far (its Hit::app_t), the bound the box tests cull by
+    float tmax_ = 0.0f;  // the ray's own tfar: the window of the robust primitive tests
     TraversalOrder order_ = TraversalOrder::DFS;
     bool register_ = false;  // the next-node register is in use
     Hit hit_;
@@ -91,6 +120,9 @@ private:
     uint32_t current_treelet_ = ~0u;
     StackEntry next_;
     bool has_next_ = false;
+    bool headers_ = false;   // the image's headers are read (ImageHeader::has_headers)
+    Aabb root_box_;          // with headers: the image header's, tested when it is read
+    uint64_t root_ = 0;
     uint32_t nodes_visited_ = 0;
 
     // Ray in the space of the node being processed (world, or an instance's object space).

@@ -24,6 +24,15 @@ Treelets form_treelets(const BvhImage& img, uint32_t budget, bool contiguous, ui
     Treelets t;
     std::deque<StackEntry> roots = {{img.header().root, NodeType::Internal, kNoId}};
     std::vector<StackEntry> kids;
+    // With headers, the Treelet code charges the TLAS header to the root treelet and a BLAS's
+    // header to the treelet of the instance leaf that leads into it (createTreelets, vrt.cc
+    // l.1044-1053 and l.1127): they belong to those treelets, read and prefetched with them.
+    const bool headers = img.header().has_headers;
+    auto add = [&](uint32_t id, const StackEntry& e) {
+        t.of[e.addr] = id;
+        t.nodes[id].push_back(e);
+        t.bytes[id] += node_bytes(e.type);
+    };
     while (!roots.empty()) {
         const StackEntry root = roots.front();
         roots.pop_front();
@@ -31,6 +40,7 @@ Treelets form_treelets(const BvhImage& img, uint32_t budget, bool contiguous, ui
         const uint32_t id = uint32_t(t.nodes.size());
         t.nodes.emplace_back();
         t.bytes.push_back(0);
+        if (headers && id == 0) add(id, StackEntry{0, NodeType::Header, kNoId});
         std::deque<StackEntry> frontier = {root};
         while (!frontier.empty()) {
             const StackEntry e = frontier.front();
@@ -38,17 +48,21 @@ Treelets form_treelets(const BvhImage& img, uint32_t budget, bool contiguous, ui
                 frontier.pop_front();
                 continue;
             }
-            const uint32_t size = node_bytes(e.type);
+            uint64_t blas_header = ~uint64_t(0);
+            if (headers && e.type == NodeType::Instance) {
+                const uint64_t h = decode_instance(img.at(e.addr, 2 * kBlockBytes)).blas_root - kBlockBytes;
+                if (!t.of.count(h)) blas_header = h;  // a BLAS instanced twice: its header is in one treelet
+            }
+            const uint32_t size = node_bytes(e.type) + (blas_header != ~uint64_t(0) ? kBlockBytes : 0);
             // The root always goes in; growth stops at the first node that does not fit, and the
             // frontier from it on roots further treelets.
-            if (!t.nodes[id].empty() && t.bytes[id] + size > budget) {
+            if (t.of.count(root.addr) && t.bytes[id] + size > budget) {
                 for (const StackEntry& f : frontier) roots.push_back(f);
                 break;
             }
             frontier.pop_front();
-            t.of[e.addr] = id;
-            t.nodes[id].push_back(e);
-            t.bytes[id] += size;
+            add(id, e);
+            if (blas_header != ~uint64_t(0)) add(id, StackEntry{blas_header, NodeType::Header, kNoId});
             children(img, e, kids);
             for (const StackEntry& k : kids) frontier.push_back(k);
         }

@@ -3,7 +3,9 @@
 // createTreelets and remapBVHToTreeletLayout): the BVH cut into sub-trees grown breadth-first
 // from a root up to a byte budget. Growth stops at the first node that does not fit; that node
 // and the rest of the frontier become the roots of further treelets, taken in order. Every node
-// belongs to exactly one treelet. Instance leaves lead into their BLAS like child edges.
+// belongs to exactly one treelet. Instance leaves lead into their BLAS like child edges. An image
+// with headers has its TLAS header in the root treelet and each BLAS's header in the treelet of
+// the (first) instance leaf that leads into it.
 //
 // Layout: the nodes stay where the BVH builder put them (`bvh`, what the TTP paper ran: the
 // Treelet code's remap_to_treelet_layout 0), or every treelet is moved, for the memory system

@@ -50,12 +50,17 @@ struct WarpTracer {
     void trace(Workload& workload, size_t wi, std::vector<uint32_t>& trace_nodes, std::vector<WarmFetch>* rec) {
         const uint32_t sm = frame.sm(wi);
         frame.threads(wi, paths, pending);
+        for (uint32_t p : paths) workload.restart(p);  // whatever this workload traced of them before
         for (uint32_t k = 0;; ++k) {
             uint32_t longest = 0;
             bool any = false;
+            // The threads of the lowest phase trace together, as the workload driver's traces take them.
+            uint32_t phase = ~0u;
+            for (size_t i = 0; i < paths.size(); ++i)
+                if (!pending[i].empty()) phase = std::min(phase, pending[i].front().phase);
             for (size_t i = 0; i < paths.size(); ++i) {
                 auto& q = pending[i];
-                if (q.empty()) continue;
+                if (q.empty() || q.front().phase != phase) continue;
                 any = true;
                 const WorkRay w = q.front();
                 q.pop_front();

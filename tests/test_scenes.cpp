@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <limits>
+#include <cstring>
 #include <set>
 
 #include <sys/resource.h>
@@ -21,6 +22,7 @@
 #include "workloads/mesh_io.h"
 #include "workloads/verify.h"
 #include "workloads/rays.h"
+#include "workloads/lumibench.h"
 #include "workloads/scenes.h"
 
 using namespace rtu;
@@ -28,21 +30,25 @@ using rtu::test::TempDir;
 using rtu::test::write_text;
 
 // shared/scenes/README.md: 483 small spheres (393 diffuse, 64 metal, 26 glass), the first kept
-// at (-10.144357, 0.2, -10.283112); plus the ground and three large spheres.
+// at (-10.144357, 0.2, -10.283112); plus the ground and three large spheres. As LumiBench builds
+// it (SceneList.cpp l.21-64, l.131-158), every sphere is a model of its own: 487 meshes, each
+// one procedural sphere, each its own BLAS under the TLAS.
 TEST(Scenes, WkndIsBuiltExactlyAsLumiBench) {
     const Scene s = make_wknd();
-    ASSERT_EQ(s.meshes.size(), 1u);
-    const Mesh& m = s.meshes[0];
-    ASSERT_TRUE(m.procedural());
-    ASSERT_EQ(m.spheres.size(), 1u + 483u + 3u);
-    EXPECT_EQ(m.spheres[0].radius, 1000.0f);
-    EXPECT_NEAR(m.spheres[1].center.x, -10.144357f, 1e-5f);
-    EXPECT_EQ(m.spheres[1].center.y, 0.2f);
-    EXPECT_NEAR(m.spheres[1].center.z, -10.283112f, 1e-5f);
+    ASSERT_EQ(s.meshes.size(), 1u + 483u + 3u);
+    ASSERT_EQ(s.instances.size(), s.meshes.size());
+    for (const Mesh& m : s.meshes) {
+        ASSERT_TRUE(m.procedural());
+        ASSERT_EQ(m.spheres.size(), 1u);
+    }
+    EXPECT_EQ(s.meshes[0].spheres[0].radius, 1000.0f);
+    EXPECT_NEAR(s.meshes[1].spheres[0].center.x, -10.144357f, 1e-5f);
+    EXPECT_EQ(s.meshes[1].spheres[0].center.y, 0.2f);
+    EXPECT_NEAR(s.meshes[1].spheres[0].center.z, -10.283112f, 1e-5f);
     int diffuse = 0, metal = 0, glass = 0;
     for (size_t i = 1; i <= 483; ++i) {
-        EXPECT_EQ(m.spheres[i].radius, 0.2f);
-        switch (s.materials[m.material[i]].kind) {
+        EXPECT_EQ(s.meshes[i].spheres[0].radius, 0.2f);
+        switch (s.materials[s.meshes[i].material[0]].kind) {
             case Material::Kind::Diffuse: ++diffuse; break;
             case Material::Kind::Metal: ++metal; break;
             case Material::Kind::Glass: ++glass; break;
@@ -52,9 +58,9 @@ TEST(Scenes, WkndIsBuiltExactlyAsLumiBench) {
     EXPECT_EQ(diffuse, 393);
     EXPECT_EQ(metal, 64);
     EXPECT_EQ(glass, 26);
-    EXPECT_EQ(s.materials[m.material[484]].kind, Material::Kind::Glass);  // (0,1,0)
-    EXPECT_EQ(m.spheres[486].center, glm::vec3(4, 1, 0));
-    EXPECT_FALSE(s.two_level());
+    EXPECT_EQ(s.materials[s.meshes[484].material[0]].kind, Material::Kind::Glass);  // (0,1,0)
+    EXPECT_EQ(s.meshes[486].spheres[0].center, glm::vec3(4, 1, 0));
+    EXPECT_TRUE(s.two_level());
     EXPECT_TRUE(s.has_procedural());
 }
 
@@ -88,14 +94,18 @@ TEST(MeshFiles, ObjTrianglesAreNumberedInFileOrderAndPolygonsFanned) {
     ASSERT_EQ(load_mesh_file(s, obj), 0u);
     const Mesh& m = s.meshes[0];
     ASSERT_EQ(m.triangles.size(), 6u);
-    EXPECT_EQ(m.triangles[0], glm::uvec3(0, 1, 2));
-    EXPECT_EQ(m.triangles[1], glm::uvec3(0, 2, 3));
-    EXPECT_EQ(m.triangles[2], glm::uvec3(0, 1, 4));
-    EXPECT_EQ(m.triangles[3], glm::uvec3(0, 4, 2));
-    EXPECT_EQ(m.triangles[4], glm::uvec3(0, 2, 3));
-    EXPECT_EQ(m.triangles[5], glm::uvec3(0, 1, 2));
+    // Each triangle's corners as the file's vertex numbers (1-based). A vertex used with other
+    // texture or normal indices, or another material, is a mesh vertex of its own (as
+    // LumiBench's loader keeps them), so the triangles are compared by position.
+    const glm::vec3 p[] = {{}, {0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0.5f, 2, 0}};
+    const int expect[6][3] = {{1, 2, 3}, {1, 3, 4}, {1, 2, 5}, {1, 5, 3}, {1, 3, 4}, {1, 2, 3}};
+    for (int i = 0; i < 6; ++i)
+        for (int k = 0; k < 3; ++k) EXPECT_EQ(m.vertices[m.triangles[i][k]], p[expect[i][k]]) << "triangle " << i << " corner " << k;
+    ASSERT_EQ(m.normals.size(), m.vertices.size());
     EXPECT_EQ(s.materials[m.material[0]].albedo, glm::vec3(0.8f, 0.1f, 0.1f));
-    EXPECT_EQ(s.materials[m.material[2]].kind, Material::Kind::Emitter);
+    // LumiBench's loader reads Kd alone (Model.cpp l.68-78): the light is Lambertian of its Kd.
+    EXPECT_EQ(s.materials[m.material[2]].kind, Material::Kind::Diffuse);
+    EXPECT_EQ(s.materials[m.material[2]].albedo, glm::vec3(1.0f));
     EXPECT_EQ(m.material[5], m.material[0]);
 }
 
@@ -532,10 +542,20 @@ void check_image(const Scene& s, const BvhImage& img) {
                 case NodeType::Instance: {
                     const InstanceLeaf il = decode_instance(img.at(n.addr[i], 2 * kBlockBytes));
                     nodes_bytes += 2 * kBlockBytes;
-                    if (seen_blas.insert(il.blas_root).second) todo.push_back({il.blas_root, il.instance});
+                    if (seen_blas.insert(il.blas_root).second) {
+                        todo.push_back({il.blas_root, il.instance});
+                        if (h.has_headers) {
+                            // The BLAS's 64 B header is the block before its root and names it.
+                            const ImageHeader bh = decode_header(img.at(il.blas_root - kBlockBytes, kBlockBytes));
+                            EXPECT_EQ(bh.root, il.blas_root);
+                            EXPECT_FALSE(bh.has_instances);
+                            nodes_bytes += kBlockBytes;
+                        }
+                    }
                     break;
                 }
                 case NodeType::Empty: ADD_FAILURE() << "empty child slot inside count"; break;
+                case NodeType::Header: ADD_FAILURE() << "a header as a child"; break;
             }
         }
     }
@@ -546,11 +566,14 @@ void check_image(const Scene& s, const BvhImage& img) {
 }  // namespace
 
 TEST(BvhImage, WkndAndCornellImagesAreCompleteAndConservative) {
+    // Both are two-level, as LumiBench builds them: one BLAS per sphere or per Cornell-box mesh.
     for (const Scene& s : {make_wknd(), make_cornell()}) {
         const BvhImage img = build_bvh_image(s);
         check_image(s, img);
         EXPECT_EQ(img.size(), img.stats.image_bytes);
-        EXPECT_FALSE(img.header().has_instances);
+        EXPECT_TRUE(img.header().has_instances);
+        EXPECT_TRUE(img.header().has_headers);
+        EXPECT_EQ(img.stats.blas_count, s.meshes.size());
         EXPECT_LE(img.stats.depth, 32u);
     }
 }
@@ -565,6 +588,21 @@ TEST(BvhImage, TwoLevelImageForSeveralMeshes) {
     EXPECT_EQ(img.stats.instance_leaves, 2u);
     EXPECT_EQ(img.stats.blas_count, 2u);
     check_image(s, img);
+}
+
+// --flatten applies to meshes placed as they are: a mesh under a transform keeps its instance
+// leaf and BLAS, and the image is byte for byte the one built without --flatten.
+TEST(BvhImage, FlattenLeavesAPlacedMeshTwoLevel) {
+    Scene s = make_wknd();  // one mesh per sphere
+    ASSERT_GE(s.instances.size(), 2u);
+    s.instances[1].object_to_world[3] = 25.0f;  // a translation in x
+    const BvhImage two = build_bvh_image(s);
+    s.flatten = true;
+    EXPECT_TRUE(s.two_level());
+    const BvhImage flat = build_bvh_image(s);
+    ASSERT_EQ(flat.size(), two.size());
+    EXPECT_EQ(0, std::memcmp(flat.at(0, flat.size()), two.at(0, two.size()), two.size()));
+    EXPECT_EQ(flat.stats.instance_leaves, s.instances.size());
 }
 
 TEST(BvhImage, SharedScenesBunnyAndShip) {
@@ -583,9 +621,40 @@ TEST(Scenes, DefaultCameraFramesARawMesh) {
     const Scene s = load_scene(f, "");
     const BvhImage img = build_bvh_image(s);
     // The centre pixel's primary ray hits the mesh.
-    const Ray r = camera_ray(s.camera, 0, 0, 1, 1, 0.5f, 0.5f, 0.5f, 0.5f);
+    const Ray r = lumibench::CameraRays(s.camera, 1, 1).ray({0.5f, 0.5f}, {0.0f, 0.0f});
     EXPECT_TRUE(trace_ray(img, r, TraversalOrder::DFS).hit.hit);
 }
+
+namespace {
+// A scene of one mesh (identity-placed) with these corners and triangles, for the verification
+// classes' hand-made cases.
+Scene one_mesh(const std::vector<glm::vec3>& vertices, const std::vector<glm::uvec3>& triangles) {
+    Scene s;
+    s.materials.push_back(Material{});
+    Mesh m;
+    m.name = "mesh";
+    m.vertices = vertices;
+    m.triangles = triangles;
+    m.material.assign(triangles.size(), 0);
+    s.meshes.push_back(m);
+    add_identity_instances(s);
+    return s;
+}
+// Triangle `prim` of the one mesh hit by `r` in [tnear, tfar] (the robust test), as a Hit.
+Hit robust_hit(const Scene& s, const Ray& r, uint32_t prim) {
+    const Mesh& m = s.meshes[0];
+    const glm::uvec3& t = m.triangles.at(prim);
+    TriangleHit th;
+    Hit h;
+    h.hit = intersect_triangle(r.org, r.dir, m.vertices[t[0]], m.vertices[t[1]], m.vertices[t[2]], r.tnear, r.tfar, &th);
+    h.t = th.t;
+    h.u = th.u;
+    h.v = th.v;
+    h.geom = 0;
+    h.prim = prim;
+    return h;
+}
+}  // namespace
 
 // Verification: a far, thin triangle of PARTY whose edge test is within float rounding. The ray
 // (PARTY 64x64 path tracing, ray 1931) passes 8e-5 (in barycentric weight) outside the edge in
@@ -593,29 +662,17 @@ TEST(Scenes, DefaultCameraFramesARawMesh) {
 // is the class edge_within_float_error, not a mismatch; a ray a clear margin outside is still
 // a mismatch.
 TEST(Verify, EdgeDecisionWithinFloatErrorIsItsOwnClass) {
-    Scene s;
-    s.materials.push_back(Material{});
-    Mesh m;
-    m.name = "thin";
-    m.vertices = {{-0x1.1258d6p+1f, 0x1.d8755ap+3f, -0x1.c8920ep+3f},
-                  {-0x1.15d976p+1f, 0x1.d8b2a4p+3f, -0x1.c8921cp+3f},
-                  {-0x1.160758p+1f, 0x1.c3af06p+3f, -0x1.c88e42p+3f}};
-    m.triangles = {{0, 1, 2}};
-    m.material = {0};
-    s.meshes.push_back(m);
-    add_identity_instances(s);
+    const Scene s = one_mesh({{-0x1.1258d6p+1f, 0x1.d8755ap+3f, -0x1.c8920ep+3f},
+                             {-0x1.15d976p+1f, 0x1.d8b2a4p+3f, -0x1.c8921cp+3f},
+                             {-0x1.160758p+1f, 0x1.c3af06p+3f, -0x1.c88e42p+3f}}, {{0, 1, 2}});
     Ray r;
     r.org = {-0x1.ff0b02p+5f, 0x1.2bc37cp+2f, 0x1.dee4c8p+5f};
     r.dir = {0x1.4a99p-1f, 0x1.b026p-4f, -0x1.8d228p-1f};
-    TriangleHit th;
-    ASSERT_TRUE(intersect_triangle(r.org, r.dir, m.vertices[0], m.vertices[1], m.vertices[2], 0.0f, INFINITY, &th));
+    r.tnear = 0.0f;
+    r.tfar = INFINITY;
+    const Hit ours = robust_hit(s, r, 0);
+    ASSERT_TRUE(ours.hit);
     EXPECT_TRUE(edge_decision_within_float_error(s, r, 0, 0));
-    Hit ours;
-    ours.hit = true;
-    ours.t = th.t;
-    ours.u = th.u;
-    ours.v = th.v;
-    ours.geom = ours.prim = 0;
     const Hit embree_miss;
     EXPECT_EQ(classify(s, r, ours, embree_miss, embree_miss), Agreement::EdgeFloatError);
     // Turned by a thousandth of a radian the ray misses the edge by far more than the rounding.
@@ -623,4 +680,74 @@ TEST(Verify, EdgeDecisionWithinFloatErrorIsItsOwnClass) {
     far.dir.y += 1e-3f;
     EXPECT_FALSE(edge_decision_within_float_error(s, far, 0, 0));
     EXPECT_EQ(classify(s, far, ours, embree_miss, embree_miss), Agreement::Mismatch);
+}
+
+// Two faces of the ship's sail that meet at an edge, and a camera ray (128x128 primary rays)
+// that crosses both near it, 0.005 apart in t at t = 1190. Embree takes the nearer by its
+// robust t; the TTP authors' simulator orders hits by its float Moller-Trumbore t, which puts
+// the other no farther, and that float t is off the exact plane t by more than the two planes
+// are apart: the class simulator_float_order. The other way round (taking the face the float t
+// puts farther) is still a mismatch.
+TEST(Verify, SimulatorFloatOrderIsItsOwnClass) {
+    // Ship triangles 1265 and 1260.
+    const Scene s = one_mesh({{0x1.71ab8p+6f, 0x1.2fa6dp+7f, -0x1.256684p+9f}, {-0x1.c404ecp+6f, 0x1.4f6ca4p+10f, -0x1.ccf44ap+8f},
+                              {-0x1.bec8cp+6f, 0x1.4f8accp+10f, -0x1.cf3222p+8f}, {0x1.7f72b2p+6f, 0x1.2f97a8p+7f, -0x1.24ee9cp+9f}},
+                             {{0, 1, 2}, {0, 3, 1}});
+    const Mesh& m = s.meshes[0];
+    Ray r;
+    r.org = {0x1.7a0002p+8f, 0x1.16p+8f, 0x1.f4p+8f};
+    r.dir = {-0x1.4db11ap-2f, 0x1.9142f2p-2f, -0x1.b883ecp-1f};
+    r.tnear = 0.0f;
+    r.tfar = INFINITY;
+    const Hit h[2] = {robust_hit(s, r, 0), robust_hit(s, r, 1)};
+    float app[2];
+    for (uint32_t p = 0; p < 2; ++p) {
+        const glm::uvec3& t = m.triangles[p];
+        ASSERT_TRUE(h[p].hit) << p;
+        ASSERT_TRUE(moller_trumbore_t(r.org, r.dir, {m.vertices[t[0]], m.vertices[t[1]], m.vertices[t[2]], 0, p}, &app[p]));
+    }
+    EXPECT_GT(h[0].t, h[1].t);     // Embree's answer is face 1
+    EXPECT_LE(app[0], app[1]);     // the simulator's, face 0
+    EXPECT_TRUE(simulator_float_order(s, r, h[0], h[1]));
+    EXPECT_EQ(classify(s, r, h[0], h[1], h[1]), Agreement::SimulatorOrder);
+    EXPECT_FALSE(simulator_float_order(s, r, h[1], h[0]));
+    // Moved apart by 0.1 along z, the faces are ordered by far more than the float error.
+    Scene apart = s;
+    apart.meshes[0].vertices.push_back(apart.meshes[0].vertices[0] + glm::vec3(0, 0, 0.1f));
+    apart.meshes[0].vertices.push_back(apart.meshes[0].vertices[1] + glm::vec3(0, 0, 0.1f));
+    apart.meshes[0].vertices.push_back(apart.meshes[0].vertices[2] + glm::vec3(0, 0, 0.1f));
+    apart.meshes[0].triangles[0] = {4, 5, 6};
+    EXPECT_FALSE(simulator_float_order(apart, r, h[0], h[1]));
+}
+
+// An AO ray of the ship (128x128) that leaves the hull almost along it, under 1e-4 rad off the
+// plane of the triangle it then meets at t = 0.16, well inside the triangle: Embree's float test
+// misses it. The ray starts on that plane within 8 ulps of the coordinates, so whether the hit is
+// past tnear is rounding: hit_at_tnear_tfar. Started 100 units back along the ray, it is off the
+// plane by far more, and the same disagreement would be a mismatch.
+TEST(Verify, GrazingRayStartingOnThePlaneIsABoundaryHit) {
+    // Ship triangle 1951.
+    const Scene s = one_mesh({{-0x1.398264p+7f, 0x1.dc21bcp+8f, -0x1.20a2fap+9f}, {-0x1.a69a0cp+1f, 0x1.43e584p+9f, -0x1.be1f34p+8f},
+                              {0x1.1ab558p+5f, 0x1.c272b6p+8f, -0x1.a53a2ap+8f}},
+                             {{0, 1, 2}});
+    Ray r;
+    r.org = {-0x1.a186c4p+3f, 0x1.f4fe6ap+8f, -0x1.cb0b46p+8f};
+    r.dir = {-0x1.8a2cdap-3f, 0x1.f25fbep-1f, -0x1.fd85bcp-4f};
+    r.tnear = 0x1.0624dep-10f;  // 0.001
+    r.tfar = 10;
+    r.query = Query::Any;
+    long double cosine = 1;
+    ASSERT_TRUE(exact_triangle_t(s, r, 0, 0, &cosine).has_value());
+    EXPECT_LT(cosine, 1e-4L);
+    const Hit ours = robust_hit(s, r, 0);
+    ASSERT_TRUE(ours.hit);
+    EXPECT_NEAR(ours.t, 0.158f, 0.001f);
+    const Hit embree_miss;
+    EXPECT_EQ(classify(s, r, ours, embree_miss, embree_miss), Agreement::BoundaryT);
+    Ray back = r;
+    back.org = r.org - 100.0f * r.dir;
+    back.tfar = 200;
+    Hit far = ours;
+    far.t = ours.t + 100.0f;
+    EXPECT_EQ(classify(s, back, far, embree_miss, embree_miss), Agreement::Mismatch);
 }

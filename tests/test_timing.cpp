@@ -115,8 +115,8 @@ TEST(TimingInterval, BunnyPathTracingHitsEqualFunctional) { RTU_NEED_SHARED_SCEN
 TEST(TimingInterval, ShipShadowHitsEqualFunctional) { RTU_NEED_SHARED_SCENES(); timing_equals_functional("ship", Model::Interval, WorkloadKind::Shadow); }
 
 namespace {
-// One triangle at z = 0 under an identity instance: header [0,64), root internal node [64,128),
-// triangle leaf [128,192).
+// One triangle at z = 0, flattened: header [0,64), root internal node [64,128), triangle leaf
+// [128,192). The ray reads the header first (its 64 B, then structure latency), then the nodes.
 BvhImage one_triangle_image() {
     Scene s;
     s.name = "one-triangle";
@@ -127,7 +127,9 @@ BvhImage one_triangle_image() {
     m.material = {0};
     s.meshes.push_back(m);
     add_identity_instances(s);
+    s.flatten = true;  // single-level: no TLAS, no instance leaf, no BLAS header
     BvhImage image = build_bvh_image(s);
+    EXPECT_TRUE(image.header().has_headers);
     EXPECT_EQ(image.header().root, 64u);
     EXPECT_EQ(image.size(), 192u);
     return image;
@@ -167,16 +169,20 @@ WarpRay one_warp_ray() {
 // One ray, one triangle, cold caches, memory clock = core clock (so no rounding between clock
 // domains). The image is: header [0,64), root internal node [64,128), triangle leaf [128,192).
 // Worked by hand from the mobile preset's latencies:
-//   cycle 0    the warp is accepted; the scheduler puts the root's two chunks (64, 96) in the queue
-//   cycle 1    chunk 64 leaves: L1 line miss -> L2 slice 0 (line 0) line miss, +160 -> DRAM 161
+//   cycle 0    the warp is accepted; the scheduler puts the header's two chunks (0, 32) in the queue
+//   cycle 1    chunk 0 leaves: L1 line miss -> L2 slice 0 (line 0) line miss, +160 -> DRAM 161
 //              channel 0 bank 0 closed: ACT 161, column 181 (+tRCD), data 201..209 (+tCL, 8 cycles)
-//   cycle 2    chunk 96 leaves: L1 and L2 sector misses -> DRAM 162, scheduler waits until the
+//   cycle 2    chunk 32 leaves: L1 and L2 sector misses -> DRAM 162, scheduler waits until the
 //              column bus allows (next column 189 - tRCD = 169): row hit, column 189, data 209..217
-//   209, 217   responses drained; the node is complete at 217: header + ray-box = 12 -> 229
-//   229        the leaf's chunks (128, 160) are queued; they leave at 230 and 231
-//   230        line 1: L2 slice 1, DRAM channel 1 at 390: ACT 390, column 410, data 430..438
-//   231        DRAM 391, decision at 418 - 20 = 398, row hit, column 418, data 438..446
-//   446        leaf complete: descriptor 4 + ray-triangle 8 + hit 8 = 20 -> ray retires at 466
+//   217        the header is drained: structure latency 4 -> 221; the root box is hit
+//   221        the root's chunks (64, 96) are queued; they leave at 222 and 223: L1 and L2 sector
+//              misses of line 0 -> DRAM 382, row 0 still open: column 382, data 402..410; DRAM
+//              383, column 390 (tCCD later), data 410..418
+//   418        the root is complete: ray-box 8 -> 426
+//   426        the leaf's chunks (128, 160) are queued; they leave at 427 and 428
+//   427        line 1: L2 slice 1, DRAM channel 1 at 587: ACT 587, column 607, data 627..635
+//   428        DRAM 588, decision at 615 - 20 = 595, row hit, column 615, data 635..643
+//   643        leaf complete: descriptor 4 + ray-triangle 8 + hit 8 = 20 -> ray retires at 663
 TEST(TimingAT, SingleRayLatencyIsTheHandWorkedSum) {
     FsResolution resolution;
     const BvhImage image = one_triangle_image();
@@ -184,35 +190,41 @@ TEST(TimingAT, SingleRayLatencyIsTheHandWorkedSum) {
     c.set("gpu.memory_clock_mhz=1365");
     const HwConfig hw = c.resolve();
     const uint64_t L2 = hw.l2.latency, rcd = hw.dram.tRCD, cl = hw.dram.tCL, xfer = 32 / (2 * hw.dram.bus_bytes);
-    const uint64_t root_a = 1 + L2 + rcd + cl + xfer;                        // 209
+    const uint64_t ccd = std::max<uint64_t>(hw.dram.tCCD, xfer);
+    const uint64_t header_a = 1 + L2 + rcd + cl + xfer;                     // 209
     const uint64_t col_a = 1 + L2 + rcd;                                     // 181
-    const uint64_t root_b = col_a + std::max<uint64_t>(hw.dram.tCCD, xfer) + cl + xfer;  // 217
-    const uint64_t root_done = std::max(root_a, root_b) + hw.lat.header + hw.lat.ray_box;  // 229
-    const uint64_t leaf_a = root_done + 1 + L2 + rcd + cl + xfer;            // 438
-    const uint64_t leaf_b = leaf_a + xfer;                                   // 446 (column tCCD/xfer later)
-    const uint64_t expected = leaf_b + hw.lat.leaf_descriptor + hw.lat.ray_triangle + hw.lat.triangle_hit;  // 466
-    ASSERT_EQ(expected, 466u);
+    const uint64_t header_b = col_a + ccd + cl + xfer;                       // 217
+    const uint64_t header_done = std::max(header_a, header_b) + hw.lat.structure;  // 221
+    const uint64_t root_col = header_done + 1 + L2;                          // 382, a row hit
+    const uint64_t root_done = root_col + ccd + cl + xfer + hw.lat.ray_box;  // 426
+    const uint64_t leaf_a = root_done + 1 + L2 + rcd + cl + xfer;            // 635
+    const uint64_t leaf_b = leaf_a + xfer;                                   // 643 (column tCCD/xfer later)
+    const uint64_t expected = leaf_b + hw.lat.leaf_descriptor + hw.lat.ray_triangle + hw.lat.triangle_hit;  // 663
+    ASSERT_EQ(expected, 663u);
 
     const TimingResult r = run_one_ray_at(hw, image);
     ASSERT_EQ(r.rays.size(), 1u);
     EXPECT_TRUE(r.rays[0].hit.hit);
     EXPECT_EQ(r.cycles, expected);
     const DramStats dram = total(r.counts.dram);
-    EXPECT_EQ(dram.reads, 4u);
+    EXPECT_EQ(dram.reads, 6u);
     EXPECT_EQ(dram.row_misses, 2u);
-    EXPECT_EQ(dram.row_hits, 2u);
+    EXPECT_EQ(dram.row_hits, 4u);
     EXPECT_EQ(total(r.counts.l1).demand.line_misses, 2u);
-    EXPECT_EQ(total(r.counts.l1).demand.sector_misses, 2u);
+    EXPECT_EQ(total(r.counts.l1).demand.sector_misses, 4u);
+    const RtUnitStats rt = total(r.counts.rt);
+    EXPECT_EQ(rt.node_fetches, 2u);
+    EXPECT_EQ(rt.header_fetches, 1u);
     EXPECT_TRUE(r.protocol_violations.empty()) << r.protocol_violations.front();
 }
 
-// The checker itself catches broken sequences (a checker that never fires proves nothing).
 // The interval fidelity on the same ray (model/interval_gpu.h). Cold, it takes AT's hand-worked
-// 466 cycles above: the same request port, drain, L2 and DRAM timing. The same ray again on the
-// same SM finds every chunk in its L1: per node, the chunks leave one per cycle from the cycle
-// after the thread was scheduled, each drains in the cycle after it left, then the math runs:
-// (2 + 1 + 12) + (2 + 1 + 20). On another SM (cold L1, warm L2) each node's second chunk is back
-// 2 + L2 latency after scheduling. Two threads with the same ray share each fetch (coalescing).
+// 663 cycles above: the same request port, drain, L2 and DRAM timing. The same ray again on the
+// same SM finds every chunk in its L1: per read (header, root, leaf), the chunks leave one per
+// cycle from the cycle after the thread was scheduled, each drains in the cycle after it left,
+// then the math runs: (2 + 1 + 4) + (2 + 1 + 8) + (2 + 1 + 20). On another SM (cold L1, warm L2)
+// each read's second chunk is back 2 + L2 latency after scheduling. Two threads with the same ray
+// share each fetch (coalescing).
 TEST(TimingInterval, SingleRayLatenciesAreTheHandWorkedSums) {
     const BvhImage image = one_triangle_image();
     Config c = Config::load("mobile");
@@ -232,29 +244,30 @@ TEST(TimingInterval, SingleRayLatenciesAreTheHandWorkedSums) {
         return done[0].end;
     };
     const WarpRay r = one_warp_ray();
-    const uint64_t internal = hw.lat.header + hw.lat.ray_box, leaf = hw.lat.leaf_descriptor + hw.lat.ray_triangle + hw.lat.triangle_hit;
-    EXPECT_EQ(time_trace(0, {r}, 0), 466u);
+    const uint64_t header = hw.lat.structure, internal = hw.lat.ray_box, leaf = hw.lat.leaf_descriptor + hw.lat.ray_triangle + hw.lat.triangle_hit;
+    EXPECT_EQ(time_trace(0, {r}, 0), 663u);
     ASSERT_EQ(out.size(), 1u);
     EXPECT_TRUE(out[0].hit.hit);
-    EXPECT_EQ(out[0].nodes_visited, 2u);
+    EXPECT_EQ(out[0].nodes_visited, 2u);  // the header is read, not visited
     EXPECT_EQ(out[0].dram_nodes, 2u);
     const DramStats d = total(gpu.dram_stats());
-    EXPECT_EQ(d.reads, 4u);
+    EXPECT_EQ(d.reads, 6u);
     EXPECT_EQ(d.row_misses, 2u);
-    EXPECT_EQ(d.row_hits, 2u);
+    EXPECT_EQ(d.row_hits, 4u);
     EXPECT_EQ(gpu.l1()[0].tags().stats(ReqKind::Demand).line_misses, 2u);
-    EXPECT_EQ(gpu.l1()[0].tags().stats(ReqKind::Demand).sector_misses, 2u);
+    EXPECT_EQ(gpu.l1()[0].tags().stats(ReqKind::Demand).sector_misses, 4u);
 
-    EXPECT_EQ(time_trace(0, {r}, 1000), 1000 + (2 + 1 + internal) + (2 + 1 + leaf));  // 1038
-    EXPECT_EQ(gpu.l1()[0].tags().stats(ReqKind::Demand).hits, 4u);
-    EXPECT_EQ(time_trace(1, {r}, 2000), 2000 + (2 + hw.l2.latency + internal) + (2 + hw.l2.latency + leaf));  // 2356
-    EXPECT_EQ(gpu.l2()[0].tags().stats(ReqKind::Demand).hits + gpu.l2()[1].tags().stats(ReqKind::Demand).hits, 4u);
-    EXPECT_EQ(time_trace(0, {r, r}, 3000), 3038u);
-    EXPECT_EQ(total(gpu.rt_stats()).coalesced_fetches, 2u);
-    EXPECT_EQ(total(gpu.dram_stats()).reads, 4u);
+    EXPECT_EQ(time_trace(0, {r}, 1000), 1000 + (2 + 1 + header) + (2 + 1 + internal) + (2 + 1 + leaf));  // 1041
+    EXPECT_EQ(gpu.l1()[0].tags().stats(ReqKind::Demand).hits, 6u);
+    EXPECT_EQ(time_trace(1, {r}, 2000), 2000 + (2 + hw.l2.latency + header) + (2 + hw.l2.latency + internal) + (2 + hw.l2.latency + leaf));  // 2518
+    EXPECT_EQ(gpu.l2()[0].tags().stats(ReqKind::Demand).hits + gpu.l2()[1].tags().stats(ReqKind::Demand).hits, 6u);
+    EXPECT_EQ(time_trace(0, {r, r}, 3000), 3041u);
+    EXPECT_EQ(total(gpu.rt_stats()).coalesced_fetches, 3u);
+    EXPECT_EQ(total(gpu.dram_stats()).reads, 6u);
     EXPECT_EQ(out.size(), 5u);
 }
 
+// The checker itself catches broken sequences (a checker that never fires proves nothing).
 TEST(ProtocolChecker, DetectsViolations) {
     FsResolution resolution;
     ProtocolChecker chk("chk");
@@ -401,6 +414,7 @@ TEST(RtUnitCore, ResponseHeldBackPastTheTrackingRing) {
     std::map<uint64_t, Hit> got;
     std::multimap<uint64_t, uint64_t> answers;  // cycle -> chunk id
     uint64_t held = 0, sent = 0;
+    bool released = false;
     for (uint64_t c = 0; c < 5000000 && (next < rays.size() || !core.idle()); ++c) {
         while (next < rays.size() && core.has_free_slot()) {
             std::vector<WarpRay> warp;
@@ -415,7 +429,10 @@ TEST(RtUnitCore, ResponseHeldBackPastTheTrackingRing) {
         }
         for (auto it = answers.begin(); it != answers.end() && it->first <= c; it = answers.erase(it))
             core.on_response(it->second, true, true, c);
-        if (held && sent == 10000) answers.insert({c + 1, held});
+        if (held && sent >= 10000 && !released) {  // once, even if no request leaves for some cycles
+            answers.insert({c + 1, held});
+            released = true;
+        }
         if (core.has_request(c)) {
             const ChunkRequest r = core.front_request(c);
             core.pop_request(c);
@@ -581,13 +598,13 @@ TEST(OrderedEvents, SameTimeHandlersRunByRankThenNotification) {
 namespace {
 // The ray of the hand-worked test above with rt.leaf_descriptor_read: the leaf is read in two
 // dependent steps. Worked by hand (mobile latencies, memory clock = core clock):
-//   229        the root is done (as above); the leaf's descriptor chunk (128) is queued
-//   230        it leaves: L1 and L2 line misses -> DRAM channel 1 at 390: ACT, column 410, data 430..438
-//   438        the descriptor is drained; decoding it takes leaf_descriptor = 4 -> 442
-//   442        the leaf's two chunks are queued; 128 leaves at 443 (an L1 hit now), 160 at 444:
-//              L1 and L2 sector misses -> DRAM 604, a row hit: column 604, data 624..632
-//   632        the leaf is whole: ray-triangle 8 + hit 8 = 16 -> the ray retires at 648
-constexpr uint64_t kTwoStepLeafCycles = 648;
+//   426        the root is done (as above); the leaf's descriptor chunk (128) is queued
+//   427        it leaves: L1 and L2 line misses -> DRAM channel 1 at 587: ACT, column 607, data 627..635
+//   635        the descriptor is drained; decoding it takes leaf_descriptor = 4 -> 639
+//   639        the leaf's two chunks are queued; 128 leaves at 640 (an L1 hit now), 160 at 641:
+//              L1 and L2 sector misses -> DRAM 801, a row hit: column 801, data 821..829
+//   829        the leaf is whole: ray-triangle 8 + hit 8 = 16 -> the ray retires at 845
+constexpr uint64_t kTwoStepLeafCycles = 845;
 HwConfig two_step_config() {
     Config c = Config::load("mobile");
     c.set("gpu.memory_clock_mhz=1365");
@@ -601,8 +618,8 @@ TEST(TimingAT, TwoStepLeafReadIsTheHandWorkedSum) {
     const BvhImage image = one_triangle_image();
     const HwConfig hw = two_step_config();
     const uint64_t L2 = hw.l2.latency, rcd = hw.dram.tRCD, cl = hw.dram.tCL, xfer = 32 / (2 * hw.dram.bus_bytes);
-    const uint64_t descriptor = 229 + 1 + L2 + rcd + cl + xfer;                    // 438
-    const uint64_t leaf = descriptor + hw.lat.leaf_descriptor + 2 + L2 + cl + xfer;  // 632 (row hit)
+    const uint64_t descriptor = 426 + 1 + L2 + rcd + cl + xfer;                    // 635
+    const uint64_t leaf = descriptor + hw.lat.leaf_descriptor + 2 + L2 + cl + xfer;  // 829 (row hit)
     ASSERT_EQ(leaf + hw.lat.ray_triangle + hw.lat.triangle_hit, kTwoStepLeafCycles);
     const TimingResult r = run_one_ray_at(hw, image);
     ASSERT_EQ(r.rays.size(), 1u);
@@ -610,9 +627,10 @@ TEST(TimingAT, TwoStepLeafReadIsTheHandWorkedSum) {
     EXPECT_EQ(r.cycles, kTwoStepLeafCycles);
     const RtUnitStats rt = total(r.counts.rt);
     EXPECT_EQ(rt.node_fetches, 2u);    // two node reads: the root and the leaf
-    EXPECT_EQ(rt.chunk_requests, 5u);  // root 2 + descriptor 1 + leaf 2
+    EXPECT_EQ(rt.header_fetches, 1u);
+    EXPECT_EQ(rt.chunk_requests, 7u);  // header 2 + root 2 + descriptor 1 + leaf 2
     EXPECT_EQ(total(r.counts.l1).demand.hits, 1u);  // the leaf's first chunk: the descriptor's sector
-    EXPECT_EQ(total(r.counts.dram).reads, 4u);
+    EXPECT_EQ(total(r.counts.dram).reads, 6u);
     EXPECT_TRUE(r.protocol_violations.empty()) << r.protocol_violations.front();
 }
 
@@ -625,7 +643,7 @@ TEST(TimingInterval, TwoStepLeafReadIsTheHandWorkedSum) {
     ASSERT_EQ(done.size(), 1u);
     EXPECT_EQ(done[0].end, kTwoStepLeafCycles);
     EXPECT_EQ(total(gpu.rt_stats()).node_fetches, 2u);
-    EXPECT_EQ(total(gpu.rt_stats()).chunk_requests, 5u);
+    EXPECT_EQ(total(gpu.rt_stats()).chunk_requests, 7u);
 }
 
 // The paper's Figure 3 walk (section 3.2): a BVH with nodes A..P laid out by hand and one ray

@@ -93,6 +93,33 @@ Aabb union_of(const BuildNode* n) {
     return b;
 }
 
+// An acceleration structure's header bounds as the driver writes them (Mesa's lavapipe,
+// lvp_acceleration_structure.c l.1348-1360): per axis, the lowest child bound of the root
+// (calc_bounds' origin) and origin + the highest quantized upper bound times the root's
+// quantum, in float. The TLAS's bounds are the ray's first test; a BLAS's are its instance's box
+// in the TLAS build.
+Aabb mesa_header_bounds(const BuildNode* root) {
+    Aabb out;
+    for (int a = 0; a < 3; ++a) {
+        float lo = root->box[0].lo[a], hi = root->box[0].hi[a];
+        for (uint32_t i = 1; i < root->count; ++i) lo = std::min(lo, root->box[i].lo[a]), hi = std::max(hi, root->box[i].hi[a]);
+        const float total = hi - lo;
+        out.lo[a] = lo;
+        if (std::isinf(total)) {
+            out.hi[a] = INFINITY;
+            continue;
+        }
+        int exp = 0;
+        const float m = std::frexp(total, &exp);
+        if (m > 255.0f / 256.0f) ++exp;
+        exp = std::max(exp, -128);
+        float top = 0.0f;
+        for (uint32_t i = 0; i < root->count; ++i) top = std::max(top, std::ceil(std::ldexp(root->box[i].hi[a] - lo, 8 - exp)));
+        out.hi[a] = std::max(hi, lo + std::ldexp(top, exp - 8));  // never inside the exact box
+    }
+    return out;
+}
+
 class ImageWriter {
 public:
     std::vector<uint8_t> bytes;
@@ -286,14 +313,30 @@ BvhImage build_bvh_image(const Scene& scene) {
         w.stats.depth = w.write_internal(root, union_of(root), header.root, mesh_leaf_type, writer) + 1;
         rtcReleaseBVH(bvh);
     } else {
+        // Every BLAS is built first, as the driver builds the BLASes before the TLAS: an
+        // instance's box in the TLAS build is its BLAS header's bounds (mesa_header_bounds).
+        struct Blas {
+            RTCBVH bvh = nullptr;
+            BuildNode holder;
+            const BuildNode* root = nullptr;
+            Aabb header_bounds;
+        };
+        std::vector<Blas> blas(scene.meshes.size());
+        for (const Instance& in : scene.instances) {
+            Blas& b = blas[in.mesh];
+            const Mesh& mesh = scene.meshes[in.mesh];
+            if (b.bvh || mesh.primitives() == 0) continue;
+            auto prims = mesh_primitives(mesh, in.mesh);
+            b.bvh = rtcNewBVH(device.dev);
+            b.root = ensure_internal_root(build_tree(device.dev, b.bvh, prims), mesh.bounds(), b.holder);
+            b.header_bounds = mesa_header_bounds(b.root);
+        }
         // TLAS over the instances of non-empty meshes.
         std::vector<RTCBuildPrimitive> inst_prims;
-        std::vector<Aabb> inst_boxes(scene.instances.size());
         for (uint32_t i = 0; i < scene.instances.size(); ++i) {
-            const Mesh& m = scene.meshes[scene.instances[i].mesh];
-            if (m.primitives() == 0) continue;
-            inst_boxes[i] = transformed_box(m.bounds(), scene.instances[i].object_to_world);
-            const Aabb& b = inst_boxes[i];
+            const Instance& in = scene.instances[i];
+            if (!blas[in.mesh].bvh) continue;
+            const Aabb b = is_identity(in.object_to_world) ? blas[in.mesh].header_bounds : transformed_box(blas[in.mesh].header_bounds, in.object_to_world);
             inst_prims.push_back({b.lo.x, b.lo.y, b.lo.z, 0, b.hi.x, b.hi.y, b.hi.z, i});
         }
         RTCBVH tlas_bvh = rtcNewBVH(device.dev);
@@ -306,7 +349,7 @@ BvhImage build_bvh_image(const Scene& scene) {
         }
         const BuildNode* troot = ensure_internal_root(tree, world, holder);
         header.root = w.alloc(kBlockBytes);
-        header.root_box = world;
+        header.root_box = mesa_header_bounds(troot);
         header.has_instances = true;
         std::vector<std::pair<uint32_t, uint64_t>> inst_leaves;  // instance, leaf address
         auto inst_writer = [&](const BuildLeaf* leaf, uint64_t at) {
@@ -317,23 +360,29 @@ BvhImage build_bvh_image(const Scene& scene) {
         w.stats.tlas_depth = w.write_internal(troot, union_of(troot), header.root, instance_type, inst_writer);
         rtcReleaseBVH(tlas_bvh);
 
-        // One BLAS per mesh that is instanced, laid out after the TLAS.
+        // One BLAS per mesh that is instanced, laid out after the TLAS in the order its first
+        // instance leaf is, each its header and then its tree.
         std::vector<uint64_t> blas_root(scene.meshes.size(), 0);
         std::vector<uint32_t> blas_depth(scene.meshes.size(), 0);
         for (const auto& [inst, at] : inst_leaves) {
             const uint32_t geom = scene.instances[inst].mesh;
             if (blas_root[geom] != 0) continue;
             const Mesh& mesh = scene.meshes[geom];
-            auto prims = mesh_primitives(mesh, geom);
-            RTCBVH bvh = rtcNewBVH(device.dev);
-            BuildNode bholder;
-            const BuildNode* root = ensure_internal_root(build_tree(device.dev, bvh, prims), mesh.bounds(), bholder);
+            const Blas& b = blas[geom];
+            const uint64_t blas_header = w.alloc(kBlockBytes);
             blas_root[geom] = w.alloc(kBlockBytes);
+            const uint64_t leaves_before = w.stats.triangle_leaves + w.stats.procedural_leaves;
             auto writer = mesh_leaf_writer(mesh, geom);
-            blas_depth[geom] = w.write_internal(root, union_of(root), blas_root[geom], mesh_leaf_type, writer);
-            rtcReleaseBVH(bvh);
+            blas_depth[geom] = w.write_internal(b.root, union_of(b.root), blas_root[geom], mesh_leaf_type, writer);
+            ImageHeader bh;
+            bh.root = blas_root[geom];
+            bh.root_box = b.header_bounds;
+            bh.leaves = uint32_t(w.stats.triangle_leaves + w.stats.procedural_leaves - leaves_before);
+            encode_header(bh, &w.bytes[blas_header]);
             ++w.stats.blas_count;
         }
+        for (Blas& b : blas)
+            if (b.bvh) rtcReleaseBVH(b.bvh);
         uint32_t deepest = 0;
         for (const auto& [inst, at] : inst_leaves) {
             const Instance& in = scene.instances[inst];
@@ -349,6 +398,7 @@ BvhImage build_bvh_image(const Scene& scene) {
         w.stats.depth = w.stats.tlas_depth + 1 + deepest + 1;  // + instance leaf + primitive leaf
     }
     header.has_procedural = scene.has_procedural();
+    header.has_headers = true;
     header.leaves = uint32_t(w.stats.triangle_leaves + w.stats.procedural_leaves + w.stats.instance_leaves);
     encode_header(header, w.bytes.data());
     BvhStats stats = w.stats;

@@ -9,10 +9,12 @@
 #include <cstring>
 #include <filesystem>
 #include <iostream>
+#include <array>
 #include <map>
 #include <string_view>
 #include <type_traits>
 
+#include <absl/container/flat_hash_map.h>
 #include <assimp/Importer.hpp>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
@@ -111,7 +113,10 @@ void fan(Mesh& m, const std::vector<uint32_t>& poly, uint32_t material) {
 
 // --- OBJ -------------------------------------------------------------------------------------
 
-void load_mtl(Scene& scene, const std::string& path, std::map<std::string, uint32_t>& by_name) {
+// Materials as LumiBench's model loader reads them (RayTracingInVulkan src/Assets/Model.cpp
+// l.68-78): each material of the library becomes a Lambertian of its Kd; every other field (Ks,
+// Ke, Ni, illum, d) is ignored. `order` receives the materials' indices in library order.
+void load_mtl(Scene& scene, const std::string& path, std::map<std::string, uint32_t>& by_name, std::vector<uint32_t>& order) {
     std::error_code ec;
     if (!fs::is_regular_file(path, ec)) {
         std::cerr << "warning: " << path << ": material library not found, using default materials\n";
@@ -121,17 +126,8 @@ void load_mtl(Scene& scene, const std::string& path, std::map<std::string, uint3
     size_t pos = 0;
     std::string_view line;
     std::vector<std::string_view> t;
-    Material* cur = nullptr;
     std::vector<Material> mats;
-    std::vector<int> illum;
-    std::vector<float> dissolve;
     size_t lineno = 0;
-    auto vec = [&]() {
-        glm::vec3 v(0.0f);
-        for (int i = 0; i < 3 && i + 1 < int(t.size()); ++i)
-            if (!parse_float(t[i + 1], &v[i])) throw input_error(path, lineno, "bad number '" + std::string(t[i + 1]) + "'");
-        return v;
-    };
     while (next_line(data, pos, line)) {
         ++lineno;
         const auto hash = line.find('#');
@@ -141,45 +137,91 @@ void load_mtl(Scene& scene, const std::string& path, std::map<std::string, uint3
         if (t[0] == "newmtl") {
             mats.push_back(Material{});
             mats.back().name = t.size() > 1 ? std::string(t[1]) : "";
-            illum.push_back(2);
-            dissolve.push_back(1.0f);
-            cur = &mats.back();
-        } else if (!cur) {
-            continue;
-        } else if (t[0] == "Kd") {
-            cur->albedo = vec();
-        } else if (t[0] == "Ke") {
-            cur->emission = vec();
-        } else if (t[0] == "Ni" && t.size() > 1) {
-            parse_float(t[1], &cur->ior);
-        } else if (t[0] == "d" && t.size() > 1) {
-            parse_float(t[1], &dissolve.back());
-        } else if (t[0] == "illum" && t.size() > 1) {
-            illum.back() = std::atoi(std::string(t[1]).c_str());
+        } else if (!mats.empty() && t[0] == "Kd") {
+            glm::vec3 v(0.0f);
+            for (int i = 0; i < 3 && i + 1 < int(t.size()); ++i)
+                if (!parse_float(t[i + 1], &v[i])) throw input_error(path, lineno, "bad number '" + std::string(t[i + 1]) + "'");
+            mats.back().albedo = v;
         }
     }
-    for (size_t i = 0; i < mats.size(); ++i) {
-        Material& m = mats[i];
-        if (m.emission.x > 0 || m.emission.y > 0 || m.emission.z > 0)
-            m.kind = Material::Kind::Emitter;
-        else if (illum[i] == 5 || illum[i] == 7 || (dissolve[i] < 1.0f && m.ior > 1.0f))
-            m.kind = Material::Kind::Glass;
-        else if (illum[i] == 3)
-            m.kind = Material::Kind::Metal;
-        by_name[m.name] = add_material(scene, m);
+    for (Material& m : mats) {
+        const uint32_t i = add_material(scene, m);
+        by_name[m.name] = i;
+        order.push_back(i);
     }
 }
 
-void load_obj(Scene& scene, Mesh& mesh, const std::string& path) {
+// A face's corner: its position, texture and normal indices (0-based; -1 when absent).
+struct Corner {
+    long v, vt, vn;
+};
+
+// Reads "v", "v/vt", "v//vn" or "v/vt/vn" with 1-based or negative indices against the counts so
+// far. A bad position index is an error; a texture or normal index out of range is taken as
+// absent (the corner then gets a smooth normal).
+Corner parse_corner(std::string_view tok, long nv, long nvt, long nvn, const std::string& path, size_t lineno) {
+    Corner c{-1, -1, -1};
+    long* out[3] = {&c.v, &c.vt, &c.vn};
+    const long count[3] = {nv, nvt, nvn};
+    for (int k = 0; k < 3 && !tok.empty(); ++k) {
+        const size_t slash = tok.find('/');
+        const std::string_view part = tok.substr(0, slash);
+        const std::string_view whole = tok;
+        tok = slash == std::string_view::npos ? std::string_view() : tok.substr(slash + 1);
+        if (part.empty()) {
+            if (k == 0) throw input_error(path, lineno, "bad face index '" + std::string(whole) + "'");
+            continue;
+        }
+        long v = 0;
+        if (!parse_number(part, &v)) throw input_error(path, lineno, "bad face index '" + std::string(k == 0 ? whole.substr(0, slash) : part) + "'");
+        const long i = v > 0 ? v - 1 : count[k] + v;
+        if (v == 0 || i < 0 || i >= count[k]) {
+            if (k == 0)
+                throw input_error(path, lineno, "face index '" + std::string(part) + "' out of range (1.." + std::to_string(count[k]) + ")");
+            continue;
+        }
+        *out[k] = i;
+    }
+    return c;
+}
+
+// The triangles of a polygon, as corner indices into it: a fan (v0,v1,v2), (v0,v2,v3), ...; with
+// `tinyobj_quads` a quad is split along its shorter diagonal as LumiBench's loader (tinyobjloader
+// 2.0.0rc10, tiny_obj_loader.h l.1463-1550) does: (0,1,2), (0,2,3) if |v2 - v0| < |v3 - v1|,
+// else (0,1,3), (1,2,3). Larger polygons are fanned either way (tinyobjloader clips ears).
+void triangulate(const std::vector<Corner>& poly, const std::vector<glm::vec3>& pos, bool tinyobj_quads, std::vector<std::array<size_t, 3>>& out) {
+    out.clear();
+    if (tinyobj_quads && poly.size() == 4) {
+        const glm::vec3 e02 = pos[size_t(poly[2].v)] - pos[size_t(poly[0].v)], e13 = pos[size_t(poly[3].v)] - pos[size_t(poly[1].v)];
+        const float sqr02 = e02.x * e02.x + e02.y * e02.y + e02.z * e02.z, sqr13 = e13.x * e13.x + e13.y * e13.y + e13.z * e13.z;
+        if (sqr02 < sqr13) out = {{0, 1, 2}, {0, 2, 3}};
+        else out = {{0, 1, 3}, {1, 2, 3}};
+        return;
+    }
+    for (size_t k = 1; k + 1 < poly.size(); ++k) out.push_back({0, k, k + 1});
+}
+
+void load_obj(Scene& scene, Mesh& mesh, const std::string& path, bool tinyobj_quads) {
     const std::string data = read_file_maybe_gz(path);
     size_t pos = 0;
     std::map<std::string, uint32_t> materials;
-    const uint32_t default_material = add_material(scene, Material{});
-    uint32_t current = default_material;
+    std::vector<uint32_t> library;  // the materials in library order
+    bool named = false;             // a usemtl named a material of the library
+    uint32_t current = 0;           // index into `library`, or the default material
+    std::vector<glm::vec3> positions, normals;
+    long texcoords = 0;
     std::string_view line;
     std::vector<std::string_view> t;
     size_t lineno = 0;
-    std::vector<uint32_t> poly;
+    std::vector<Corner> poly;
+    std::vector<std::array<size_t, 3>> tris;
+    // The mesh's vertices are the distinct (position, texture, normal, material) corners, as
+    // LumiBench's loader keeps them (Model.cpp l.97-144): a vertex on a material or texture seam
+    // is split, and without normals in the file each gets its own smooth normal.
+    absl::flat_hash_map<std::array<long, 4>, uint32_t> corner_vertex;
+    std::vector<long> vertex_normal;  // per mesh vertex: its normal index, or -1
+    std::vector<uint32_t> face_material;
+    bool any_default = false;
     while (next_line(data, pos, line)) {
         ++lineno;
         const auto hash = line.find('#');
@@ -187,36 +229,62 @@ void load_obj(Scene& scene, Mesh& mesh, const std::string& path) {
         if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
         split(line, t);
         if (t.empty()) continue;
-        if (t[0] == "v") {
-            if (t.size() < 4) throw input_error(path, lineno, "vertex needs 3 coordinates: '" + std::string(line) + "'");
+        if (t[0] == "v" || t[0] == "vn") {
+            const bool position = t[0] == "v";
+            if (t.size() < 4)
+                throw input_error(path, lineno, std::string(position ? "vertex" : "normal") + " needs 3 coordinates: '" + std::string(line) + "'");
             glm::vec3 v;
             for (int a = 0; a < 3; ++a) {
                 if (!parse_float(t[a + 1], &v[a]))
-                    throw input_error(path, lineno, "bad vertex coordinate '" + std::string(t[a + 1]) + "'");
+                    throw input_error(path, lineno, std::string(position ? "bad vertex coordinate '" : "bad normal coordinate '") + std::string(t[a + 1]) + "'");
                 check_finite(path, lineno, t[a + 1], v[a]);
             }
-            mesh.vertices.push_back(v);
+            (position ? positions : normals).push_back(v);
+        } else if (t[0] == "vt") {
+            ++texcoords;
         } else if (t[0] == "f") {
             if (t.size() < 4) throw input_error(path, lineno, "face needs at least 3 vertices: '" + std::string(line) + "'");
             poly.clear();
-            for (size_t k = 1; k < t.size(); ++k) {
-                long v = 0;
-                if (!parse_number(t[k].substr(0, t[k].find('/')), &v))
-                    throw input_error(path, lineno, "bad face index '" + std::string(t[k]) + "'");
-                const long n = long(mesh.vertices.size());
-                const long i = v > 0 ? v - 1 : n + v;
-                if (v == 0 || i < 0 || i >= n)
-                    throw input_error(path, lineno, "face index '" + std::string(t[k]) + "' out of range (1.." + std::to_string(n) + ")");
-                poly.push_back(uint32_t(i));
+            for (size_t k = 1; k < t.size(); ++k)
+                poly.push_back(parse_corner(t[k], long(positions.size()), texcoords, long(normals.size()), path, lineno));
+            const long mat = named ? long(current) : -1;  // -1: the default, resolved at the end
+            any_default |= mat < 0;
+            triangulate(poly, positions, tinyobj_quads, tris);
+            for (const auto& tri : tris) {
+                glm::uvec3 idx;
+                for (int k = 0; k < 3; ++k) {
+                    const Corner& c = poly[tri[k]];
+                    const auto [it, fresh] = corner_vertex.try_emplace({c.v, c.vt, c.vn, mat}, uint32_t(mesh.vertices.size()));
+                    if (fresh) {
+                        mesh.vertices.push_back(positions[size_t(c.v)]);
+                        vertex_normal.push_back(c.vn);
+                    }
+                    idx[k] = it->second;
+                }
+                mesh.triangles.push_back(idx);
+                face_material.push_back(uint32_t(mat < 0 ? ~0u : uint32_t(mat)));
             }
-            fan(mesh, poly, current);
         } else if (t[0] == "usemtl") {
-            const std::string name = t.size() > 1 ? std::string(t[1]) : "";
-            auto it = materials.find(name);
-            current = it == materials.end() ? default_material : it->second;
+            const auto it = materials.find(t.size() > 1 ? std::string(t[1]) : "");
+            named = it != materials.end();
+            if (named) current = it->second;
         } else if (t[0] == "mtllib" && t.size() > 1) {
-            load_mtl(scene, (fs::path(path).parent_path() / std::string(t[1])).string(), materials);
+            load_mtl(scene, (fs::path(path).parent_path() / std::string(t[1])).string(), materials, library);
         }
+    }
+    // Faces before any usemtl, or naming no material of the library, take the library's first
+    // material (tinyobjloader's -1, taken as 0 by Model.cpp l.131-134); a file without a library
+    // takes the default grey (0.7) Lambertian (l.80-88).
+    const uint32_t fallback = !library.empty() ? library.front() : (any_default ? add_material(scene, Material{}) : 0u);
+    mesh.file_materials = library.empty() && any_default ? std::vector<uint32_t>{fallback} : library;
+    mesh.material.reserve(face_material.size());
+    for (uint32_t m : face_material) mesh.material.push_back(m == ~0u ? fallback : m);
+    // Normals: the file's; without any (`vn`), smooth normals (compute_smooth_normals), which
+    // also stand in for a corner whose normal index is missing or out of range.
+    if (!normals.empty()) {
+        compute_smooth_normals(mesh);
+        for (size_t i = 0; i < mesh.vertices.size(); ++i)
+            if (vertex_normal[i] >= 0) mesh.normals[i] = normals[size_t(vertex_normal[i])];
     }
 }
 
@@ -813,7 +881,7 @@ bool is_mesh_file(const std::string& path) {
     return imp.IsExtensionSupported("." + ext);
 }
 
-uint32_t load_mesh_file(Scene& scene, const std::string& path, const ImporterLimits& limits) {
+uint32_t load_mesh_file(Scene& scene, const std::string& path, const ImporterLimits& limits, bool tinyobj_quads) {
     std::error_code ec;
     if (!fs::exists(path, ec)) throw input_error(path, 0, "file not found");
     // A FIFO, socket or device would block the reader (Assimp waits forever on a FIFO) or never end.
@@ -826,7 +894,7 @@ uint32_t load_mesh_file(Scene& scene, const std::string& path, const ImporterLim
     mesh.name = path;
     const std::string ext = mesh_extension(path);
     if (ext == "obj") {
-        load_obj(scene, mesh, path);
+        load_obj(scene, mesh, path, tinyobj_quads);
     } else if (ext == "ply") {
         const uint32_t mat = add_material(scene, Material{});
         PlyReader(path, read_file_maybe_gz(path)).load(mesh, mat);
@@ -835,6 +903,7 @@ uint32_t load_mesh_file(Scene& scene, const std::string& path, const ImporterLim
     } else {
         load_assimp_isolated(scene, mesh, path, limits);
     }
+    if (mesh.normals.empty()) compute_smooth_normals(mesh);
     scene.meshes.push_back(std::move(mesh));
     return uint32_t(scene.meshes.size() - 1);
 }

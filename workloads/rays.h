@@ -1,8 +1,8 @@
-// Ray workloads: camera primary rays, path tracing, ambient occlusion, shadow rays and ray
-// files. A workload hands out rays and consumes their hits; follow-up rays (bounces, AO and
-// shadow rays) are made from the hits, so the same workload drives the functional loop here
-// and, later, the timing model. Every random number comes from a generator seeded by
-// (seed, path, depth), so results do not depend on the order in which rays complete.
+// Ray workloads: camera primary rays, path tracing, ambient occlusion, shadow rays (LumiBench's
+// application, workloads/lumibench.h) and ray files. A workload hands out rays and consumes their
+// hits; follow-up rays (bounces, AO and shadow rays) are made from the hits, so the same workload
+// drives the functional loop and the timing model. A pixel's random numbers are its own stream,
+// drawn in its rays' order, so results do not depend on the order in which pixels complete.
 #pragma once
 #include <cstdint>
 #include <memory>
@@ -16,7 +16,7 @@
 
 namespace rtu {
 
-// SplitMix64-seeded xorshift generator; uniform floats in [0, 1).
+// SplitMix64-seeded generator; uniform floats in [0, 1) (the sample design's draws).
 class Rng {
 public:
     explicit Rng(uint64_t seed);
@@ -30,13 +30,19 @@ private:
 
 struct WorkRay {
     Ray ray;
-    uint32_t path = 0;   // pixel sample (or ray-file line order) this ray belongs to
-    uint16_t depth = 0;  // 0 primary, then bounces / secondary rays
+    uint32_t path = 0;   // the pixel (one thread of its shader warp) or ray-file line this ray belongs to
+    uint16_t depth = 0;  // the ray's place in its sample: 0 the camera ray, then bounces or secondary rays
+    // Where the thread is in the ray generation shader (sample << 8 | trace of the sample): a
+    // shader warp executes its threads' trace calls together, as SIMT hardware does, so a trace
+    // takes the rays of the warp's threads that are furthest behind (the lowest phase) and the
+    // others wait (a thread done with its sample waits for the warp's other threads to finish
+    // theirs: the sample loop reconverges; docs/lumibench.md).
+    uint32_t phase = 0;
 };
 
 struct WorkloadParams {
     int width = 128, height = 128, spp = 2, bounces = 16;
-    uint64_t seed = 1;
+    uint64_t seed = 1;  // LumiBench's frame number: TotalNumberOfSamples = spp x seed seeds the pixels
 };
 
 enum class WorkloadKind { Primary, PathTrace, AmbientOcclusion, Shadow, RayFile };
@@ -50,14 +56,16 @@ public:
     virtual void begin(std::vector<WorkRay>& out) = 0;
     // Consumes the hit of a traced ray and appends the rays it causes.
     virtual void complete(const WorkRay& r, const Hit& hit, std::vector<WorkRay>& out) = 0;
+    // Puts path `path` back as begin() left it (its first ray emitted), so that it can be traced
+    // again from that ray with the same results: the sampling pre-pass and the caches' warming
+    // trace a shader warp more than once, on workloads that other warps have advanced.
+    virtual void restart(uint32_t path) { (void)path; }
     // Linear RGB per pixel (row-major, top row first), or empty if the workload has no image.
     virtual std::vector<glm::vec3> image() const { return {}; }
 };
 
+// The scene's workload as LumiBench's application casts it (workloads/lumibench.h).
 std::unique_ptr<Workload> make_scene_workload(WorkloadKind kind, const Scene& scene, const WorkloadParams& p);
-
-// A camera ray through pixel (px, py) with jitter (jx, jy) in [0,1)^2 and lens sample (lx, ly).
-Ray camera_ray(const Camera& cam, int px, int py, int width, int height, float jx, float jy, float lx, float ly);
 
 // Ray file (shared/interfaces.md): one ray per line "ox oy oz dx dy dz tnear tfar [closest|any]".
 struct RayFileEntry {

@@ -5,6 +5,10 @@
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
 #include <glm/trigonometric.hpp>
+#include <glm/gtc/matrix_inverse.hpp>
+#include <glm/gtc/type_ptr.hpp>
+#include <glm/mat3x3.hpp>
+#include <glm/mat4x4.hpp>
 
 #include "input_error.h"
 
@@ -23,12 +27,11 @@ void grow(Aabb& b, const Aabb& o) {
 Aabb Mesh::prim_bounds(size_t i) const {
     Aabb b;
     if (procedural()) {
-        // center +- r is rounded outward so the box contains the whole sphere.
+        // centre -+ radius in float, as LumiBench gives the driver a sphere's box (Sphere.hpp
+        // l.21-24); the node quantization above it rounds outward.
         const Sphere& s = spheres[i];
-        for (int a = 0; a < 3; ++a) {
-            b.lo[a] = std::nextafter(s.center[a] - s.radius, -INFINITY);
-            b.hi[a] = std::nextafter(s.center[a] + s.radius, INFINITY);
-        }
+        b.lo = s.center - s.radius;
+        b.hi = s.center + s.radius;
         return b;
     }
     const glm::uvec3& t = triangles[i];
@@ -45,8 +48,7 @@ Aabb Mesh::bounds() const {
 bool Scene::two_level() const {
     for (const Instance& i : instances)
         if (!is_identity(i.object_to_world)) return true;
-    if (flatten) return false;
-    return instances.size() > 1;
+    return !flatten;
 }
 
 bool Scene::has_procedural() const {
@@ -109,6 +111,25 @@ void Scene::validate() const {
         for (float f : i.object_to_world)
             if (!std::isfinite(f)) throw InputError(name + ": instance transform not finite");
     }
+}
+
+void compute_smooth_normals(Mesh& m) {
+    if (m.procedural()) return;
+    m.normals.assign(m.vertices.size(), glm::vec3(0.0f));
+    for (const glm::uvec3& t : m.triangles) {
+        const glm::vec3 n = glm::normalize(glm::cross(m.vertices[t[1]] - m.vertices[t[0]], m.vertices[t[2]] - m.vertices[t[0]]));
+        // A degenerate triangle has no normal (LumiBench's would make its vertices' NaN).
+        if (!std::isfinite(n.x) || !std::isfinite(n.y) || !std::isfinite(n.z)) continue;
+        for (int k = 0; k < 3; ++k) m.normals[t[k]] += n;
+    }
+    for (glm::vec3& n : m.normals) n = glm::normalize(n);
+}
+
+void bake_transform(Mesh& mesh, const float m[16]) {
+    const glm::mat4 M = glm::make_mat4(m);
+    const glm::mat3 N = glm::inverseTranspose(glm::mat3(M));
+    for (glm::vec3& p : mesh.vertices) p = glm::vec3(M * glm::vec4(p, 1.0f));
+    for (glm::vec3& n : mesh.normals) n = N * n;
 }
 
 uint32_t add_material(Scene& s, Material m) {

@@ -31,9 +31,11 @@ struct Sphere {
 struct Mesh {
     std::string name;
     std::vector<glm::vec3> vertices;
+    std::vector<glm::vec3> normals;     // per vertex: the shading normals (not unit length after a transform)
     std::vector<glm::uvec3> triangles;  // indices into vertices, in file order
     std::vector<Sphere> spheres;        // procedural primitives
     std::vector<uint32_t> material;     // per primitive, index into Scene::materials
+    std::vector<uint32_t> file_materials;  // the mesh file's materials in its library's order (LumiBench's per-model list)
     bool procedural() const { return !spheres.empty(); }
     size_t primitives() const { return procedural() ? spheres.size() : triangles.size(); }
     Aabb prim_bounds(size_t i) const;
@@ -62,12 +64,12 @@ struct Scene {
     float light_radius = 0.0f;
 
     // With only identity instances, build one single-level BVH over all meshes (`--flatten`):
-    // no instance leaves, no transforms, fewer levels. Off by default (LumiBench places every
-    // mesh in its own BLAS).
+    // no instance leaves, no transforms, fewer levels. Off by default: LumiBench builds every
+    // model (mesh) into a BLAS of its own under one TLAS.
     bool flatten = false;
 
-    // Two-level (TLAS of instance leaves over one BLAS per mesh) when there is more than one
-    // instance or any non-identity transform, unless `flatten` applies; otherwise single-level.
+    // Two-level (a TLAS of instance leaves over one BLAS per mesh) unless `flatten` applies to
+    // identity instances only.
     bool two_level() const;
     bool has_procedural() const;
     uint64_t triangle_count() const;
@@ -79,6 +81,15 @@ struct Scene {
     // Checks invariants (non-empty, finite vertices, valid indices); throws InputError.
     void validate() const;
 };
+
+// Smooth vertex normals as LumiBench's loader makes them for a mesh without normals
+// (RayTracingInVulkan src/Assets/Model.cpp l.146-168): each vertex's is the sum of the unit face
+// normals of the triangles that use it, normalised. Procedural meshes get none.
+void compute_smooth_normals(Mesh& m);
+// Places a mesh as LumiBench's Model::Transform does (Model.cpp l.786-795): every vertex p
+// becomes M p and every normal n inverse-transpose(M) n, not renormalised. `m` is column-major
+// (glm), its last row (0, 0, 0, 1).
+void bake_transform(Mesh& mesh, const float m[16]);
 
 // Adds a material and returns its index.
 uint32_t add_material(Scene& s, Material m);

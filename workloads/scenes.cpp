@@ -6,7 +6,12 @@
 #include <random>
 #include <sstream>
 
+#include <array>
+#include <functional>
+
 #include <glm/geometric.hpp>
+#include <glm/gtc/matrix_transform.hpp>
+#include <glm/gtc/type_ptr.hpp>
 #include <glm/trigonometric.hpp>
 
 #include "input_error.h"
@@ -17,95 +22,130 @@ namespace fs = std::filesystem;
 namespace rtu {
 namespace {
 
-Affine multiply(const Affine& a, const Affine& b) {  // a * b
-    Affine r{};
-    for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 4; ++j) {
-            double s = (j == 3) ? a[4 * i + 3] : 0.0;
-            for (int k = 0; k < 3; ++k) s += double(a[4 * i + k]) * b[4 * k + j];
-            r[4 * i + j] = float(s);
-        }
-    return r;
-}
-Affine translate(glm::vec3 t) { return {1, 0, 0, t.x, 0, 1, 0, t.y, 0, 0, 1, t.z}; }
-Affine scale(float s) { return {s, 0, 0, 0, 0, s, 0, 0, 0, 0, s, 0}; }
-Affine rotate_y(float degrees) {
-    const double r = degrees * M_PI / 180.0;
-    const float c = float(std::cos(r)), s = float(std::sin(r));
-    return {c, 0, s, 0, 0, 1, 0, 0, -s, 0, c, 0};
+// LumiBench's placement of a model (RayTracingInVulkan src/SceneList.cpp, e.g. l.325-330):
+// rotate(scale(translate(I, t), s), radians(deg), +Y) in GLM's float arithmetic, baked into the
+// vertices (Model::Transform): a vertex is rotated about +Y, then scaled, then translated.
+glm::mat4 lumibench_placement(glm::vec3 t, float s, float deg) {
+    return glm::rotate(glm::scale(glm::translate(glm::mat4(1.0f), t), glm::vec3(s)), glm::radians(deg), glm::vec3(0, 1, 0));
 }
 
-// LumiBench's placement: translate * rotateY * scale applied to the (normalised) object.
-Affine placement(glm::vec3 t, float rot_y, float s, const Affine& pre = identity_affine()) {
-    return multiply(translate(t), multiply(rotate_y(rot_y), multiply(scale(s), pre)));
-}
+void bake(Mesh& m, const glm::mat4& M) { bake_transform(m, glm::value_ptr(M)); }
 
-// Moves the mesh's bounding-box bottom centre to the origin and scales its height to 1.
-Affine normalise_height(const Mesh& m) {
+// Moves the mesh's bounding-box bottom centre to the origin and scales its height to 1 (the
+// shared stand-ins are in their scanners' units; the scenes README).
+void normalise_height(Mesh& m) {
     const Aabb b = m.bounds();
     const float h = b.hi.y - b.lo.y;
     const float s = h > 0.0f ? 1.0f / h : 1.0f;
     const glm::vec3 c(0.5f * (b.lo.x + b.hi.x), b.lo.y, 0.5f * (b.lo.z + b.hi.z));
-    return multiply(scale(s), translate(-c));
+    bake(m, glm::translate(glm::scale(glm::mat4(1.0f), glm::vec3(s)), -c));
 }
 
-// Appends the Cornell box walls (and light) as one mesh; `mirror_sides` makes the side walls metal.
-uint32_t add_cornell_box(Scene& s, bool mirror_sides) {
-    Material green, red, white, light;
-    green.albedo = {0.12f, 0.45f, 0.15f};
-    red.albedo = {0.65f, 0.05f, 0.05f};
-    white.albedo = {0.73f, 0.73f, 0.73f};
-    light.kind = Material::Kind::Emitter;
-    light.emission = glm::vec3(15.0f);
-    if (mirror_sides) {
-        green.kind = red.kind = Material::Kind::Metal;
-        green.albedo = red.albedo = glm::vec3(0.9f);
-    }
-    const uint32_t mg = add_material(s, green), mr = add_material(s, red), mw = add_material(s, white),
-                   ml = add_material(s, light);
+Material lambertian(glm::vec3 albedo) {
+    Material m;
+    m.albedo = albedo;
+    return m;
+}
+Material metallic(glm::vec3 albedo, float fuzz) {
+    Material m;
+    m.kind = Material::Kind::Metal;
+    m.albedo = albedo;
+    m.fuzz = fuzz;
+    return m;
+}
+Material dielectric(float ior) {
+    Material m;
+    m.kind = Material::Kind::Glass;
+    m.ior = ior;
+    return m;
+}
+Material diffuse_light(float e) {
+    Material m;
+    m.kind = Material::Kind::Emitter;
+    m.emission = glm::vec3(e);
+    m.albedo = glm::vec3(e);  // LumiBench's DiffuseLight keeps the emission as its colour
+    return m;
+}
+
+// Model::SetMaterial(m, i) and SetAllMaterial(m) (Model.cpp l.764-784): the model's material i of
+// its file's library, or every one of them.
+void set_material(Scene& s, const Mesh& mesh, size_t i, const Material& m) {
+    if (i < mesh.file_materials.size()) s.materials[mesh.file_materials[i]] = m;
+}
+void set_all_materials(Scene& s, const Mesh& mesh, const Material& m) {
+    for (size_t i = 0; i < mesh.file_materials.size(); ++i) set_material(s, mesh, i, m);
+}
+
+// Model::CreateSphere(center, r, material, procedural) as one model of its own.
+void add_sphere_model(Scene& s, const std::string& name, glm::vec3 c, float r, const Material& mat) {
+    Mesh m;
+    m.name = name;
+    m.spheres.push_back({c, r});
+    m.material.push_back(add_material(s, mat));
+    m.file_materials = m.material;
+    s.meshes.push_back(std::move(m));
+}
+
+// LumiBench's CornellBox::Create (src/Assets/CornellBox.cpp): one model of 12 triangles, each
+// panel with its inward normal at every vertex; materials red, green, white, light (15).
+// `mirror_sides` (REF, SceneList.cpp l.1281-1282): the red and green walls become perfect mirrors.
+void add_cornell_box(Scene& s, bool mirror_sides) {
+    const glm::vec3 red(0.65f, 0.05f, 0.05f), green(0.12f, 0.45f, 0.15f);
+    const uint32_t mr = add_material(s, mirror_sides ? metallic(red, 0.0f) : lambertian(red));
+    const uint32_t mg = add_material(s, mirror_sides ? metallic(green, 0.0f) : lambertian(green));
+    const uint32_t mw = add_material(s, lambertian(glm::vec3(0.73f))), ml = add_material(s, diffuse_light(15.0f));
     Mesh m;
     m.name = "cornell-box";
-    auto quad = [&](glm::vec3 a, glm::vec3 b, glm::vec3 c, glm::vec3 d, uint32_t mat) {
-        const uint32_t base = uint32_t(m.vertices.size());
-        m.vertices.insert(m.vertices.end(), {a, b, c, d});
-        m.triangles.push_back({base, base + 1, base + 2});
-        m.triangles.push_back({base, base + 2, base + 3});
-        m.material.insert(m.material.end(), {mat, mat});
-    };
+    m.file_materials = {mr, mg, mw, ml};
     const float L = 555.0f;
-    quad({0, 0, 0}, {0, L, 0}, {0, L, -L}, {0, 0, -L}, mg);   // left x = 0
-    quad({L, 0, 0}, {L, 0, -L}, {L, L, -L}, {L, L, 0}, mr);   // right x = 555
-    quad({0, 0, -L}, {0, L, -L}, {L, L, -L}, {L, 0, -L}, mw); // back z = -555
-    quad({0, 0, 0}, {0, 0, -L}, {L, 0, -L}, {L, 0, 0}, mw);   // floor y = 0
-    quad({0, L, 0}, {L, L, 0}, {L, L, -L}, {0, L, -L}, mw);   // ceiling y = 555
-    const float y = 553.89f;
-    quad({213, y, -223}, {343, y, -223}, {343, y, -328}, {213, y, -328}, ml);
+    const glm::vec3 l0(0, 0, 0), l1(0, 0, -L), l2(0, L, -L), l3(0, L, 0), r0(L, 0, 0), r1(L, 0, -L), r2(L, L, -L), r3(L, L, 0);
+    // A panel: four vertices with one normal, two triangles as CornellBox.cpp orders them.
+    auto panel = [&](std::array<glm::vec3, 4> v, glm::vec3 n, std::array<glm::uvec3, 2> tris, uint32_t mat) {
+        const uint32_t base = uint32_t(m.vertices.size());
+        for (const glm::vec3& p : v) {
+            m.vertices.push_back(p);
+            m.normals.push_back(n);
+        }
+        for (const glm::uvec3& t : tris) {
+            m.triangles.push_back(t + glm::uvec3(base));
+            m.material.push_back(mat);
+        }
+    };
+    const std::array<glm::uvec3, 2> ccw{glm::uvec3(0, 1, 2), glm::uvec3(0, 2, 3)};
+    panel({l0, l1, l2, l3}, {1, 0, 0}, ccw, mg);                                       // left, green
+    panel({r0, r1, r2, r3}, {-1, 0, 0}, {glm::uvec3(2, 1, 0), glm::uvec3(3, 2, 0)}, mr);  // right, red
+    panel({l1, r1, r2, l2}, {0, 0, 1}, ccw, mw);                                       // back
+    panel({l0, r0, r1, l1}, {0, 1, 0}, ccw, mw);                                       // floor
+    panel({l2, r2, r3, l3}, {0, -1, 0}, ccw, mw);                                      // ceiling
+    const float x0 = L * (213.0f / 555.0f), x1 = L * (343.0f / 555.0f);
+    const float z0 = L * (-555.0f + 332.0f) / 555.0f, z1 = L * (-555.0f + 227.0f) / 555.0f, y1 = L * 0.998f;
+    panel({glm::vec3(x0, y1, z1), glm::vec3(x1, y1, z1), glm::vec3(x1, y1, z0), glm::vec3(x0, y1, z0)}, {0, -1, 0}, ccw, ml);  // light
     s.meshes.push_back(std::move(m));
-    return uint32_t(s.meshes.size() - 1);
 }
 
-Camera cornell_camera(float vfov) {
+// LumiBench's cameras: lookAt(eye, look-at, +Y) and a vertical field of view.
+Camera lumibench_camera(glm::vec3 eye, glm::vec3 lookat, float vfov, float aperture = 0.0f, float focus = 10.0f) {
     Camera c;
-    c.eye = {278, 278, 800};
-    c.lookat = {278, 278, 0};
+    c.eye = eye;
+    c.lookat = lookat;
     c.vfov = vfov;
-    c.focus_dist = 800;
+    c.aperture = aperture;
+    c.focus_dist = focus;
     return c;
 }
 
-std::vector<std::string> mesh_files_in(const std::string& dir, const std::string& skip_prefix = "") {
+std::vector<std::string> mesh_files_in(const std::string& dir) {
     std::vector<std::string> names;
     std::error_code ec;
     for (const auto& e : fs::directory_iterator(dir, ec)) {
         if (!e.is_regular_file()) continue;
         const std::string n = e.path().filename().string();
-        if (!skip_prefix.empty() && n.rfind(skip_prefix, 0) == 0) continue;
         if (e.path().extension() == ".obj" || e.path().extension() == ".ply" ||
             (n.size() > 7 && n.compare(n.size() - 7, 7, ".ply.gz") == 0))
             names.push_back(n);
     }
     if (ec) throw input_error(dir, 0, "cannot list folder: " + ec.message());
-    std::sort(names.begin(), names.end());  // byte-wise
+    std::sort(names.begin(), names.end());  // byte-wise (LumiBench takes the file system's order, which it does not fix)
     return names;
 }
 
@@ -118,16 +158,75 @@ std::string find_camera_file(const std::string& dir) {
     return cams.empty() ? std::string() : cams.front();
 }
 
-Scene load_folder(const std::string& dir, const std::string& skip_prefix, float vfov) {
+// A folder of mesh files, one model each; `keep(file, mesh)` decides whether a loaded file is
+// kept (LumiBench's SPRNG drops empty files and Dirt_grass*).
+Scene load_folder(const std::string& dir, float vfov, bool tinyobj_quads,
+                  const std::function<bool(const std::string&, const Mesh&)>& keep = nullptr) {
     Scene s;
     s.name = dir;
-    const auto files = mesh_files_in(dir, skip_prefix);
+    const auto files = mesh_files_in(dir);
     if (files.empty()) throw input_error(dir, 0, "folder holds no mesh files (.obj, .ply, .ply.gz)");
-    for (const auto& f : files) load_mesh_file(s, (fs::path(dir) / f).string());
+    for (const auto& f : files) {
+        load_mesh_file(s, (fs::path(dir) / f).string(), {}, tinyobj_quads);
+        if (keep && !keep(f, s.meshes.back())) s.meshes.pop_back();
+    }
     add_identity_instances(s);
     const std::string cam = find_camera_file(dir);
     s.camera = cam.empty() ? default_camera(s.world_bounds()) : read_camera_file(cam, vfov);
+    if (!cam.empty()) s.camera.focus_dist = 7.0f;  // LumiBench's folder scenes; no lens (aperture 0)
     return s;
+}
+
+bool contains(const std::string& s, const char* part) { return s.find(part) != std::string::npos; }
+
+// LumiBench's BATH materials (SceneList.cpp l.1313-1359), by file name.
+void bath_materials(Scene& s) {
+    const auto c = [](int r, int g, int b) { return glm::vec3(float(r / 256.0), float(g / 256.0), float(b / 256.0)); };
+    const Material chrome = metallic(glm::vec3(0.73f), 0.0f);
+    for (const Mesh& m : s.meshes) {
+        const std::string f = fs::path(m.name).filename().string();
+        if (f == "sol.obj") {
+            set_material(s, m, 0, diffuse_light(15.0f));
+            set_material(s, m, 1, lambertian(c(44, 26, 12)));
+            set_material(s, m, 2, chrome);
+            set_material(s, m, 4, lambertian(c(226, 243, 227)));
+            set_material(s, m, 5, lambertian(c(196, 137, 88)));
+        } else if (contains(m.name, "Meuble") || contains(m.name, "meuble") || contains(m.name, "baignoire")) {
+            set_all_materials(s, m, lambertian(c(196, 137, 88)));
+        } else if (contains(m.name, "statu")) {
+            set_all_materials(s, m, lambertian(c(14, 6, 3)));
+        } else if (contains(m.name, "robinet") || contains(m.name, "etend_serviette")) {
+            set_all_materials(s, m, chrome);
+        } else if (f == "prise.obj") {
+            set_material(s, m, 0, lambertian(c(164, 150, 134)));
+            set_material(s, m, 1, lambertian(c(34, 22, 13)));
+        } else if (contains(m.name, "poubelle")) {
+            set_material(s, m, 0, chrome);
+            set_material(s, m, 1, lambertian(c(14, 5, 4)));
+        } else if (contains(m.name, "pese_personne")) {
+            set_material(s, m, 1, lambertian(c(14, 5, 4)));
+        } else if (contains(m.name, "bouteille")) {
+            set_material(s, m, 2, lambertian(c(93, 77, 62)));
+        } else if (contains(m.name, "emit_haut")) {
+            set_all_materials(s, m, diffuse_light(15.0f));
+        }
+    }
+}
+
+// LumiBench's SPRNG materials (SceneList.cpp l.768-799), by file name, first match.
+void sprng_materials(Scene& s) {
+    const auto c = [](int r, int g, int b) { return glm::vec3(float(r / 256.0), float(g / 256.0), float(b / 256.0)); };
+    const std::pair<std::vector<const char*>, glm::vec3> rules[] = {
+        {{"spring_body"}, c(223, 175, 171)},   {{"stitches"}, c(92, 64, 51)},        {{"spring_jacket"}, c(163, 67, 42)},
+        {{"spring_pants"}, c(92, 74, 101)},    {{"spring_boots"}, c(150, 106, 86)},  {{"spring_hairband"}, c(69, 23, 8)},
+        {{"spring_hair"}, c(108, 86, 99)},     {{"spring_scarf", "spring_pullover"}, c(114, 76, 64)},
+    };
+    for (const Mesh& m : s.meshes)
+        for (const auto& [parts, colour] : rules)
+            if (std::any_of(parts.begin(), parts.end(), [&](const char* p) { return contains(m.name, p); })) {
+                set_all_materials(s, m, lambertian(colour));
+                break;
+            }
 }
 
 std::string require_assets(const std::string& name, const std::string& assets) {
@@ -153,69 +252,49 @@ std::string require_file(const std::string& dir, const std::vector<std::string>&
 }  // namespace
 
 Scene make_wknd() {
+    // SceneList.cpp l.21-64 and l.131-158: every sphere a model of its own, in this order.
     Scene s;
     s.name = "wknd";
-    Mesh m;
-    m.name = "wknd-spheres";
     std::mt19937 gen(42);
-    std::uniform_real_distribution<float> dist;  // [0, 1)
+    std::uniform_real_distribution<float> dist;  // [0, 1), one 32-bit draw a call with libstdc++
     auto rnd = [&] { return dist(gen); };
-    auto add = [&](glm::vec3 c, float r, Material mat) {
-        m.spheres.push_back({c, r});
-        m.material.push_back(add_material(s, mat));
-    };
-    Material ground;
-    ground.albedo = glm::vec3(0.5f);
-    add({0, -1000, 0}, 1000, ground);
-    for (int a = -11; a < 11; ++a) {
-        for (int b = -11; b < 11; ++b) {
+    add_sphere_model(s, "ground", {0, -1000, 0}, 1000, lambertian(glm::vec3(0.5f)));
+    for (int i = -11; i < 11; ++i) {
+        for (int j = -11; j < 11; ++j) {
             const float choose = rnd();
-            const float z = b + 0.9f * rnd();  // drawn before x, as LumiBench's code evaluates it
-            const float x = a + 0.9f * rnd();
+            const float z = float(j) + 0.9f * rnd();  // LumiBench's `center_y`, drawn before x
+            const float x = float(i) + 0.9f * rnd();
             const glm::vec3 c(x, 0.2f, z);
-            if (glm::length(c - glm::vec3(4, 0.2f, 0)) <= 0.9f) continue;
-            Material mat;
+            if (!(glm::length(c - glm::vec3(4, 0.2f, 0)) > 0.9f)) continue;
+            const std::string name = "sphere-" + std::to_string(s.meshes.size());
             if (choose < 0.8f) {
-                // colour::random() * colour::random(): six draws. With three, as the scenes
-                // README words it, the counts below do not come out (482 spheres, not 483).
-                const glm::vec3 c1{rnd(), rnd(), rnd()};  // braces: drawn left to right
-                const glm::vec3 c2{rnd(), rnd(), rnd()};
-                mat.albedo = c1 * c2;
+                const float b = rnd() * rnd(), g = rnd() * rnd(), r = rnd() * rnd();  // each product's draws in turn
+                add_sphere_model(s, name, c, 0.2f, lambertian({r, g, b}));
             } else if (choose < 0.95f) {
-                mat.kind = Material::Kind::Metal;
-                mat.fuzz = 0.5f * rnd();
-                mat.albedo = {0.5f + 0.5f * rnd(), 0.5f + 0.5f * rnd(), 0.5f + 0.5f * rnd()};
+                const float fuzz = 0.5f * rnd();
+                const float b = 0.5f * (1 + rnd()), g = 0.5f * (1 + rnd()), r = 0.5f * (1 + rnd());
+                add_sphere_model(s, name, c, 0.2f, metallic({r, g, b}, fuzz));
             } else {
-                mat.kind = Material::Kind::Glass;
+                add_sphere_model(s, name, c, 0.2f, dielectric(1.5f));
             }
-            add(c, 0.2f, mat);
         }
     }
-    Material glass, diffuse, metal;
-    glass.kind = Material::Kind::Glass;
-    diffuse.albedo = {0.4f, 0.2f, 0.1f};
-    metal.kind = Material::Kind::Metal;
-    metal.albedo = {0.7f, 0.6f, 0.5f};
-    add({0, 1, 0}, 1, glass);
-    add({-4, 1, 0}, 1, diffuse);
-    add({4, 1, 0}, 1, metal);
-    s.meshes.push_back(std::move(m));
+    add_sphere_model(s, "glass", {0, 1, 0}, 1.0f, dielectric(1.5f));
+    add_sphere_model(s, "diffuse", {-4, 1, 0}, 1.0f, lambertian({0.4f, 0.2f, 0.1f}));
+    add_sphere_model(s, "metal", {4, 1, 0}, 1.0f, metallic({0.7f, 0.6f, 0.5f}, 0.0f));
     add_identity_instances(s);
-    s.camera.eye = {13, 2, 3};
-    s.camera.lookat = {0, 0, 0};
-    s.camera.vfov = 20;
-    s.camera.aperture = 0.1f;
-    s.camera.focus_dist = 10;
+    s.camera = lumibench_camera({13, 2, 3}, {0, 0, 0}, 20, 0.1f, 10.0f);
     s.sky = true;
     return s;
 }
 
 Scene make_cornell() {
+    // LumiBench's CornellBox scene (SceneList.cpp): the box alone, no sky.
     Scene s;
     s.name = "cornell";
     add_cornell_box(s, false);
     add_identity_instances(s);
-    s.camera = cornell_camera(40);
+    s.camera = lumibench_camera({278, 278, 800}, {278, 278, 0}, 40);
     s.sky = false;
     s.light = glm::vec3(278, 553, -275.5f);
     s.light_radius = 50;
@@ -247,85 +326,65 @@ Camera read_camera_file(const std::string& path, float vfov) {
 std::vector<std::string> scene_names() { return {"wknd", "cornell", "ship", "bunny", "ref", "ref-full", "bath", "sprng", "party"}; }
 
 Scene load_scene(const std::string& name, const std::string& assets) {
+    // LumiBench's scenes as its SceneList.cpp builds them: every model (an OBJ file, the Cornell
+    // box, a procedural sphere) its own BLAS under one TLAS, placed by transforms baked into its
+    // vertices; docs/lumibench.md gives each choice's source.
     Scene s;
     if (name == "wknd") {
         s = make_wknd();
     } else if (name == "cornell") {
         s = make_cornell();
-    } else if (name == "ship") {
+    } else if (name == "ship") {  // SceneList.cpp l.310-335
         const std::string dir = require_assets(name, assets);
-        load_mesh_file(s, require_file(dir, {"karimSchooner.obj"}));
-        s.instances.push_back({0, placement({173, -9, -377}, 75, 100)});
-        s.camera.eye = {378, 278, 500};
-        s.camera.lookat = {178, 278, 0};
-        s.camera.vfov = 50;
-        s.camera.focus_dist = glm::length(s.camera.lookat - s.camera.eye);
+        load_mesh_file(s, require_file(dir, {"karimSchooner.obj"}), {}, true);
+        bake(s.meshes[0], lumibench_placement({173, -9, -377}, 100, 75));
+        s.camera = lumibench_camera({378, 278, 500}, {178, 278, 0}, 50);
         s.sky = true;
-    } else if (name == "bunny") {
+    } else if (name == "bunny") {  // l.337-363: the box first, then the bunny
         const std::string dir = require_assets(name, assets);
-        load_mesh_file(s, require_file(dir, {"stanford-bunny.obj", "bunny.obj", "bun_zipper.ply"}));
         add_cornell_box(s, false);
-        s.instances.push_back({0, placement({173, 5, -307}, 75, 200, normalise_height(s.meshes[0]))});
-        s.instances.push_back({1, identity_affine()});
-        s.camera = cornell_camera(40);
+        load_mesh_file(s, require_file(dir, {"stanford-bunny.obj", "bunny.obj", "bun_zipper.ply"}), {}, true);
+        normalise_height(s.meshes[1]);
+        bake(s.meshes[1], lumibench_placement({173, 5, -307}, 200, 75));
+        s.camera = lumibench_camera({278, 278, 800}, {278, 278, 0}, 40);
         s.sky = false;
         s.light = glm::vec3(280, 500, 400);
         s.light_radius = 10;
-    } else if (name == "ref" || name == "ref-full") {
-        // ref: the 202 k-triangle dragon; ref-full: the 871 k-triangle one, same placement.
+    } else if (name == "ref" || name == "ref-full") {  // l.1251-1291: box (mirrors), glass sphere, statue
+        // ref: the 202 k-triangle dragon in place of LumiBench's Lucy; ref-full: the 871 k-triangle one.
         const std::string dir = require_assets(name, assets);
+        add_cornell_box(s, true);
+        add_sphere_model(s, "glass-sphere", {425, 165, -147.5f}, 80, dielectric(1.5f));
         if (name == "ref")
             load_mesh_file(s, require_file(dir, {"dragon_vrip_res2.ply.gz", "dragon_vrip.ply.gz", "dragon_vrip_res2.ply", "dragon_vrip.ply"}));
         else
             load_mesh_file(s, require_file(dir, {"dragon_vrip.ply.gz", "dragon_vrip.ply"}));
-        add_cornell_box(s, true);
-        Mesh glass;
-        glass.name = "glass-sphere";
-        Material gm;
-        gm.kind = Material::Kind::Glass;
-        glass.spheres.push_back({{425, 165, -147.5f}, 80});
-        glass.material.push_back(add_material(s, gm));
-        s.meshes.push_back(std::move(glass));
-        // Our placement of the dragon stand-in (LumiBench's own REF asset differs): height 200,
-        // standing on the floor left of the glass sphere.
-        s.instances.push_back({0, placement({230, 0, -330}, 75, 200, normalise_height(s.meshes[0]))});
-        s.instances.push_back({1, identity_affine()});
-        s.instances.push_back({2, identity_affine()});
-        s.camera.eye = {278, 278, 350};
-        s.camera.lookat = {278, 278, 0};
-        s.camera.vfov = 78;
-        s.camera.focus_dist = 350;
+        // Our placement of the stand-in (Lucy's own differs): height 200, on the floor left of
+        // the glass sphere.
+        normalise_height(s.meshes[2]);
+        bake(s.meshes[2], lumibench_placement({230, 0, -330}, 200, 75));
+        s.camera = lumibench_camera({278, 278, 350}, {278, 278, 0}, 78);
         s.sky = false;
-        s.light = glm::vec3(278, 540, -275.5f);
-        s.light_radius = 50;
-    } else if (name == "bath") {
-        s = load_folder(require_assets(name, assets), "", 36);
-        s.sky = false;
-        // sol.obj and emit_haut_* are the emitters (shared/scenes/README.md).
-        for (uint32_t i = 0; i < s.meshes.size(); ++i) {
-            const std::string f = fs::path(s.meshes[i].name).filename().string();
-            if (f == "sol.obj" || f.rfind("emit_haut_", 0) == 0) {
-                Material e;
-                e.kind = Material::Kind::Emitter;
-                e.emission = glm::vec3(8.0f);
-                const uint32_t mi = add_material(s, e);
-                std::fill(s.meshes[i].material.begin(), s.meshes[i].material.end(), mi);
-            }
-        }
-        const Aabb b = s.world_bounds();
-        s.light = glm::vec3(0.5f * (b.lo.x + b.hi.x), b.hi.y - 0.05f * (b.hi.y - b.lo.y), 0.5f * (b.lo.z + b.hi.z));
-    } else if (name == "sprng") {
-        s = load_folder(require_assets(name, assets), "Dirt_grass", 20);  // LumiBench skips Dirt_grass*
+        s.light = glm::vec3(280, 500, 280);
+        s.light_radius = 10;
+    } else if (name == "bath") {  // l.1293-1378
+        s = load_folder(require_assets(name, assets), 36, true);
+        bath_materials(s);
         s.sky = true;
-    } else if (name == "party") {
-        // LumiBench PARTY without its characters (shared/scenes/README.md): the camera file is
-        // LumiBench's default view, vfov 20, sky.
-        s = load_folder(require_assets(name, assets), "", 20);
+        const Aabb b = s.world_bounds();  // no light position in LumiBench's BATH: the shadow workload's is ours
+        s.light = glm::vec3(0.5f * (b.lo.x + b.hi.x), b.hi.y - 0.05f * (b.hi.y - b.lo.y), 0.5f * (b.lo.z + b.hi.z));
+    } else if (name == "sprng") {  // l.738-820: files without vertices and Dirt_grass* are left out
+        s = load_folder(require_assets(name, assets), 20, true,
+                        [](const std::string& f, const Mesh& m) { return !m.vertices.empty() && f.find("Dirt_grass") == std::string::npos; });
+        sprng_materials(s);
+        s.sky = true;
+    } else if (name == "party") {  // l.822-863, without its characters (shared/scenes/README.md)
+        s = load_folder(require_assets(name, assets), 20, true);
         s.sky = true;
     } else {
         std::error_code ec;
         if (fs::is_directory(name, ec)) {
-            s = load_folder(name, "", 45);
+            s = load_folder(name, 45, false);
         } else if (fs::exists(name, ec)) {
             load_mesh_file(s, name);
             add_identity_instances(s);
@@ -337,6 +396,7 @@ Scene load_scene(const std::string& name, const std::string& assets) {
         }
         s.sky = true;
     }
+    if (s.instances.empty()) add_identity_instances(s);
     if (s.name.empty() || name == "bath" || name == "sprng" || name == "party") s.name = name;
     s.validate();
     return s;

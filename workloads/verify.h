@@ -16,7 +16,9 @@ enum class Agreement : uint8_t {
     TUlps,            // same primitive, same point: t within kUlpTolerance ulps of t or of the coordinates
     SameTOtherPrim,   // different primitive at the same point (as TUlps): a shared edge or vertex
     Coincident,       // different triangle with the same three vertex positions (a duplicated face)
-    BoundaryT,        // one hits, one misses, and the hit lies within kUlpTolerance ulps of tnear or tfar
+    BoundaryT,        // the answers differ by a hit within kUlpTolerance ulps of tnear or tfar, or at the ray's start
+                      // within kLooseUlpTolerance ulps of the coordinates (a ray leaving a surface); or one side
+                      // hits a triangle whose plane the ray starts on, within kUlpTolerance ulps of the coordinates
     VertexEmbreeMiss, // we hit a triangle at a vertex (two barycentrics ~0) that Embree's robust mode misses
     ZeroDirFace,      // one side misses a ray with an exactly-zero direction component (box face plane, sign of zero)
     SphereFloatError, // a sphere where Embree's float solver errs: a long-double solve confirms our answer
@@ -25,6 +27,9 @@ enum class Agreement : uint8_t {
                       // transformed to an instance's object space in float (by us as by Embree)
     EdgeFloatError,   // the nearer answer's triangle is hit or missed by an edge decision that lies within
                       // the rounding error of the float edge test (edge_decision_within_float_error)
+    SimulatorOrder,   // another triangle, no farther by the TTP authors' simulator's float t (moller_trumbore_t,
+                      // which orders hits), the two exact t's closer together than those float t's errors:
+                      // near-coincident surfaces (the ship's double-sided sails) that the float t cannot order
     Mismatch,
     Count
 };
@@ -39,13 +44,13 @@ uint32_t ulp_distance(float a, float b);
 // `scene` gives the primitives for the long-double check of sphere disagreements.
 Agreement classify(const Scene& scene, const Ray& ray, const Hit& ours, const Hit& ref, const Hit& ref_closest);
 
-// Nearest root in [tnear, tfar] of the ray with sphere `prim` of mesh `geom`, solved in long
-// double; nullopt if there is none, or if the sphere is not a procedural one in world space.
 // Distance to the plane of triangle `prim` of mesh `geom` (placed by its instance transform),
 // in long double; nullopt for a ray parallel to the plane. `cosine` receives |cos| of the
 // angle between the ray and the plane's normal.
 std::optional<long double> exact_triangle_t(const Scene& scene, const Ray& ray, uint32_t geom, uint32_t prim,
                                             long double* cosine = nullptr);
+// Nearest root in [tnear, tfar] of the ray with sphere `prim` of mesh `geom`, solved in long
+// double; nullopt if there is none, or if the sphere is not a procedural one in world space.
 std::optional<long double> exact_sphere_t(const Scene& scene, const Ray& ray, uint32_t geom, uint32_t prim);
 
 // Whether the float edge test of intersect_triangle (model/robust.h) may decide either way for
@@ -54,6 +59,12 @@ std::optional<long double> exact_sphere_t(const Scene& scene, const Ray& ray, ui
 // others and a magnitude within a first-order bound of the float computation's rounding error.
 // False for instanced and procedural geometry (no claim is made there).
 bool edge_decision_within_float_error(const Scene& scene, const Ray& ray, uint32_t geom, uint32_t prim);
+
+// Whether hit `ours` (a triangle) is no farther than `other` (another triangle) by the TTP
+// authors' simulator's float t (moller_trumbore_t, which orders hits), while the two triangles'
+// long-double plane t's are closer together than those float t's are off them: the float t
+// cannot order the two surfaces. Identity-placed meshes only (false otherwise).
+bool simulator_float_order(const Scene& scene, const Ray& ray, const Hit& ours, const Hit& other);
 
 struct VerifyCounts {
     std::array<uint64_t, size_t(Agreement::Count)> by_class{};

@@ -86,8 +86,13 @@ std::optional<std::vector<WarpRay>> WorkloadDriver::next_trace(uint32_t sm, uint
         if (selection_) selection_->trace_starts(wi, sm, sw.traces_done);
         std::vector<WarpRay> rays;
         std::vector<RetiredRay> invalid;
+        // The warp's threads trace together; those further on (a higher phase) wait for the
+        // others (WorkRay::phase).
+        uint32_t phase = ~0u;
+        for (const Thread& t : sw.threads)
+            if (!t.pending.empty()) phase = std::min(phase, t.pending.front().phase);
         for (Thread& t : sw.threads) {
-            if (t.pending.empty()) continue;
+            if (t.pending.empty() || t.pending.front().phase != phase) continue;
             const WorkRay w = t.pending.front();
             t.pending.pop_front();
             Record rec;
@@ -128,7 +133,10 @@ void WorkloadDriver::retire(uint32_t sm, const std::vector<RetiredRay>& rays, ui
     for (const RetiredRay& rr : rays) {
         Record& rec = records_.at(rr.key);
         rec.r.hit = rr.hit;
-        if (rec.r.hit.hit) rec.r.hit.t = std::ldexp(rec.r.hit.t, -rec.scale);
+        if (rec.r.hit.hit) {
+            rec.r.hit.t = std::ldexp(rec.r.hit.t, -rec.scale);
+            rec.r.hit.app_t = std::ldexp(rec.r.hit.app_t, -rec.scale);
+        }
         rec.r.nodes_visited = rr.nodes_visited;
         summary_.rays += 1;
         summary_.invalid += !rec.r.valid;

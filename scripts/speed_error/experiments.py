@@ -33,9 +33,10 @@ EXTRA_SEEDS = range(2, 7)  # seed 1 is the rtsim default (--seed 1), run above a
 
 
 def main():
-    # 256x256 at 2 spp is 128 clusters of the mobile GPU's 32 warps: a 10 % sample draws the
-    # first wave and 12 strata, enough for an interval (a sample needs 10; docs/sampling.md).
-    a = arguments(__doc__, size=256)
+    # 384x384 is 4,608 shader warps (a warp is 32 pixels; each thread traces its pixel's
+    # samples, as LumiBench's), 144 clusters of the mobile GPU's 32 warps: a 10 % sample draws
+    # the first wave and 13 strata, enough for an interval (a sample needs 10; docs/sampling.md).
+    a = arguments(__doc__, size=384)
     runs = []
     for fid, fargs in FIDELITIES.items():
         for pf, pargs in (("base", ""), ("ttp", "--prefetcher ttp")):
