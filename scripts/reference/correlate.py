@@ -1,0 +1,329 @@
+#!/usr/bin/python3
+"""rtunit beside the TTP authors' simulator, scene by scene: writes reports/correlation/README.md,
+its charts and rtunit.csv.
+
+For every run of the reference data (reference.csv, made by run_reference.py; its ok rows), the
+same scene, frame, traversal and prefetcher in rtunit's AT fidelity under the configuration that
+mirrors the reference's (the fork's updated-config: configs/updated-mobile.json here; its
+tested-cfgs, the paper's Table 2: the `paper` preset), and compares what both print: rays, nodes
+per ray, cycles, the TTP speed-up, the RT unit's L1 and L2 miss rates, prefetches and DRAM reads.
+reference_traces.csv (trace_stats.py) says where the reference's cycles go. Every sentence of the
+report is computed from these figures.
+
+rtunit's runs are kept in OUT/runs/ under the rtsim binary's hash, so a second report with the
+same binary runs nothing again.
+Usage: correlate.py [--rtsim build/rtsim] [--scenes ../shared/scenes] [--data reports/correlation]
+                    [--jobs 2]"""
+import argparse
+import concurrent.futures
+import csv
+import hashlib
+import json
+import math
+import os
+import pathlib
+import subprocess
+import sys
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+HERE = pathlib.Path(__file__).resolve().parent
+ROOT = HERE.parent.parent
+sys.path.insert(0, str(ROOT / "scripts" / "sweep"))
+from report_util import Markdown, geomean  # noqa: E402
+
+SCENE_ASSETS = {"wknd": None, "ship": "ship", "bunny": "bunny", "ref": "dragon", "bath": "bath", "sprng": "sprng",
+                "party": "party"}
+# reference config -> (rtunit configuration, traversal, prefetcher)
+CONFIGS = {
+    "dfs": ("updated", "dfs", "none"), "dfs-ttp": ("updated", "dfs", "ttp"),
+    "base": ("updated", "bfs", "none"), "ttp": ("updated", "bfs", "ttp"),
+    "paper-dfs": ("paper", "dfs", "none"), "paper-dfs-ttp": ("paper", "dfs", "ttp"),
+    "paper-base": ("paper", "bfs", "none"), "paper-ttp": ("paper", "bfs", "ttp"),
+}
+CONFIG_ARG = {"updated": str(HERE / "configs" / "updated-mobile.json"), "paper": "paper"}
+# The TTP speed-up: (baseline, with TTP) pairs of reference configs.
+PAIRS = [("dfs", "dfs-ttp", "DFS, updated-config"), ("base", "ttp", "BFS, updated-config"),
+         ("paper-dfs", "paper-dfs-ttp", "DFS, paper (tested-cfgs)"), ("paper-base", "paper-ttp", "BFS, paper (tested-cfgs)")]
+# Targets of the reference issue (reports, not tests).
+TARGET_RAYS, TARGET_NODES, TARGET_TTP, TARGET_CYCLES, TARGET_R = 0.03, 0.03, 0.10, 0.25, 0.95
+
+
+def sha256(path):
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for b in iter(lambda: f.read(1 << 20), b""):
+            h.update(b)
+    return h.hexdigest()[:16]
+
+
+def f(r, k):
+    v = r.get(k, "")
+    try:
+        return float(v)
+    except (TypeError, ValueError):
+        return None
+
+
+def reference_rows(path):
+    rows = {}
+    with open(path) as fh:
+        for r in csv.DictReader(fh):
+            if r["status"] == "ok" and r["config"] in CONFIGS:
+                rows[(r["scene"], int(r["width"]), int(r["height"]), int(r["spp"]), r["config"])] = r  # the last ok attempt
+    return rows
+
+
+def rt_cache(r, prefix):
+    """The reference RT unit's reads at its cache (rtc_) or at L2 (rtl2_): accesses and misses
+    (a hit on a pending line counts as a hit, as rtunit's MSHR hits do)."""
+    hit, hr, miss, sec = (f(r, prefix + k) or 0.0 for k in ("read_hit", "read_hit_reserved", "read_miss", "read_sector_miss"))
+    pf = f(r, prefix + "read_prefetch_hit") or 0.0
+    acc = hit + hr + miss + sec + pf
+    return acc, miss + sec
+
+
+def run_rtunit(key, args, runs, rtsim, scenes):
+    scene, w, h, spp, config = key
+    cset, traversal, prefetcher = CONFIGS[config]
+    out = runs / f"{scene}-{w}x{h}-{spp}spp-{config}.json"
+    if out.exists():
+        return key, json.loads(out.read_text())
+    cmd = [rtsim, "--scene", scene, "--width", str(w), "--height", str(h), "--spp", str(spp), "--fidelity", "at",
+           "--config", CONFIG_ARG[cset], "--traversal", traversal, "--prefetcher", prefetcher, "--quiet",
+           "--stats", str(out) + ".tmp"]
+    if SCENE_ASSETS[scene]:
+        cmd += ["--assets", str(pathlib.Path(scenes) / SCENE_ASSETS[scene])]
+    p = subprocess.run(cmd, capture_output=True, text=True)
+    if p.returncode != 0:
+        raise RuntimeError(f"{' '.join(cmd)}: exit {p.returncode}: {p.stderr.strip()[-400:]}")
+    os.replace(str(out) + ".tmp", out)
+    return key, json.loads(out.read_text())
+
+
+def ours(j):
+    t = j["timing"]
+    l1, l2 = t["l1"]["demand"], t["l2"]["demand"]
+    return {"rays": j["rays"], "nodes": j["nodes_per_ray"], "max_nodes": j["max_nodes_per_ray"], "cycles": j["cycles"],
+            "l1_miss": (l1["sector_misses"] + l1["line_misses"]) / max(1, l1["accesses"]),
+            "l2_miss": (l2["sector_misses"] + l2["line_misses"]) / max(1, l2["accesses"]),
+            "prefetches": t["rt_unit"]["prefetch_queue"]["sent"], "dram_reads": t["dram"]["reads"]}
+
+
+def theirs(r):
+    acc1, miss1 = rt_cache(r, "rtc_")
+    acc2, miss2 = rt_cache(r, "rtl2_")
+    return {"rays": f(r, "rt_n_total_rays"), "nodes": f(r, "rt_avg_nodes_per_ray"), "max_nodes": f(r, "rt_max_nodes_per_ray"),
+            "cycles": f(r, "gpu_sim_cycle"), "l1_miss": miss1 / acc1 if acc1 else None, "l2_miss": miss2 / acc2 if acc2 else None,
+            "prefetches": f(r, "rtc_num_prefetched"), "dram_reads": f(r, "total_dram_reads")}
+
+
+def rel(a, b):
+    return None if a is None or b in (None, 0) else a / b - 1.0
+
+
+def pct(x, digits=1):
+    return "—" if x is None else f"{100 * x:+.{digits}f} %"
+
+
+def pearson(xs, ys):
+    n = len(xs)
+    if n < 3:
+        return None
+    mx, my = sum(xs) / n, sum(ys) / n
+    sxy = sum((x - mx) * (y - my) for x, y in zip(xs, ys))
+    sxx = sum((x - mx) ** 2 for x in xs)
+    syy = sum((y - my) ** 2 for y in ys)
+    return sxy / math.sqrt(sxx * syy) if sxx > 0 and syy > 0 else None
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--rtsim", default=str(ROOT / "build" / "rtsim"))
+    ap.add_argument("--scenes", default=str(ROOT.parent / "shared" / "scenes"))
+    ap.add_argument("--data", default=str(ROOT / "reports" / "correlation"))
+    ap.add_argument("--jobs", type=int, default=2)
+    a = ap.parse_args()
+    data = pathlib.Path(a.data)
+    ref = reference_rows(data / "reference.csv")
+    traces = {}
+    if (data / "reference_traces.csv").exists():
+        with open(data / "reference_traces.csv") as fh:
+            for r in csv.DictReader(fh):
+                traces[(r["scene"], int(r["width"]), int(r["height"]), int(r["spp"]), r["config"])] = r
+    binary = sha256(a.rtsim)
+    runs = data / "runs" / binary
+    runs.mkdir(parents=True, exist_ok=True)
+    got = {}
+    with concurrent.futures.ThreadPoolExecutor(max_workers=a.jobs) as ex:
+        futs = [ex.submit(run_rtunit, k, a, runs, a.rtsim, a.scenes) for k in sorted(ref)]
+        for i, fu in enumerate(concurrent.futures.as_completed(futs), 1):
+            k, j = fu.result()
+            got[k] = ours(j)
+            print(f"\rcorrelate: {i} of {len(futs)} rtunit runs", end="", file=sys.stderr, flush=True)
+    print(file=sys.stderr)
+    # rtunit.csv: both sides of every run
+    keys = sorted(ref)
+    metrics = ["rays", "nodes", "max_nodes", "cycles", "l1_miss", "l2_miss", "prefetches", "dram_reads"]
+    with open(data / "rtunit.csv", "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["scene", "width", "height", "spp", "config"] + [f"{m}_{s}" for m in metrics for s in ("reference", "rtunit")])
+        for k in keys:
+            t, o = theirs(ref[k]), got[k]
+            w.writerow(list(k) + [v for m in metrics for v in (t[m], o[m])])
+
+    md = Markdown()
+    md.p("# rtunit against the TTP authors' simulator")
+    md.p()
+    versions = {ref[k]["vulkan_sim"][:8] + "/" + ref[k]["mesa"][:8] + "/" + ref[k]["rtiv"][:8] for k in keys}
+    md.p(f"Reference: the authors' Vulkan-sim fork, Mesa and LumiBench (commits {', '.join(sorted(versions))}: "
+         "vulkan-sim/mesa/RayTracingInVulkan), run by `scripts/reference/run_reference.py` on the matrix of "
+         f"`scripts/reference/matrices/`: {len(keys)} runs in `reference.csv`. rtunit: AT, the same scene, frame, traversal "
+         f"and prefetcher, rtsim {binary} (sha256 prefix of the binary); `rtunit.csv` holds both sides. Made by "
+         "`/usr/bin/python3 scripts/reference/correlate.py` (rtunit's runs are cached under `runs/`).")
+    md.p()
+    md.p("Configurations: `dfs`, `dfs-ttp`, `base` (BFS), `ttp` (BFS with TTP) are the fork's "
+         "`configs/updated-config/MOBILE-gpgpusim.config` with its two switches set; rtunit runs "
+         "`scripts/reference/configs/updated-mobile.json` for them. `paper-*` are the same switches on "
+         "`configs/tested-cfgs/MOBILE/gpgpusim.config`, the paper's Table 2, against rtunit's `paper` preset.")
+    md.p()
+
+    # --- the workload: rays and nodes per ray
+    md.p("## The workload: rays and nodes per ray")
+    md.p()
+    md.p("The functional side, which the timing does not change (taken from the DFS runs; BFS casts other rays where hits tie).")
+    md.p()
+    rows, worst_rays, worst_nodes, within = [], 0.0, 0.0, 0
+    func = [k for k in keys if CONFIGS[k[4]][1] == "dfs" and CONFIGS[k[4]][2] == "none" and CONFIGS[k[4]][0] == "updated"]
+    for k in func:
+        t, o = theirs(ref[k]), got[k]
+        er, en = rel(o["rays"], t["rays"]), rel(o["nodes"], t["nodes"])
+        worst_rays, worst_nodes = max(worst_rays, abs(er)), max(worst_nodes, abs(en))
+        ok = abs(er) <= TARGET_RAYS and abs(en) <= TARGET_NODES
+        within += ok
+        rows.append([k[0], f"{k[1]}x{k[2]}", f"{t['rays']:.0f} / {o['rays']}", pct(er), f"{t['nodes']:.2f} / {o['nodes']:.2f}", pct(en),
+                     f"{t['max_nodes']:.0f} / {o['max_nodes']}", "yes" if ok else "**no**"])
+    md.table(["scene", "frame", "rays (reference / rtunit)", "error", "nodes per ray", "error", "max nodes", "within 3 %"], rows)
+    md.p(f"{within} of {len(func)} frames within the target of 3 % on both (worst: rays {pct(worst_rays)}, "
+         f"nodes per ray {pct(worst_nodes)}).")
+    md.p()
+
+    # --- cycles
+    md.p("## Frame cycles")
+    md.p()
+    rows, xs, ys = [], [], []
+    for k in keys:
+        t, o = theirs(ref[k]), got[k]
+        e = rel(o["cycles"], t["cycles"])
+        xs.append(t["cycles"])
+        ys.append(o["cycles"])
+        rows.append([k[0], f"{k[1]}x{k[2]}", k[4], f"{t['cycles']:,.0f}", f"{o['cycles']:,}", pct(e), f"{o['cycles'] / t['cycles']:.3f}"])
+    md.table(["scene", "frame", "config", "reference cycles", "rtunit cycles", "error", "ratio"], rows)
+    r_lin = pearson(xs, ys)
+    r_log = pearson([math.log(x) for x in xs], [math.log(y) for y in ys])
+    within = sum(abs(y / x - 1) <= TARGET_CYCLES for x, y in zip(xs, ys))
+    ratio = geomean([y / x for x, y in zip(xs, ys)])
+    md.p(f"Across the {len(xs)} runs: rtunit's cycles are {ratio:.3f}x the reference's (geometric mean); {within} of {len(xs)} "
+         f"within {TARGET_CYCLES:.0%} (the target); correlation {r_lin:.3f} (Pearson, cycles), {r_log:.3f} (of their "
+         f"logarithms; target above {TARGET_R}).")
+    md.p()
+    fig, ax = plt.subplots(figsize=(5.5, 5.5))
+    for c in sorted({k[4] for k in keys}):
+        px = [theirs(ref[k])["cycles"] for k in keys if k[4] == c]
+        py = [got[k]["cycles"] for k in keys if k[4] == c]
+        ax.scatter(px, py, label=c, s=18)
+    lo, hi = min(xs + ys) * 0.8, max(xs + ys) * 1.25
+    ax.plot([lo, hi], [lo, hi], color="grey", lw=0.8)
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlim(lo, hi)
+    ax.set_ylim(lo, hi)
+    ax.set_xlabel("reference cycles (Vulkan-sim)")
+    ax.set_ylabel("rtunit cycles (AT)")
+    ax.set_title(f"Frame cycles, {len(xs)} runs: r = {r_lin:.2f}")
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(data / "cycles.png", dpi=110)
+    plt.close(fig)
+    md.p("![cycles](cycles.png)")
+    md.p()
+
+    # --- where the reference's cycles go
+    if traces:
+        md.p("## Where the reference's cycles go")
+        md.p()
+        md.p("From the reference's log (`reference_traces.csv`, `scripts/reference/trace_stats.py`): each warp's traces "
+             "(arrival at the RT unit to completion) and the shader code between them (completion to the next arrival: "
+             "closest-hit, miss, intersection and ray-generation shaders on the SIMT cores). rtunit stands for that code with "
+             "`workload.shade_latency` cycles a trace (100 in every preset).")
+        md.p()
+        rows = []
+        shares, gaps = [], []
+        for k in keys:
+            tr = traces.get(k)
+            if not tr or CONFIGS[k[4]][2] != "none":
+                continue
+            g = float(tr["shader_gap_mean"]) if tr["shader_gap_mean"] else None
+            gaps.append(g)
+            shares.append(float(tr["rt_share"]))
+            rows.append([k[0], f"{k[1]}x{k[2]}", k[4], f"{float(tr['gpu_sim_cycle']):,.0f}", tr["traces"], tr["first_trace"],
+                         f"{float(tr['rt_residence_mean']):,.0f}", f"{g:,.0f}" if g else "—", f"{float(tr['rt_share']):.2f}"])
+        md.table(["scene", "frame", "config", "cycles", "traces", "first trace at", "mean RT residence", "mean shader gap",
+                  "RT share of a warp's time"], rows)
+        gs = [g for g in gaps if g]
+        lead = sorted(int(traces[k]["first_trace"]) - int(traces[k]["cta_first_issue"]) for k in traces)
+        issue = sorted({int(traces[k]["cta_first_issue"]) for k in traces})
+        md.p(f"Between two traces a warp spends {min(gs):,.0f} to {max(gs):,.0f} cycles in shader code (mean of the runs above), "
+             f"{min(gs) / 100:.0f} to {max(gs) / 100:.0f} times rtunit's `workload.shade_latency`; the RT unit holds a warp for "
+             f"{min(shares):.0%} to {max(shares):.0%} of its time between its first trace and its last. The first trace "
+             f"arrives {lead[0]:,} to {lead[-1]:,} cycles after the first CTA is issued, which itself comes "
+             f"{', '.join(f'{c:,}' for c in issue)} cycles into the kernel.")
+        md.p()
+
+    # --- TTP speed-up
+    md.p("## The TTP speed-up")
+    md.p()
+    rows = []
+    n_ok = n = 0
+    for base, ttp, what in PAIRS:
+        for k in keys:
+            if k[4] != base:
+                continue
+            k2 = k[:4] + (ttp,)
+            if k2 not in ref:
+                continue
+            st = theirs(ref[k])["cycles"] / theirs(ref[k2])["cycles"]
+            so = got[k]["cycles"] / got[k2]["cycles"]
+            e = so / st - 1
+            if k[1] == 64 and k[2] == 64:
+                n += 1
+                n_ok += abs(e) <= TARGET_TTP
+            rows.append([k[0], f"{k[1]}x{k[2]}", what, f"{st:.3f}", f"{so:.3f}", pct(e)])
+    md.table(["scene", "frame", "traversal, configuration", "reference", "rtunit", "error"], rows)
+    md.p(f"At 64x64, the target's frame, {n_ok} of {n} speed-ups are within {TARGET_TTP:.0%} of the reference's.")
+    md.p()
+
+    # --- memory behaviour
+    md.p("## The RT unit's memory behaviour")
+    md.p()
+    md.p("Miss rates of the RT unit's reads at L1 and at L2 (the reference's `RT_Total_core_cache_stats_breakdown` and "
+         "`RT_L2_cache_stats_breakdown`: misses and sector misses over all reads; rtunit's node-chunk reads at L1 and the "
+         "L2 reads they cause), TTP's prefetches sent and the DRAM reads (the reference's include the shaders' loads).")
+    md.p()
+    rows = []
+    for k in keys:
+        t, o = theirs(ref[k]), got[k]
+        rows.append([k[0], f"{k[1]}x{k[2]}", k[4], f"{t['l1_miss']:.3f} / {o['l1_miss']:.3f}" if t["l1_miss"] is not None else "—",
+                     f"{t['l2_miss']:.3f} / {o['l2_miss']:.3f}" if t["l2_miss"] is not None else "—",
+                     f"{t['prefetches']:,.0f} / {o['prefetches']:,}" if t["prefetches"] else f"0 / {o['prefetches']:,}",
+                     f"{t['dram_reads']:,.0f} / {o['dram_reads']:,}"])
+    md.table(["scene", "frame", "config", "L1 miss rate (reference / rtunit)", "L2 miss rate", "prefetches", "DRAM reads"], rows)
+    (data / "README.md").write_text(md.text())
+    print(f"correlate: {len(keys)} runs -> {data / 'README.md'}")
+
+
+if __name__ == "__main__":
+    main()
