@@ -41,7 +41,8 @@ const Key kSchema[] = {
     {"rt.latency.procedural", "core cycles", Type::Int, 0, 1000, false, "procedural (sphere) test"},
     {"rt.latency.structure", "core cycles", Type::Int, 0, 1000, false, "a BVH header's record: the TLAS's at a ray's start, a BLAS's after an instance leaf (Vulkan-sim's STRUCTURE)"},
     {"workload.resident_warps", "shader warps", Type::Int, 0, 1 << 20, false, "shader warps an SM holds at once (CTAs of one warp); a finished warp's place goes to the next warp of the frame (0: every warp at once)"},
-    {"workload.shade_latency", "core cycles", Type::Int, 0, 1e7, false, "cycles to shade a hit and issue the next ray"},
+    {"workload.shade_latency", "core cycles", Type::Int, 0, 1e7, false, "cycles of shader code a shader warp runs before each of its traces (ray generation before the first; hit, miss and ray generation code before the others)"},
+    {"workload.launch_latency", "core cycles", Type::Int, 0, 1e7, false, "cycles from the frame's kernel launch to its first shader warp's start"},
     {"l1.size_kb", "KiB", Type::Int, 1, 1 << 20, true, "L1 data cache per SM"},
     {"l1.assoc", "ways", Type::Int, 0, 1 << 16, false, "ways (0: fully associative)"},
     {"l1.line", "bytes", Type::Int, 16, 4096, true, "line bytes"},
@@ -292,6 +293,7 @@ HwConfig Config::resolve() const {
              u32("rt.latency.leaf_descriptor"), u32("rt.latency.ray_triangle"), u32("rt.latency.triangle_hit"),
              u32("rt.latency.procedural"), u32("rt.latency.structure")};
     h.shade_latency = u32("workload.shade_latency");
+    h.launch_latency = u32("workload.launch_latency");
     h.resident_warps = u32("workload.resident_warps");
     // `latency`: what a hit costs the cache's requester (the RT unit at an L1).
     auto cache = [&](const std::string& p, uint64_t kb, uint32_t latency) {

@@ -71,6 +71,7 @@ struct HwConfig {
     bool leaf_descriptor_read;  // a primitive leaf read in two dependent steps (model/node_fetch.h)
     RtLatency lat;
     uint32_t shade_latency;
+    uint32_t launch_latency;
     uint32_t resident_warps;  // shader warps per SM at once (0: all)
     CacheConfig l1;
     uint32_t l2_slices;

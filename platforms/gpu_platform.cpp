@@ -101,8 +101,8 @@ struct GpuPlatform::Impl {
         : cfg(c), image(img), opt(o),
           // Treelet traversal (and with it the Treelet prefetcher, which needs it) works on treelets.
           treelets(traversal_treelets(c, img, o.order)),
-          sample(frame_sample(c, img, o, treelets.get())),
-          driver(w, c.sms, c.warp_size, c.shade_latency, c.resident_warps, sample.get()),
+          sample(frame_sample(c, img, o, treelets.get(), w)),
+          driver(w, c.sms, c.warp_size, shader_timing(c, w), sample.get()),
           gpu("gpu", c, img, o.order, driver, o.fidelity, treelets.get(), o.check_protocol),
           core(gpu.core_clock()),
           mem(gpu.memory_clock()) {}

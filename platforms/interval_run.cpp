@@ -9,7 +9,7 @@ namespace rtu {
 
 TimingResult run_interval(const HwConfig& cfg, const BvhImage& image, Workload& workload, const TimingOptions& opt) {
     IntervalGpu gpu(cfg, image, opt.order);
-    const std::unique_ptr<FrameSample> sample = frame_sample(cfg, image, opt, nullptr);
+    const std::unique_ptr<FrameSample> sample = frame_sample(cfg, image, opt, nullptr, workload);
     // Sampled run: when an SM starts a simulated cluster, its caches are warmed with its node
     // fetches of the clusters skipped before it (its L1, then L2 on an L1 miss).
     if (sample)
@@ -17,7 +17,7 @@ TimingResult run_interval(const HwConfig& cfg, const BvhImage& image, Workload& 
             for (const WarmFetch& f : fetches)
                 for (uint32_t o = 0; o < f.bytes; o += sector) gpu.warm(f.sm, f.addr + o);
         };
-    WorkloadDriver driver(workload, cfg.sms, cfg.warp_size, cfg.shade_latency, cfg.resident_warps, sample.get());
+    WorkloadDriver driver(workload, cfg.sms, cfg.warp_size, shader_timing(cfg, workload), sample.get());
     driver.keep_rays(opt.keep_rays);
 
     // Warp-buffer slots by the cycle they are free (then by SM: deterministic order). A slot whose

@@ -535,7 +535,10 @@ JobResult JobRun::run(const Job& j) {
         traced = std::move(t.rays);
     }
     if (m_.gpu) {
-        auto driver = std::make_unique<WorkloadDriver>(*workload, m_.hw.sms, m_.hw.warp_size, m_.hw.shade_latency, m_.hw.resident_warps);
+        // A job's rays are in memory already: no kernel launch before its first warps.
+        ShaderTiming timing = shader_timing(m_.hw, *workload);
+        timing.launch = 0;
+        auto driver = std::make_unique<WorkloadDriver>(*workload, m_.hw.sms, m_.hw.warp_size, timing);
         driver->keep_rays(true);
         // The last job's prefetches may still be on their way after its last ray retired: this
         // job starts when they are in.

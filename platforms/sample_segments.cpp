@@ -111,8 +111,8 @@ TimingResult merge_segments(const HwConfig& cfg, const BvhImage& image, Workload
     const std::unique_ptr<Treelets> treelets = traversal_treelets(cfg, image, opt.order);
     TimingOptions o = opt;
     o.sample_segment = SamplingOptions::kNoSegment;
-    FrameSample sample(sampling_options(cfg, image, o, treelets.get()), cfg.sms, cfg.shade_latency, cfg.resident_warps);
-    const WorkloadDriver driver(workload, cfg.sms, cfg.warp_size, cfg.shade_latency, cfg.resident_warps, &sample);
+    FrameSample sample(sampling_options(cfg, image, o, treelets.get()), cfg.sms, shader_timing(cfg, workload));
+    const WorkloadDriver driver(workload, cfg.sms, cfg.warp_size, shader_timing(cfg, workload), &sample);
     std::vector<std::vector<WarpRecord>> records;
     TimingResult r;
     r.counts = segments[0].counts;

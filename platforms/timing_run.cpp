@@ -36,9 +36,10 @@ SamplingOptions sampling_options(const HwConfig& c, const BvhImage& img, const T
     return s;
 }
 
-std::unique_ptr<FrameSample> frame_sample(const HwConfig& c, const BvhImage& img, const TimingOptions& o, const Treelets* treelets) {
+std::unique_ptr<FrameSample> frame_sample(const HwConfig& c, const BvhImage& img, const TimingOptions& o, const Treelets* treelets,
+                                          const Workload& workload) {
     if (o.sample_rate >= 1.0) return nullptr;
-    return std::make_unique<FrameSample>(sampling_options(c, img, o, treelets), c.sms, c.shade_latency, c.resident_warps);
+    return std::make_unique<FrameSample>(sampling_options(c, img, o, treelets), c.sms, shader_timing(c, workload));
 }
 
 void take_estimate(TimingResult& r, const FrameSample* sample, const WorkloadDriver& driver) {

@@ -77,7 +77,8 @@ inline uint32_t gpu_warp_capacity(const HwConfig& c) { return c.sms * c.warp_buf
 // many warps as the GPU holds, the functional pre-pass on `image`, warming enough to refill every
 // cache twice. `treelets` as for the run's traversal (may be null). The run's driver takes it as
 // its warp selection; the run sets its on_warm.
-std::unique_ptr<FrameSample> frame_sample(const HwConfig& cfg, const BvhImage& image, const TimingOptions& opt, const Treelets* treelets);
+std::unique_ptr<FrameSample> frame_sample(const HwConfig& cfg, const BvhImage& image, const TimingOptions& opt, const Treelets* treelets,
+                                          const Workload& workload);
 // The sampling options frame_sample uses (the merge of a split sample draws with them too).
 SamplingOptions sampling_options(const HwConfig& cfg, const BvhImage& image, const TimingOptions& opt, const Treelets* treelets);
 // Puts the sample's estimate into `r` (r.cycles_simulated and r.interrupted set): a sampled run's

@@ -71,9 +71,11 @@ bool check_segments(const SampleDesign& design, const SamplingOptions& o) {
 
 }  // namespace
 
-FrameSample::FrameSample(const SamplingOptions& opt, uint32_t sms, uint32_t shade_latency, uint32_t resident_warps)
-    : opt_(opt), sms_(sms), resident_(resident_warps),
-      estimator_({sms, std::max<uint32_t>(1, opt.capacity / std::max<uint32_t>(1, sms)), shade_latency, resident_warps}, opt.capacity) {}
+FrameSample::FrameSample(const SamplingOptions& opt, uint32_t sms, const ShaderTiming& timing)
+    : opt_(opt), sms_(sms), resident_(timing.resident),
+      estimator_({sms, std::max<uint32_t>(1, opt.capacity / std::max<uint32_t>(1, sms)), timing.shade, timing.resident, timing.first(),
+                  timing.shaders ? timing.shade : 0},
+                 opt.capacity) {}
 
 std::vector<uint64_t> FrameSample::select(const FrameWarps& frame) {
     const SamplingOptions& o = opt_;

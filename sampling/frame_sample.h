@@ -19,9 +19,9 @@ namespace rtu {
 
 class FrameSample : public WarpSelection {
 public:
-    // `sms`, `shade_latency`, `resident_warps`: the GPU the driver runs the frame on (as given to
-    // it); `opt.capacity` warps make a cluster.
-    FrameSample(const SamplingOptions& opt, uint32_t sms, uint32_t shade_latency, uint32_t resident_warps);
+    // `sms`, `timing`: the GPU the driver runs the frame on (as given to it); `opt.capacity` warps
+    // make a cluster.
+    FrameSample(const SamplingOptions& opt, uint32_t sms, const ShaderTiming& timing);
 
     std::vector<uint64_t> select(const FrameWarps& frame) override;
     void trace_starts(uint32_t kept, uint32_t sm, uint32_t trace) override;

@@ -30,7 +30,7 @@ std::vector<double> schedule_resident(const std::vector<std::vector<double>>& tr
         while (launched < traces.size() && traces[launched].empty()) ++launched;  // a warp without traces needs no place
         if (launched < traces.size()) events.push({at, 1, sm, launched++});
     };
-    for (uint64_t k = 0; k < uint64_t(shape.sms) * shape.resident; ++k) launch(uint32_t(k % shape.sms), 0.0);
+    for (uint64_t k = 0; k < uint64_t(shape.sms) * shape.resident; ++k) launch(uint32_t(k % shape.sms), double(shape.first));
     std::vector<double> end(shape.sms, 0.0);
     while (!events.empty()) {
         const Event e = events.top();
@@ -40,7 +40,7 @@ std::vector<double> schedule_resident(const std::vector<std::vector<double>>& tr
             if (next[e.warp] < traces[e.warp].size())
                 events.push({e.at + double(shape.shade), 1, e.sm, e.warp});
             else
-                launch(e.sm, e.at);
+                launch(e.sm, e.at + double(shape.lead));
         } else {
             ready[e.sm].push({e.at, e.warp});
         }
@@ -69,7 +69,7 @@ std::vector<double> schedule_sm_ends(const std::vector<std::vector<double>>& tra
         std::priority_queue<double, std::vector<double>, std::greater<double>> free_at;
         std::vector<size_t> next(traces.size(), 0);
         for (size_t w = sm; w < traces.size(); w += shape.sms)
-            if (!traces[w].empty()) ready.push({0.0, w});
+            if (!traces[w].empty()) ready.push({double(shape.first), w});
         for (uint32_t s = 0; s < shape.slots; ++s) free_at.push(0.0);
         while (!ready.empty()) {
             const auto [at, w] = ready.top();

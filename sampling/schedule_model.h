@@ -6,6 +6,8 @@
 // SM holds that many warps at once: the first sms x resident warps go round robin, and each later
 // warp (in order) starts on the SM where a warp finished its last trace, when it finished. Memory contention is
 // not modelled here: it is in the trace durations, which come from the detailed simulation.
+// The first warps' first traces are ready at `first` (ShaderTiming::first), a later warp's
+// `lead` cycles after it takes its place.
 // Plain C++ (no SystemC).
 #pragma once
 #include <cstdint>
@@ -17,6 +19,8 @@ struct ScheduleShape {
     uint32_t sms = 1, slots = 1;  // RT units, warp-buffer slots per RT unit
     uint64_t shade = 0;           // cycles between a warp's traces
     uint32_t resident = 0;        // shader warps an SM holds at once (0: all of them from the start)
+    uint64_t first = 0;           // the cycle the frame's first warps' first traces are ready
+    uint64_t lead = 0;            // cycles a later warp (with `resident`) takes before its first trace
 };
 
 // `traces[w]`: the durations, in cycles, of shader warp w's traces in order. Returns the cycle

@@ -502,8 +502,8 @@ struct WarmingFrame {
         s.make_workload = [this, kind] { return make_scene_workload(kind, scene, p); };
         s.trace = [this](const Ray& r, std::vector<StackEntry>* fetched) { return trace_ray(img, r, TraversalOrder::DFS, nullptr, fetched); };
         workload = s.make_workload();
-        sample = std::make_unique<FrameSample>(s, 2, 0, 0);
-        driver = std::make_unique<WorkloadDriver>(*workload, 2, 32, 0, 0, sample.get());  // 2 SMs, no shading latency, every warp resident
+        sample = std::make_unique<FrameSample>(s, 2, ShaderTiming{});
+        driver = std::make_unique<WorkloadDriver>(*workload, 2, 32, ShaderTiming{}, sample.get());  // 2 SMs, no shading latency, every warp resident
     }
     WarmingFrame(const WarmingFrame&) = delete;
     const Scene scene;

@@ -873,7 +873,7 @@ TEST(RtComplex, SeveralInOneSimulationShareNothing) {
     }
     for (size_t i = 0; i < n; ++i) {
         workloads.push_back(make_scene_workload(WorkloadKind::Primary, scenes[i], p));
-        drivers.emplace_back(new WorkloadDriver(*workloads[i], hw.sms, hw.warp_size, hw.shade_latency, hw.resident_warps));
+        drivers.emplace_back(new WorkloadDriver(*workloads[i], hw.sms, hw.warp_size, shader_timing(hw, *workloads[i])));
         gpus.emplace_back(new RtComplex(("gpu_" + std::to_string(i)).c_str(), hw, images[i], TraversalOrder::DFS, *drivers[i], units[i].fidelity));
     }
     EXPECT_EQ(std::string(gpus[1]->rt_units()[3]->name()), "gpu_1.rt_unit_3");

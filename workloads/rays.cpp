@@ -58,6 +58,7 @@ namespace {
 
 class RayFileWorkload : public Workload {
 public:
+    bool runs_shaders() const override { return false; }
     explicit RayFileWorkload(const std::vector<RayFileEntry>& rays) : rays_(rays) {}
     void begin(std::vector<WorkRay>& out) override {
         for (uint32_t i = 0; i < rays_.size(); ++i) {

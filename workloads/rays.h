@@ -62,6 +62,9 @@ public:
     virtual void restart(uint32_t path) { (void)path; }
     // Linear RGB per pixel (row-major, top row first), or empty if the workload has no image.
     virtual std::vector<glm::vec3> image() const { return {}; }
+    // Whether shader code makes the rays (a frame's ray generation and hit shaders: a kernel
+    // launch, and shading before every trace), or they are given (a ray file).
+    virtual bool runs_shaders() const { return true; }
 };
 
 // The scene's workload as LumiBench's application casts it (workloads/lumibench.h).

@@ -29,9 +29,13 @@ private:
     const std::vector<ShaderWarp>& warps_;
 };
 
-WorkloadDriver::WorkloadDriver(Workload& workload, uint32_t sms, uint32_t warp_size, uint32_t shade_latency, uint32_t resident_warps,
-                               WarpSelection* selection)
-    : workload_(workload), shade_(shade_latency), ready_(sms), selection_(selection) {
+ShaderTiming shader_timing(const HwConfig& hw, const Workload& workload) {
+    return {hw.shade_latency, hw.launch_latency, hw.resident_warps, workload.runs_shaders()};
+}
+
+WorkloadDriver::WorkloadDriver(Workload& workload, uint32_t sms, uint32_t warp_size, const ShaderTiming& timing, WarpSelection* selection)
+    : workload_(workload), timing_(timing), ready_(sms), selection_(selection) {
+    timing_.shaders = timing.shaders && workload.runs_shaders();
     std::vector<WorkRay> first;
     workload_.begin(first);
     // Paths in order; each run of warp_size paths (neighbouring pixels) is one shader warp.
@@ -67,8 +71,8 @@ WorkloadDriver::WorkloadDriver(Workload& workload, uint32_t sms, uint32_t warp_s
         for (uint32_t i = 0; i < warps_.size(); ++i)
             for (const Thread& t : warps_[i].threads) path_warp_[t.path] = i;
     }
-    launched_ = resident_warps ? std::min<size_t>(warps_.size(), size_t(sms) * resident_warps) : warps_.size();
-    for (uint32_t i = 0; i < launched_; ++i) enqueue(i, 0);
+    launched_ = timing_.resident ? std::min<size_t>(warps_.size(), size_t(sms) * timing_.resident) : warps_.size();
+    for (uint32_t i = 0; i < launched_; ++i) enqueue(i, timing_.first());
     live_warps_ = warps_.size();
 }
 
@@ -160,13 +164,13 @@ void WorkloadDriver::retire(uint32_t sm, const std::vector<RetiredRay>& rays, ui
             if (selection_) selection_->trace_done(rec.warp, sw.sm, now, now - sw.issued_at);
             const bool more = std::any_of(sw.threads.begin(), sw.threads.end(), [](const Thread& t) { return !t.pending.empty(); });
             if (more) {
-                enqueue(rec.warp, now + shade_);
+                enqueue(rec.warp, now + timing_.shade);
             } else {
                 --live_warps_;
                 if (selection_) selection_->warp_finished(live_warps_, now);
-                if (launched_ < warps_.size()) {  // its place goes to the next warp of the frame
+                if (launched_ < warps_.size()) {  // its place goes to the next warp of the frame, which shades first
                     warps_[launched_].sm = sw.sm;
-                    enqueue(uint32_t(launched_++), now);
+                    enqueue(uint32_t(launched_++), now + (timing_.shaders ? timing_.shade : 0));
                 }
             }
         }

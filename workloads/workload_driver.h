@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "model/config.h"
 #include "model/trace_source.h"
 #include "ray_queue.h"
 #include "rays.h"
@@ -29,15 +30,17 @@ struct TracedRay {
     bool valid = true;
 };
 
+// The shader timing of `hw` for `workload` (no shader code for given rays: ShaderTiming::shaders).
+ShaderTiming shader_timing(const HwConfig& hw, const Workload& workload);
+
 class WorkloadDriver : public TraceSource {
 public:
-    // `resident_warps`: shader warps an SM holds at once (workload.resident_warps; 0: every warp
-    // of the frame from the start). The first sms x resident warps go to the SMs round robin; a
-    // warp that finishes gives its place to the next warp of the frame, on its SM. `selection`
-    // (may be null: every warp runs) picks the warps to simulate and is told what they do; it
-    // must outlive the driver.
-    WorkloadDriver(Workload& workload, uint32_t sms, uint32_t warp_size, uint32_t shade_latency, uint32_t resident_warps = 0,
-                   WarpSelection* selection = nullptr);
+    // `timing`: the shader warps' time outside the RT unit (ShaderTiming). With a limit of
+    // resident warps the first sms x resident warps go to the SMs round robin; a warp that
+    // finishes gives its place to the next warp of the frame, on its SM, which then runs its
+    // shader code before its first trace. `selection` (may be null: every warp runs) picks the
+    // warps to simulate and is told what they do; it must outlive the driver.
+    WorkloadDriver(Workload& workload, uint32_t sms, uint32_t warp_size, const ShaderTiming& timing, WarpSelection* selection = nullptr);
 
     std::optional<std::vector<WarpRay>> next_trace(uint32_t sm, uint64_t now) override;
     uint64_t earliest_ready(uint32_t sm) const override;
@@ -90,7 +93,7 @@ private:
     void enqueue(uint32_t warp, uint64_t ready_at);
 
     Workload& workload_;
-    uint32_t shade_;
+    ShaderTiming timing_;
     std::vector<ShaderWarp> warps_;
     std::vector<uint32_t> path_warp_;  // path -> shader warp
     std::vector<std::set<std::pair<uint64_t, uint32_t>>> ready_;  // per SM: (ready cycle, warp)
