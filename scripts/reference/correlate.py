@@ -253,12 +253,17 @@ def main():
 
     # --- where the reference's cycles go
     if traces:
+        shade_updated = json.loads((HERE / "configs" / "updated-mobile.json").read_text())["workload"]["shade_latency"]
+        shade_preset = json.loads((ROOT / "platforms" / "configs" / "paper.json").read_text())["workload"]["shade_latency"]
+        g64 = sorted(float(t["shader_gap_mean"]) for k, t in traces.items() if k[1] == 64 and k[2] == 64 and k[4] == "dfs")
+        gap_median = g64[len(g64) // 2] if g64 else float("nan")
         md.p("## Where the reference's cycles go")
         md.p()
         md.p("From the reference's log (`reference_traces.csv`, `scripts/reference/trace_stats.py`): each warp's traces "
              "(arrival at the RT unit to completion) and the shader code between them (completion to the next arrival: "
              "closest-hit, miss, intersection and ray-generation shaders on the SIMT cores). rtunit stands for that code with "
-             "`workload.shade_latency` cycles a trace (100 in every preset).")
+             f"`workload.shade_latency` cycles before each trace: {shade_updated:,} in `configs/updated-mobile.json`, the median "
+             f"of the 64x64 DFS runs' mean gaps below ({gap_median:,.0f}), and {shade_preset} in rtunit's `paper` preset.")
         md.p()
         rows = []
         shares, gaps = [], []
@@ -276,8 +281,8 @@ def main():
         gs = [g for g in gaps if g]
         lead = sorted(int(traces[k]["first_trace"]) - int(traces[k]["cta_first_issue"]) for k in traces)
         issue = sorted({int(traces[k]["cta_first_issue"]) for k in traces})
-        md.p(f"Between two traces a warp spends {min(gs):,.0f} to {max(gs):,.0f} cycles in shader code (mean of the runs above), "
-             f"{min(gs) / 100:.0f} to {max(gs) / 100:.0f} times rtunit's `workload.shade_latency`; the RT unit holds a warp for "
+        md.p(f"Between two traces a warp spends {min(gs):,.0f} to {max(gs):,.0f} cycles in shader code (mean of the runs above); "
+             f"the RT unit holds a warp for "
              f"{min(shares):.0%} to {max(shares):.0%} of its time between its first trace and its last. The first trace "
              f"arrives {lead[0]:,} to {lead[-1]:,} cycles after the first CTA is issued, which itself comes "
              f"{', '.join(f'{c:,}' for c in issue)} cycles into the kernel.")
