@@ -64,6 +64,25 @@ TEST(Scenes, WkndIsBuiltExactlyAsLumiBench) {
     EXPECT_TRUE(s.has_procedural());
 }
 
+// WKND's acceleration structures as the application builds them (Application.cpp l.263-292,
+// l.341-361): one BLAS per sphere, each a 64 B header, a root internal node (rtunit's nodes are
+// internal at the top) and one 64 B procedural leaf; one TLAS of 487 instance leaves of 128 B
+// under its internal nodes (at least ceil(486 / 5) = 98 for 6-wide nodes) and the image's 64 B
+// header. 487 x (64 + 64 + 64) + 487 x 128 + 64 = 155,904 B before the TLAS's internal nodes;
+// the paper's scene table gives 0.2 MB for WKND.
+TEST(Scenes, WkndTreesAreOneBlasPerSphereUnderOneTlas) {
+    const BvhImage img = build_bvh_image(make_wknd());
+    EXPECT_EQ(img.stats.blas_count, 487u);
+    EXPECT_EQ(img.stats.instance_leaves, 487u);
+    EXPECT_EQ(img.stats.procedural_leaves, 487u);
+    EXPECT_EQ(img.stats.triangle_leaves, 0u);
+    ASSERT_GE(img.stats.internal_nodes, 487u + 98u);
+    const uint64_t tlas_internal = img.stats.internal_nodes - 487u;
+    EXPECT_LE(tlas_internal, 486u);  // at most one per instance leaf but the last
+    EXPECT_EQ(img.size(), 487u * (64 + 64 + 64) + 487u * 128 + 64 + 64 * tlas_internal);
+    EXPECT_NEAR(double(img.size()) / 0.2e6, 1.0, 0.25);  // within 25 % of the paper's 0.2 MB
+}
+
 TEST(Scenes, CornellBoxFollowsTheDocumentedNumbering) {
     const Scene s = make_cornell();
     ASSERT_EQ(s.meshes.size(), 1u);

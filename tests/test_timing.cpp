@@ -10,6 +10,7 @@
 #include <map>
 
 #include "platforms/gpu_platform.h"
+#include "platforms/fidelity_run.h"
 #include "platforms/interval_run.h"
 #include "model/interval_gpu.h"
 #include "test_util.h"
@@ -897,3 +898,108 @@ TEST(RtComplex, SeveralInOneSimulationShareNothing) {
         EXPECT_EQ(drivers[i]->last_progress(), j["cycles"].get<uint64_t>()) << what;
     }
 }
+
+namespace {
+// A hand-built two-level scene: mesh A, one triangle around (0, 0, 0), and mesh B, one around
+// (10, 0, 0), both in the plane z = 0, each under an identity instance of its own (a BLAS each
+// under the TLAS). The ray from (10, 0, -5) along +z meets B alone. Worked by hand, it reads
+// (DFS, every node read a pop):
+//   1. the image's (TLAS's) 64 B header at 0: the root box is hit, the TLAS root is pushed
+//   2. the TLAS root: two instance leaves; A's box (x in [-1, 1]) is missed, B's is hit
+//   3. B's instance leaf (128 B): its BLAS header follows in the same pop
+//   4. B's BLAS header (64 B, the block before its root): the BLAS root is pushed
+//   5. the BLAS root: one child, the triangle leaf
+//   6. the triangle leaf: the hit
+// Two header reads, four node visits, 2 + 2 + 4 + 2 + 2 + 2 = 14 chunks of 32 B.
+struct TwoLevel {
+    Scene scene;
+    BvhImage image;
+    Ray ray;
+};
+TwoLevel two_level_scene() {
+    TwoLevel t;
+    t.scene.name = "two-level";
+    t.scene.materials.push_back(Material{});
+    for (float x : {0.0f, 10.0f}) {
+        Mesh m;
+        m.vertices = {{x - 1, -1, 0}, {x + 1, -1, 0}, {x, 1, 0}};
+        m.triangles = {{0, 1, 2}};
+        m.material = {0};
+        t.scene.meshes.push_back(m);
+    }
+    add_identity_instances(t.scene);
+    t.image = build_bvh_image(t.scene);
+    t.ray.org = {10, 0, -5};
+    t.ray.dir = {0, 0, 1};
+    return t;
+}
+// The one ray as a timing run of `fidelity` (mobile, memory clock = core clock).
+TimingResult run_two_level(Fidelity fidelity) {
+    const TwoLevel t = two_level_scene();
+    std::vector<RayFileEntry> rays(1);
+    rays[0].ray = t.ray;
+    rays[0].valid = true;
+    auto w = make_ray_file_workload(rays);
+    Config c = Config::load("mobile");
+    c.set("gpu.memory_clock_mhz=1365");
+    TimingOptions opt;
+    opt.fidelity = fidelity;
+    opt.keep_rays = true;
+    return run_timing(c.resolve(), t.image, *w, opt);
+}
+void expect_two_level_records(const TimingResult& r) {
+    ASSERT_EQ(r.rays.size(), 1u);
+    EXPECT_TRUE(r.rays[0].hit.hit);
+    EXPECT_EQ(r.rays[0].hit.geom, 1u);  // mesh B
+    EXPECT_EQ(r.rays[0].nodes_visited, 4u);
+    const RtUnitStats rt = total(r.counts.rt);
+    EXPECT_EQ(rt.header_fetches, 2u);
+    EXPECT_EQ(rt.node_fetches, 4u);
+    EXPECT_EQ(rt.chunk_requests, 14u);
+}
+}  // namespace
+
+TEST(TwoLevelRecords, TraversalReadsTheHandWorkedList) {
+    const TwoLevel t = two_level_scene();
+    const ImageHeader& h = t.image.header();
+    ASSERT_TRUE(h.has_instances && h.has_headers);
+    const InternalNode root = decode_internal(t.image.at(h.root, kBlockBytes));
+    ASSERT_EQ(root.count, 2);
+    ASSERT_EQ(root.type[0], NodeType::Instance);
+    ASSERT_EQ(root.type[1], NodeType::Instance);
+    // B's instance leaf: the one whose BLAS holds mesh 1.
+    uint64_t inst_b = 0, blas_b = 0;
+    for (int i = 0; i < 2; ++i) {
+        const InstanceLeaf il = decode_instance(t.image.at(root.addr[i], 2 * kBlockBytes));
+        if (il.geom == 1) inst_b = root.addr[i], blas_b = il.blas_root;
+    }
+    ASSERT_NE(inst_b, 0u);
+    const InternalNode blas_root = decode_internal(t.image.at(blas_b, kBlockBytes));
+    ASSERT_EQ(blas_root.count, 1);
+    ASSERT_EQ(blas_root.type[0], NodeType::Triangle);
+    const std::vector<std::pair<uint64_t, NodeType>> expected = {
+        {0, NodeType::Header},           {h.root, NodeType::Internal}, {inst_b, NodeType::Instance},
+        {blas_b - kBlockBytes, NodeType::Header}, {blas_b, NodeType::Internal}, {blas_root.addr[0], NodeType::Triangle}};
+    Ray r = t.ray;
+    scale_direction(r);
+    TraversalThread th;
+    th.start(r, h, TraversalOrder::DFS);
+    std::vector<std::pair<uint64_t, NodeType>> read;
+    while (!th.done()) {
+        read.push_back({th.peek().addr, th.peek().type});
+        th.step(t.image);
+    }
+    EXPECT_EQ(read, expected);
+    EXPECT_TRUE(th.hit().hit);
+    EXPECT_EQ(th.hit().geom, 1u);
+    EXPECT_EQ(th.nodes_visited(), 4u);
+}
+TEST(TwoLevelRecords, AtFetchesThem) {
+    FsResolution resolution;
+    expect_two_level_records(run_two_level(Fidelity::AT));
+}
+TEST(TwoLevelRecords, LtFetchesThem) {
+    FsResolution resolution;
+    expect_two_level_records(run_two_level(Fidelity::LT));
+}
+TEST(TwoLevelRecords, IntervalFetchesThem) { expect_two_level_records(run_two_level(Fidelity::Interval)); }
