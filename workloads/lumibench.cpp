@@ -87,7 +87,7 @@ glm::vec3 refract(const glm::vec3& i, const glm::vec3& n, float eta) {
 }
 
 // Scatter.glsl l.65-80: each material's scattered ray, drawing its random numbers.
-void scatter(const Material& m, const glm::vec3& world_dir, const glm::vec3& normal, float t, uint32_t& seed, Payload& out) {
+void scatter_payload(const Material& m, const glm::vec3& world_dir, const glm::vec3& normal, float t, uint32_t& seed, Payload& out) {
     const glm::vec3 d = glm::normalize(world_dir);
     out.t = t;
     switch (m.kind) {
@@ -154,7 +154,7 @@ Surface surface(const Scene& scene, const Ray& ray, const Hit& h) {
 // The closest-hit shader of path tracing (RayTracing.rchit, RayTracing.Procedural.rchit).
 void closest_hit_pt(const Scene& scene, const Ray& ray, const Hit& h, uint32_t& seed, Payload& p) {
     const Surface s = surface(scene, ray, h);
-    scatter(*s.mat, ray.dir, s.normal, h.app_t, seed, p);
+    scatter_payload(*s.mat, ray.dir, s.normal, h.app_t, seed, p);
     if (s.sphere) p.surface_normal = s.normal;
 }
 
@@ -164,7 +164,7 @@ void closest_hit_pt(const Scene& scene, const Ray& ray, const Hit& h, uint32_t& 
 void closest_hit_secondary(const Scene& scene, const Ray& ray, const Hit& h, uint32_t& seed, Payload& p) {
     Surface s = surface(scene, ray, h);
     if (!s.sphere && glm::dot(s.normal, ray.dir) > 0.0f) s.normal = -s.normal;
-    scatter(*s.mat, ray.dir, s.normal, h.app_t, seed, p);
+    scatter_payload(*s.mat, ray.dir, s.normal, h.app_t, seed, p);
     if (!s.sphere) p.scatter = s.point;
     p.surface_normal = s.normal;
 }
@@ -376,6 +376,12 @@ public:
 };
 
 }  // namespace
+
+Scattered scatter(const Material& m, const glm::vec3& world_dir, const glm::vec3& normal, uint32_t& seed) {
+    Payload p;
+    scatter_payload(m, world_dir, normal, 0.0f, seed, p);
+    return {p.color, p.scatter, p.scattered};
+}
 
 std::unique_ptr<Workload> make_workload(WorkloadKind kind, const Scene& scene, const WorkloadParams& p) {
     switch (kind) {

@@ -37,6 +37,15 @@ struct CameraRays {
     float aperture, focus;
 };
 
+// Scatter.glsl: a material's scattered ray for a ray along `world_dir` that hits a surface of
+// shading normal `normal` (unit length), drawing from `seed` as the shader does.
+struct Scattered {
+    glm::vec3 color;      // the attenuation (a light's emission)
+    glm::vec3 direction;  // not normalised
+    bool scattered;       // false: the path ends (a light, or a Lambertian surface hit from behind)
+};
+Scattered scatter(const Material& m, const glm::vec3& world_dir, const glm::vec3& normal, uint32_t& seed);
+
 // The workload of one shader type: 0 path tracing (RayTracing.rgen), 1 shadows
 // (TraceShadow.rgen, 2 rays), 2 ambient occlusion (TraceAO.rgen, 4 rays); primary: the camera
 // rays alone (rtsim's, with LumiBench's camera and random numbers). A path is a pixel, traced by
