@@ -45,7 +45,7 @@ struct PrepassResult {
     // frame's compulsory misses of the L2, each counted at the warp that pays it), in either
     // order the GPU may run the traces: in rounds, where every warp is resident at once
     // (workload.resident_warps 0: an SM takes the first traces of all its warps before any
-    // second one, docs/sampling.md "Warming the first traces apart"), and warp by warp. Both
+    // second one, docs/sampling.md "Warming"), and warp by warp. Both
     // are kept, so that a sample plan serves either. Empty: not counted (no node_blocks).
     std::vector<uint32_t> first_reads_in_rounds, first_reads_by_warp;
     const std::vector<uint32_t>& first_reads(bool rounds) const { return rounds ? first_reads_in_rounds : first_reads_by_warp; }
