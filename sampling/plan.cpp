@@ -11,8 +11,11 @@
 namespace rtu {
 
 namespace {
-// Version 2 adds the first reads per warp (after the warps); a version-1 plan is refused by name.
-constexpr char kPlanMagic[8] = {'R', 'T', 'U', 'P', 'L', 'A', 'N', '2'};
+// Version 3 ends with a 64-bit FNV-1a checksum of every byte before it (a damaged plan is
+// refused); version 2 added the first reads per warp (after the warps). Older plans are refused
+// by name.
+constexpr char kPlanMagic[8] = {'R', 'T', 'U', 'P', 'L', 'A', 'N', '3'};
+constexpr char kPlanMagicV2[8] = {'R', 'T', 'U', 'P', 'L', 'A', 'N', '2'};
 constexpr char kPlanMagicV1[8] = {'R', 'T', 'U', 'P', 'L', 'A', 'N', '1'};
 
 void put(std::string& out, uint64_t v, size_t bytes) { out.append(reinterpret_cast<const char*>(&v), bytes); }
@@ -46,6 +49,7 @@ std::string plan_bytes(const std::string& identity, const PrepassResult& p) {
     };
     for (const std::vector<uint32_t>& w : p.trace_nodes) put_words(w, 4);
     for (const std::vector<uint32_t>* f : {&p.first_reads_in_rounds, &p.first_reads_by_warp}) put_words(*f, 8);  // 0 or one per warp
+    put(out, fnv1a(out.data(), out.size()), 8);
     return out;
 }
 
@@ -54,7 +58,7 @@ std::optional<PrepassResult> read_plan(const std::string& file, const std::strin
     if (!in) return std::nullopt;
     std::stringstream buf;
     buf << in.rdbuf();
-    const std::string data = buf.str();
+    std::string data = buf.str();
     size_t at = 0;
     auto need = [&](size_t n, const char* what) {
         if (data.size() - at < n) throw InputError(file + ": a sample plan cut short (in its " + what + ")");
@@ -69,8 +73,17 @@ std::optional<PrepassResult> read_plan(const std::string& file, const std::strin
     need(sizeof kPlanMagic, "header");
     if (data.compare(0, sizeof kPlanMagicV1, kPlanMagicV1, sizeof kPlanMagicV1) == 0)
         throw InputError(file + ": a sample plan of an older rtsim (version 1, without the first reads of nodes); remove it, and the next run writes it again");
+    if (data.compare(0, sizeof kPlanMagicV2, kPlanMagicV2, sizeof kPlanMagicV2) == 0)
+        throw InputError(file + ": a sample plan of an older rtsim (version 2, without a checksum); remove it, and the next run writes it again");
     if (data.compare(0, sizeof kPlanMagic, kPlanMagic, sizeof kPlanMagic) != 0)
         throw InputError(file + ": not a sample plan (rtsim --sample-plan writes them)");
+    // The checksum first: a damaged plan is refused before any of its figures is believed.
+    need(sizeof kPlanMagic + 8, "checksum");
+    uint64_t sum = 0;
+    std::memcpy(&sum, data.data() + data.size() - 8, 8);
+    data.resize(data.size() - 8);
+    if (sum != fnv1a(data.data(), data.size()))
+        throw InputError(file + ": a damaged sample plan (its checksum does not match its bytes); remove it, and the next run writes it again");
     at = sizeof kPlanMagic;
     const uint64_t id_size = get(8, "header");
     need(id_size, "identity");

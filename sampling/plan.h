@@ -3,11 +3,13 @@
 // of a split sample and their merge, and every sampled run of a sweep over configurations,
 // fidelities or samples of that frame, trace the frame once instead of once each. `identity`:
 // what the pre-pass depends on (prepass_identity, platforms/simulation.h); a plan of another is
-// refused. Binary, little-endian as the host: "RTUPLAN2", the identity's length (uint64) and
+// refused. Binary, little-endian as the host: "RTUPLAN3", the identity's length (uint64) and
 // text, the warps (uint64), the pre-pass's threads (uint32), per warp its traces (uint32) and
 // their critical paths (uint32 each); then twice (in rounds, then warp by warp) a count (uint64:
-// 0, or the warps) and per warp its first reads of nodes (uint32 each). A plan of version 1
-// ("RTUPLAN1", no first reads) is refused with a message to remove it. Plain C++ (no SystemC).
+// 0, or the warps) and per warp its first reads of nodes (uint32 each); last, a 64-bit FNV-1a
+// checksum of every byte before it, so that a damaged plan is refused rather than believed.
+// Plans of versions 1 ("RTUPLAN1", no first reads) and 2 (no checksum) are refused with a
+// message to remove them. Plain C++ (no SystemC).
 #pragma once
 #include <cstddef>
 #include <cstdint>

@@ -741,7 +741,7 @@ TEST(RtsimSampling, SegmentsMergedEqualTheSingleProcessRun) {
         const Result foreign = rtsim(dir, split + plan + " --seed 9 --segment 0 --stats " + dir.file("f.json"));
         EXPECT_EQ(foreign.status, 2);
         EXPECT_NE(foreign.err.find("a sample plan of another frame or configuration"), std::string::npos) << foreign.err;
-        write_text(dir.file("junk.bin"), "RTUPLAN2\x05");
+        write_text(dir.file("junk.bin"), "RTUPLAN3\x05");
         const Result junk = rtsim(dir, split + " --sample-plan " + dir.file("junk.bin") + " --segment 0 --stats " + dir.file("f.json"));
         EXPECT_EQ(junk.status, 2);
         EXPECT_NE(junk.err.find("cut short"), std::string::npos) << junk.err;

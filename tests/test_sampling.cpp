@@ -351,8 +351,9 @@ TEST(SampleDesign, FirstWaveIsTheFirstClusterWithWork) {
 // A sample plan (--sample-plan) reads back what was written, an empty warp included (a warp whose
 // rays all miss the root box has no traces; reading it once passed a null pointer to memcpy:
 // found by fuzz_segment); a missing file is no plan; another identity, a file cut short, bytes
-// after the last warp and a count beyond the file are bad input. A plan of version 1 (no first
-// reads) is refused with a message to remove it.
+// after the last warp and a count beyond the file are bad input, each with its checksum made
+// right; any flipped bit of the file is refused by the checksum. Plans of versions 1 (no first
+// reads) and 2 (no checksum) are refused with a message to remove them.
 TEST(SamplePlan, RoundTripsAndRefusesBadFiles) {
     rtu::test::TempDir dir;
     rtu::PrepassResult p;
@@ -379,30 +380,44 @@ TEST(SamplePlan, RoundTripsAndRefusesBadFiles) {
         std::ifstream in(file, std::ios::binary);
         bytes.assign(std::istreambuf_iterator<char>(in), {});
     }
-    auto refused = [&](const std::string& content) {
+    const std::string body = bytes.substr(0, bytes.size() - 8);
+    auto summed = [](const std::string& b) {  // the body with its checksum after it
+        const uint64_t sum = rtu::fnv1a(b.data(), b.size());
+        return b + std::string(reinterpret_cast<const char*>(&sum), 8);
+    };
+    ASSERT_EQ(summed(body), bytes);
+    auto refused = [&](const std::string& content, const char* why) {
         {
             std::ofstream out(dir.file("bad.bin"), std::ios::binary);
             out << content;
         }
-        EXPECT_THROW(rtu::read_plan(dir.file("bad.bin"), id), rtu::InputError) << content.size() << " bytes";
+        try {
+            (void)rtu::read_plan(dir.file("bad.bin"), id);
+            ADD_FAILURE() << content.size() << " bytes accepted; expected: " << why;
+        } catch (const rtu::InputError& e) {
+            EXPECT_NE(std::string(e.what()).find(why), std::string::npos) << e.what();
+        }
     };
-    for (size_t cut : {size_t(0), size_t(5), size_t(12), bytes.size() - 1}) refused(bytes.substr(0, cut));
-    refused(bytes + "x");
-    std::string v1 = bytes;
-    v1[7] = '1';
-    try {
-        refused(v1);
-        (void)rtu::read_plan(dir.file("bad.bin"), id);
-    } catch (const rtu::InputError& e) {
-        EXPECT_NE(std::string(e.what()).find("older rtsim"), std::string::npos) << e.what();
+    for (size_t cut : {size_t(0), size_t(5), size_t(12)}) refused(bytes.substr(0, cut), "cut short");
+    for (size_t cut : {size_t(20), body.size() - 1}) refused(summed(body.substr(0, cut)), "cut short");
+    refused(summed(body + "x"), "bytes after");
+    for (size_t bit = 0; bit < 8 * bytes.size(); bit += 37) {  // a flipped bit anywhere but the magic
+        std::string flipped = bytes;
+        flipped[bit / 8] = char(flipped[bit / 8] ^ (1 << (bit % 8)));
+        if (bit / 8 >= 8) refused(flipped, "damaged");
     }
-    std::string few = bytes;  // first reads (warp by warp) of 1 warp for 3
-    few[bytes.size() - 3 * 4 - 8] = char(1);
-    refused(few);
-    std::string huge = bytes;
+    for (char old : {'1', '2'}) {
+        std::string v = bytes;
+        v[7] = old;
+        refused(v, "older rtsim");
+    }
+    std::string few = body;  // first reads (warp by warp) of 1 warp for 3
+    few[body.size() - 3 * 4 - 8] = char(1);
+    refused(summed(few), "first reads of 1 warps");
+    std::string huge = body;
     huge[8 + 8 + id.size()] = char(0xff);  // the warp count's low byte: far more warps than bytes
     huge[8 + 8 + id.size() + 5] = char(0x7f);
-    refused(huge);
+    refused(summed(huge), "warps in");
 }
 
 // The pre-pass's first reads, against a count made here: every node the frame reads is first
