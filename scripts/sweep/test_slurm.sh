@@ -96,7 +96,7 @@ check "the same command then waits without submitting twice, and collects" \
 check "and its results equal the local engine's" scripts/sweep/same_results.py "$manifest" "$tmp/local" "$tmp/slurm"
 
 # --- one sampled frame across array tasks ------------------------------------------------------
-frame="--scene cornell --fidelity at --width 256 --height 256 --sample 0.5 --threads 1"  # 64 clusters simulated, 16 per segment
+frame="--scene cornell --fidelity at --width 256 --height 512 --sample 0.5 --threads 1"  # 64 clusters simulated, 16 per segment
 rc=0; scripts/sweep/split_frame.sh --engine slurm --poll 1 --segments 4 "$tmp/frame" -- $frame >"$tmp/out.txt" 2>&1 || rc=$?
 cat "$tmp/out.txt"
 # shellcheck disable=SC2086
