@@ -10,6 +10,7 @@
 
 #include "model/stats.h"
 #include "model/treelet.h"
+#include "sampling/plan.h"
 #include "timing_stats.h"
 #include "workloads/input_error.h"
 
@@ -54,6 +55,28 @@ void write_segment(StatsOut& out, const TimingResult& r, uint32_t index, uint32_
     o.value("payloads_allocated", r.payloads_allocated, "payloads", "TLM payloads the pool made (AT, LT; 0: interval)");
     o.json()["warps"] = segment_warps_json(r.segment_records);
     o.note("warps", "", kSegmentWarpsNote);
+    o.value("checksum", std::string(), "", "FNV-1a (64 bits, hex) of the file's compact JSON with this key empty and without time_s, simulation_rate and memory_mb: a file changed since it was written is refused by --merge-segments");
+}
+
+namespace {
+// The checksum of `doc` with its segment.checksum emptied (the key keeps its place: ordered JSON
+// dumps keys in the order written, and numbers print back as they were read, integers exactly and
+// doubles by nlohmann's shortest round-trip form, so a reader's dump is the writer's) and without
+// the keys that measure the host (wall time, speed, memory), which the merge does not read: the
+// same segment run twice has the same checksum.
+std::string segment_checksum(nlohmann::ordered_json doc) {
+    doc["segment"]["checksum"] = "";
+    for (const char* host : {"time_s", "simulation_rate", "memory_mb"}) doc.erase(host);
+    const std::string text = doc.dump();
+    char hex[17];
+    std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(fnv1a(text.data(), text.size())));
+    return hex;
+}
+}  // namespace
+
+void seal_segment(nlohmann::ordered_json& stats) {
+    if (!stats.contains("segment")) return;
+    stats["segment"]["checksum"] = segment_checksum(stats);
 }
 
 SegmentRun read_segment(const std::string& file) {
@@ -64,10 +87,19 @@ SegmentRun read_segment(const std::string& file) {
     SegmentRun s;
     try {
         // Our own files nest 5 levels; a deeper one is not one of them (and must not exhaust the stack).
-        const nlohmann::json stats = nlohmann::json::parse(text.str(), [](int depth, nlohmann::json::parse_event_t, nlohmann::json&) {
+        const nlohmann::ordered_json doc = nlohmann::ordered_json::parse(text.str(), [](int depth, nlohmann::ordered_json::parse_event_t, nlohmann::ordered_json&) {
             if (depth > 16) throw InputError("nested deeper than 16 levels");
             return true;
         });
+        // The checksum before any figure is believed.
+        if (doc.is_object() && doc.contains("segment") && doc["segment"].is_object()) {
+            const nlohmann::ordered_json& sum = doc["segment"].contains("checksum") ? doc["segment"]["checksum"] : nlohmann::ordered_json();
+            if (!sum.is_string() || sum.get<std::string>().empty())
+                throw InputError("a segment's statistics without a checksum (from an older rtsim?); run the segment again");
+            if (sum.get<std::string>() != segment_checksum(doc))
+                throw InputError("a damaged segment file (its checksum does not match its contents); run the segment again");
+        }
+        const nlohmann::json stats = doc;
         if (!stats.is_object() || !stats.contains("segment"))
             throw InputError("no \"segment\" section: not the statistics of one segment (rtsim --sample-segments K --segment I)");
         const nlohmann::json& j = stats.at("segment");

@@ -29,8 +29,15 @@ struct SegmentRun {
 // cycles are integers; residences are whole cycles).
 void write_segment(StatsOut& out, const TimingResult& r, uint32_t index, uint32_t count, const std::vector<IdentityKey>& identity);
 
+// Seals a segment's finished statistics: `segment.checksum` becomes the 64-bit FNV-1a of the
+// document's compact JSON with that key empty and without the host's keys (time_s,
+// simulation_rate, memory_mb), so that a file whose bytes are not the ones
+// written is refused by the merge (a flipped digit in a counter or a residence changes the
+// estimate silently otherwise). Nothing to do for a document without a "segment" section.
+void seal_segment(nlohmann::ordered_json& stats);
+
 // Reads a segment's statistics file (written by rtsim --segment); InputError naming `file` if it
-// is not one.
+// is not one, or if its checksum does not match its contents.
 SegmentRun read_segment(const std::string& file);
 
 // The frame's result from its segments (any order; each index 0..count-1 once, every identity

@@ -16,6 +16,7 @@
 #include "model/stats.h"
 #include "model/treelet.h"
 #include "run_record.h"
+#include "sample_segments.h"
 #include "workloads/bvh_builder.h"
 #include "workloads/embree_reference.h"
 #include "workloads/input_error.h"
@@ -398,6 +399,7 @@ void output_stage(const WorkloadStage& w, const Ran& ran, RunRecord& rec, RunRes
     }
     StatsOut stats(out.stats);
     write_stats(stats, rec);
+    seal_segment(out.stats);  // last: it covers every key above
     if (rec.timing && ran.timing.stuck) out.stuck = ran.timing.stuck_report;
     out.interrupted = rec.interrupted;
     out.invariant_failures = ran.timing.invariant_failures;

@@ -749,11 +749,40 @@ TEST(RtsimSampling, SegmentsMergedEqualTheSingleProcessRun) {
         const auto& s = m["timing"]["sampling"];
         // The schedule model's misfit per SM (mobile: 8) comes through the segment files.
         EXPECT_EQ(s["schedule_model_misfit_per_sm"].size(), 8u);
-        // Files of an older version, without each warp's SM and last cycle, merge to the same
-        // estimate with the whole run's misfit as the model's error.
+        // A segment file is sealed with a checksum of its contents (docs/sampling.md, "Segments"):
+        // one changed digit, or no checksum, is refused, naming the file; nothing is written.
+        {
+            std::string text = read_text(dir.file("seg1.json"));
+            const size_t at = text.find("\"l1_miss_nodes\": ") + 17;
+            text[at] = text[at] == '1' ? '2' : '1';
+            write_text(dir.file("flipped.json"), text);
+            const Result flipped = rtsim(dir, split + " --merge-segments " + dir.file("seg0.json") + " " + dir.file("flipped.json") + " " +
+                                                  dir.file("seg2.json") + " --stats " + dir.file("s.json"));
+            EXPECT_EQ(flipped.status, 2);
+            EXPECT_NE(flipped.err.find(dir.file("flipped.json") + ": a damaged segment file"), std::string::npos) << flipped.err;
+            auto j = nlohmann::ordered_json::parse(read_text(dir.file("seg1.json")));
+            j["segment"].erase("checksum");
+            write_text(dir.file("unsealed.json"), j.dump());
+            const Result unsealed = rtsim(dir, split + " --merge-segments " + dir.file("seg0.json") + " " + dir.file("unsealed.json") + " " +
+                                                   dir.file("seg2.json") + " --stats " + dir.file("s.json"));
+            EXPECT_EQ(unsealed.status, 2);
+            EXPECT_NE(unsealed.err.find("without a checksum"), std::string::npos) << unsealed.err;
+        }
+        // Files without each warp's SM and last cycle (as rtsim wrote them before it kept them),
+        // sealed again as the statistics reference says (FNV-1a of the compact JSON with the
+        // checksum empty and without the host's keys, computed here), merge to the same estimate with the whole run's misfit
+        // as the model's error.
         for (int i = 0; i < 3; ++i) {
-            auto j = nlohmann::json::parse(read_text(dir.file("seg" + std::to_string(i) + ".json")));
+            auto j = nlohmann::ordered_json::parse(read_text(dir.file("seg" + std::to_string(i) + ".json")));
             for (auto& w : j["segment"]["warps"]) w.erase(6), w.erase(5);
+            j["segment"]["checksum"] = "";
+            nlohmann::ordered_json model = j;
+            for (const char* k : {"time_s", "simulation_rate", "memory_mb"}) model.erase(k);
+            uint64_t h = 14695981039346656037ull;
+            for (const unsigned char c : model.dump()) h = (h ^ c) * 1099511628211ull;
+            char hex[17];
+            std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(h));
+            j["segment"]["checksum"] = hex;
             write_text(dir.file("old" + std::to_string(i) + ".json"), j.dump());
         }
         ASSERT_EQ(rtsim(dir, split + " --merge-segments " + dir.file("old0.json") + " " + dir.file("old1.json") + " " +
