@@ -312,7 +312,7 @@ def main():
              "(arrival at the RT unit to completion) and the shader code between them (completion to the next arrival: "
              "closest-hit, miss, intersection and ray-generation shaders on the SIMT cores). rtunit stands for that code with "
              f"`workload.shade_latency` cycles before each trace: {shade_updated:,} in `configs/updated-mobile.json`, the median "
-             f"of the 64x64 DFS runs' mean gaps below ({gap_median:,.0f}), and {shade_preset} in rtunit's `paper` preset.")
+             f"of the 64x64 DFS runs' mean gaps below ({gap_median:,.0f}), and {shade_preset:,} in rtunit's `paper` preset.")
         md.p()
         rows = []
         shares, gaps = [], []
