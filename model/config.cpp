@@ -268,6 +268,10 @@ void Config::set(const std::string& assignment) {
         } catch (const std::exception&) {
             throw ConfigError("--set: key '" + name + "' needs a number, got '" + text + "'");
         }
+        // stod reads "nan" and "inf", which JSON cannot hold (they would print as null): said here
+        // with the text as given.
+        if (!std::isfinite(v.get<double>()))
+            throw ConfigError("--set: key '" + name + "' needs a finite number, got '" + text + "'");
     }
     values_[name] = checked_value(*k, v, "--set");
 }

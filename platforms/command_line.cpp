@@ -1,5 +1,6 @@
 #include "command_line.h"
 
+#include <filesystem>
 #include <iostream>
 #include <tuple>
 
@@ -39,6 +40,29 @@ std::vector<std::string> segment_args(const Args& a) {
     if (a.quantum) base.insert(base.end(), {"--quantum", std::to_string(*a.quantum)});
     if (!a.sample_plan.empty()) base.insert(base.end(), {"--sample-plan", a.sample_plan});  // the first segment writes it, the rest read it
     return base;
+}
+
+// Two outputs on one file: the one written last would replace the other (the hits lost under
+// the statistics, say). Compared as the files they are (symlinks and ".." resolved as far as the
+// path exists); the VCD as the file it becomes (FILE.vcd).
+void check_distinct_outputs(const Args& a) {
+    namespace fs = std::filesystem;
+    std::string vcd = a.vcd;
+    if (!vcd.empty() && !(vcd.size() > 4 && vcd.compare(vcd.size() - 4, 4, ".vcd") == 0)) vcd += ".vcd";
+    const std::string plan = a.sample_plan.empty() || fs::is_directory(a.sample_plan) ? std::string() : a.sample_plan;
+    std::vector<std::pair<fs::path, std::string>> seen;
+    for (const auto& [option, path] : {std::pair<const char*, std::string>{"--stats", a.stats}, {"--image", a.image}, {"--hits", a.hits},
+                                       {"--vcd", vcd}, {"--dump-bvh", a.dump_bvh}, {"--dump-rays", a.dump_rays},
+                                       {"--dump-hits", a.dump_hits}, {"--sample-plan", plan}}) {
+        if (path.empty()) continue;
+        std::error_code ec;
+        fs::path file = fs::weakly_canonical(fs::absolute(path), ec);
+        if (ec) file = fs::absolute(path).lexically_normal();
+        for (const auto& [other, other_option] : seen)
+            if (other == file)
+                throw InputError(std::string(option) + " " + path + ": also named by " + other_option + "; give each output its own file");
+        seen.emplace_back(file, option);
+    }
 }
 
 }  // namespace
@@ -110,6 +134,7 @@ RunSpec spec_of(const Args& a, const std::atomic<int>* stop) {
         if (!path.empty()) check_writable_folder(option, path);
     // A plan's file, or given a folder a file in it (plan_file; the frame's name is not known yet).
     if (!a.sample_plan.empty()) check_writable_folder("--sample-plan", plan_file(a.sample_plan, ""));
+    check_distinct_outputs(a);
     if (!(a.sample > 0.0 && a.sample <= 1.0))
         throw InputError("--sample " + std::to_string(a.sample) + ": the share of the frame to simulate must be in (0, 1]");
     // Configuration first: a bad key should not wait for a scene to load.

@@ -155,6 +155,10 @@ TEST(Rtsim, BadInputExitsWithStatus2AndWritesNothing) {
         // SIGFPE after the whole simulation).
         {"--scene cornell --fidelity at --vcd " + dir.file("nodir/w.vcd"), "does not exist"},
         {"--scene cornell --image " + dir.path().string(), "is a folder"},
+        // Two outputs on one file: the one written last would replace the other.
+        {"--scene cornell --image " + dir.file("./s.json"), "also named by --stats"},
+        {"--scene cornell --fidelity at --vcd " + dir.file("h.csv") + " --dump-bvh " + dir.file("h.csv.vcd"), "also named by --vcd"},
+        {"--scene cornell --fidelity at --set l2.latency=nan", "needs a finite number, got 'nan'"},
         {"--scene cornell --rays " + dir.file("no-rays.txt"), "no-rays.txt"},
         {"--scene bunny", "--assets"},
         {"--scene cornell --bogus-option", "unrecognised"},
