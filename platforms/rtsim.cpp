@@ -27,9 +27,9 @@ using namespace rtu;
 
 namespace {
 
-// SIGINT and SIGTERM request a stop (model/stop_request.h): the run ends at its next clean point
-// and writes its statistics so far. The handler is reset by its first signal, so a second one
-// ends rtsim at once.
+// SIGINT, SIGTERM and SIGHUP (a dropped SSH session) request a stop (model/stop_request.h): the
+// run ends at its next clean point and writes its statistics so far. The handler is reset by its
+// first signal, so a second one ends rtsim at once.
 std::atomic<int> stop_signal{0};
 extern "C" void on_stop_signal(int sig) { stop_signal.store(sig, std::memory_order_relaxed); }
 
@@ -40,11 +40,15 @@ void install_stop_handlers() {
     sa.sa_flags = SA_RESETHAND | SA_RESTART;
     sigaction(SIGINT, &sa, nullptr);
     sigaction(SIGTERM, &sa, nullptr);
+    sigaction(SIGHUP, &sa, nullptr);
 }
 
-const char* signal_name(int sig) { return sig == SIGINT ? "SIGINT" : sig == SIGTERM ? "SIGTERM" : "a signal"; }
+const char* signal_name(int sig) {
+    return sig == SIGINT ? "SIGINT" : sig == SIGTERM ? "SIGTERM" : sig == SIGHUP ? "SIGHUP" : "a signal";
+}
 
-// The shell's convention: 128 + the signal's number (130 for SIGINT, 143 for SIGTERM).
+// The shell's convention: 128 + the signal's number (130 for SIGINT, 143 for SIGTERM, 129 for
+// SIGHUP).
 int interrupted_status(int sig) { return 128 + sig; }
 
 // Hits in (path, seq) order: for ray files the line order, for generated workloads each pixel

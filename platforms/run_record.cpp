@@ -47,7 +47,7 @@ void write_stats(StatsOut& out, const RunRecord& r) {
     out.value("fidelity", fidelity_name(r.fidelity), "", "functional, at, lt or interval");
     out.value("traversal", traversal_name(r.order), "", "dfs, bfs or treelet");
     out.value("interrupted", r.interrupted, "",
-              "stopped by SIGINT or SIGTERM before the end: every figure is of what was simulated so far, and cycles are the "
+              "stopped by SIGINT, SIGTERM or SIGHUP before the end: every figure is of what was simulated so far, and cycles are the "
               "cycles simulated, not the frame's (docs/robustness.md)");
     if (r.has_params) {
         StatsOut p = out.child("params", "the scene workload's parameters");

@@ -1666,6 +1666,7 @@ TEST(Rtsim, SignalsStopTheRunAndKeepWhatItSimulated) {
         {"at", "cycle ", SIGINT, 130, {"--width", "1024", "--height", "1024"}},
         {"interval", "cycle ", SIGTERM, 143, {"--width", "1024", "--height", "1024"}},
         {"functional", "traced ", SIGINT, 130, {"--width", "1024", "--height", "1024"}},
+        {"lt", "cycle ", SIGHUP, 129, {"--width", "1024", "--height", "1024"}},  // a dropped SSH session
     };
     for (const Case& c : cases) {
         SCOPED_TRACE(c.fidelity);
@@ -1677,7 +1678,7 @@ TEST(Rtsim, SignalsStopTheRunAndKeepWhatItSimulated) {
         const Stopped r = stop_rtsim(dir, args, c.marker, c.signal);
         ASSERT_NE(r.status, -2) << "the run finished before its progress line showed: make the frame larger\n" << r.err;
         ASSERT_EQ(r.status, c.status) << r.err;
-        EXPECT_NE(r.err.find(c.signal == SIGINT ? "interrupted by SIGINT" : "interrupted by SIGTERM"), std::string::npos) << r.err;
+        EXPECT_NE(r.err.find(std::string("interrupted by ") + (c.signal == SIGINT ? "SIGINT" : c.signal == SIGTERM ? "SIGTERM" : "SIGHUP")), std::string::npos) << r.err;
         EXPECT_FALSE(exists(png)) << "a partial frame was written";
         const nlohmann::json j = nlohmann::json::parse(read_text(stats));
         EXPECT_TRUE(j["interrupted"].get<bool>());
