@@ -1,11 +1,14 @@
 #include "output.h"
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <sys/resource.h>
 #include <sys/stat.h>
+#include <sys/statvfs.h>
 #include <unistd.h>
 
 #include <stb/stb_image_write.h>
@@ -33,7 +36,10 @@ void check_writable_folder(const std::string& option, const std::string& path) {
     if (fs::is_directory(target, ec)) throw InputError(option + " " + path + ": is a folder, not a file");
 }
 
-void write_file_atomic(const std::string& path, const std::string& content) {
+namespace {
+// Writes `content` to a new temporary file beside `path` and returns its name; InputError
+// naming `path` (and no temporary left) if any write fails.
+std::string write_temporary(const std::string& path, const std::string& content) {
     namespace fs = std::filesystem;
     const fs::path target(path);
     const fs::path dir = folder_of(target);
@@ -44,7 +50,7 @@ void write_file_atomic(const std::string& path, const std::string& content) {
     while (done < content.size()) {
         const ssize_t n = ::write(fd, content.data() + done, content.size() - done);
         if (n <= 0) {
-            const int err = errno;
+            const int err = n < 0 ? errno : ENOSPC;
             ::close(fd);
             ::unlink(tmpl.c_str());
             throw input_error(path, 0, std::string("cannot write: ") + std::strerror(err));
@@ -52,14 +58,49 @@ void write_file_atomic(const std::string& path, const std::string& content) {
         done += size_t(n);
     }
     fchmod(fd, 0644);
-    if (::close(fd) != 0 || std::rename(tmpl.c_str(), path.c_str()) != 0) {
+    if (::close(fd) != 0) {
         const int err = errno;
         ::unlink(tmpl.c_str());
         throw input_error(path, 0, std::string("cannot write: ") + std::strerror(err));
     }
+    return tmpl;
+}
+}  // namespace
+
+OutputFiles::~OutputFiles() {
+    for (const auto& [temporary, target] : staged_) ::unlink(temporary.c_str());
 }
 
-void write_png_atomic(const std::string& path, int width, int height, const std::vector<glm::vec3>& rgb) {
+void OutputFiles::stage(const std::string& path, const std::string& content) {
+    try {
+        staged_.emplace_back(write_temporary(path, content), path);
+    } catch (...) {
+        for (const auto& [temporary, target] : staged_) ::unlink(temporary.c_str());
+        staged_.clear();
+        throw;
+    }
+}
+
+void OutputFiles::adopt(const std::string& temporary, const std::string& path) { staged_.emplace_back(temporary, path); }
+
+void OutputFiles::commit() {
+    while (!staged_.empty()) {
+        const auto [temporary, target] = staged_.front();
+        if (std::rename(temporary.c_str(), target.c_str()) != 0) {
+            const int err = errno;
+            throw input_error(target, 0, std::string("cannot write: ") + std::strerror(err));  // the destructor removes the rest
+        }
+        staged_.erase(staged_.begin());
+    }
+}
+
+void write_file_atomic(const std::string& path, const std::string& content) {
+    OutputFiles out;
+    out.stage(path, content);
+    out.commit();
+}
+
+std::string png_bytes(int width, int height, const std::vector<glm::vec3>& rgb) {
     std::vector<unsigned char> px(size_t(width) * height * 3);
     for (size_t i = 0; i < size_t(width) * height; ++i)
         for (int c = 0; c < 3; ++c) {
@@ -70,8 +111,31 @@ void write_png_atomic(const std::string& path, int width, int height, const std:
     stbi_write_png_to_func(
         [](void* ctx, void* data, int size) { static_cast<std::string*>(ctx)->append(static_cast<char*>(data), size_t(size)); },
         &png, width, height, 3, px.data(), width * 3);
+    return png;
+}
+
+void write_png_atomic(const std::string& path, int width, int height, const std::vector<glm::vec3>& rgb) {
+    const std::string png = png_bytes(width, height, rgb);
     if (png.empty()) throw input_error(path, 0, "PNG encoding failed");
     write_file_atomic(path, png);
+}
+
+std::string temporary_beside(const std::string& path) {
+    const std::filesystem::path target(path);
+    return (folder_of(target) / ("." + target.filename().string() + ".tmp." + std::to_string(::getpid()))).string();
+}
+
+void check_written_whole(const std::string& written, const std::string& target) {
+    std::error_code ec;
+    const uintmax_t size = std::filesystem::file_size(written, ec);
+    struct rlimit limit {};
+    if (!ec && ::getrlimit(RLIMIT_FSIZE, &limit) == 0 && limit.rlim_cur != RLIM_INFINITY && size >= limit.rlim_cur)
+        throw input_error(target, 0, "cannot write: the file reached the size limit (ulimit -f), so it is cut");
+    struct statvfs fs {};
+    if (::statvfs(folder_of(std::filesystem::path(written)).c_str(), &fs) != 0) return;
+    // Root may write into the blocks reserved for it (f_bfree); others only into f_bavail.
+    const unsigned long long left = ::geteuid() == 0 ? fs.f_bfree : fs.f_bavail;
+    if (left == 0) throw input_error(target, 0, "cannot write: the filesystem is full, so the file may be cut");
 }
 
 }  // namespace rtu

@@ -117,29 +117,48 @@ int run(const Args& given) {
         plan_dir.emplace("--sample-segments");
         a.sample_plan = (plan_dir->path / "plan.bin").string();
     }
-    const RunSpec spec = spec_of(a, &stop_signal);
+    RunSpec spec = spec_of(a, &stop_signal);
+    // The VCD, which SystemC writes as the run goes, is written under a temporary name and renamed
+    // with the other outputs; a run that fails leaves none of them (OutputFiles).
+    OutputFiles outputs;
+    std::string vcd;
+    if (!spec.run.vcd.empty()) {
+        vcd = spec.run.vcd + ".vcd";
+        spec.run.vcd = temporary_beside(vcd);
+        outputs.adopt(spec.run.vcd + ".vcd", vcd);
+    }
     const RunResult r = run_simulation(spec, a.quiet ? nullptr : &std::cout);
+    // SystemC does not report a failed write: a full filesystem is the one way the VCD is cut.
+    if (!vcd.empty()) check_written_whole(spec.run.vcd + ".vcd", vcd);
     if (r.interrupted) {
-        // Only the statistics: the frame, the hits and the dumps are not whole.
+        // Only the statistics and the waveforms: the frame, the hits and the dumps are not whole.
         const int sig = stop_signal.load();
-        if (!a.stats.empty()) write_file_atomic(a.stats, r.stats.dump(2) + "\n");
+        if (!a.stats.empty()) outputs.stage(a.stats, r.stats.dump(2) + "\n");
+        outputs.commit();
         std::cerr << "rtsim: interrupted by " << signal_name(sig) << " after " << r.stats["rays"] << " rays"
                   << (r.stats.contains("cycles") ? " and " + r.stats["cycles"].dump() + " simulated cycles" : std::string()) << "; "
                   << (a.stats.empty() ? std::string("no --stats file asked for")
                                       : "statistics so far written to " + a.stats + " (\"interrupted\": true)")
-                  << (a.vcd.empty() ? "" : ", waveforms so far in " + spec.run.vcd + ".vcd")
+                  << (vcd.empty() ? "" : ", waveforms so far in " + vcd)
                   << "; the frame, hits and dumps are not written\n";
         return interrupted_status(sig);
     }
     if (!r.stuck.empty()) {
-        std::cerr << "error: " << r.stuck << "\n";
+        // The waveforms are what shows why the model stopped moving: kept; nothing else.
+        outputs.commit();
+        std::cerr << "error: " << r.stuck << (vcd.empty() ? "" : " (waveforms in " + vcd + ")") << "\n";
         return 1;
     }
-    // Write every output only after the whole run succeeded.
-    if (!a.hits.empty()) write_file_atomic(a.hits, hits_csv(r.rays));
-    for (const auto& [path, bytes] : r.files) write_file_atomic(path, bytes);
-    if (!a.image.empty()) write_png_atomic(a.image, r.width, r.height, r.image);
-    if (!a.stats.empty()) write_file_atomic(a.stats, r.stats.dump(2) + "\n");
+    // Every output only after the whole run succeeded, and all of them or none.
+    if (!a.hits.empty()) outputs.stage(a.hits, hits_csv(r.rays));
+    for (const auto& [path, bytes] : r.files) outputs.stage(path, bytes);
+    if (!a.image.empty()) {
+        const std::string png = png_bytes(r.width, r.height, r.image);
+        if (png.empty()) throw InputError(a.image + ": PNG encoding failed");
+        outputs.stage(a.image, png);
+    }
+    if (!a.stats.empty()) outputs.stage(a.stats, r.stats.dump(2) + "\n");
+    outputs.commit();
     if (!a.quiet) print_summary(a, r);
     for (const std::string& f : r.invariant_failures) std::cerr << "error: invariant violated: " << f << "\n";
     if (!r.invariant_failures.empty()) return 1;

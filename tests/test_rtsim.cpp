@@ -176,6 +176,39 @@ TEST(Rtsim, BadInputExitsWithStatus2AndWritesNothing) {
     EXPECT_NE(r.err.find("nodir/h.csv"), std::string::npos);
 }
 
+// A run whose outputs cannot all be written leaves none of them. Under a file-size limit of
+// 16 KiB (ulimit -f; SIGXFSZ ignored, so a write past it fails with EFBIG): the statistics (30 KB)
+// fail after the hits (2.5 KB) and the frame were written; the VCD, which SystemC cuts without a
+// word, is found cut. Each is exit 2 naming the file, with no output and no temporary left.
+TEST(Rtsim, AnOutputThatCannotBeWrittenLeavesNone) {
+    TempDir dir;
+    const std::string limited = write_text(dir.file("limited.sh"), "ulimit -f 16\ntrap '' XFSZ\nexec \"$@\"\n");
+    std::filesystem::create_directory(dir.file("out"));
+    auto run = [&](const std::string& args) {
+        const std::string cmd = "bash " + limited + " " + RTU_RTSIM + " " + args + " > " + dir.file("o.txt") + " 2> " + dir.file("e.txt") + " < /dev/null";
+        const int rc = std::system(cmd.c_str());
+        return Result{WIFEXITED(rc) ? WEXITSTATUS(rc) : -1, read_text(dir.file("o.txt")), read_text(dir.file("e.txt"))};
+    };
+    auto left = [&] {
+        std::vector<std::string> names;
+        for (const auto& e : std::filesystem::directory_iterator(dir.file("out"))) names.push_back(e.path().filename().string());
+        return names;
+    };
+    const std::string outs = " --hits " + dir.file("out/h.csv") + " --image " + dir.file("out/f.png") + " --stats " + dir.file("out/s.json");
+    const Result stats = run("--scene cornell --workload primary --fidelity at --width 8 --height 8 -q" + outs);
+    EXPECT_EQ(stats.status, 2) << stats.err;
+    EXPECT_NE(stats.err.find("out/s.json"), std::string::npos) << stats.err;
+    EXPECT_TRUE(left().empty()) << left().front();
+    const Result vcd = run("--scene cornell --workload primary --fidelity at --width 32 --height 32 -q --vcd " + dir.file("out/w.vcd") +
+                           " --hits " + dir.file("out/h.csv"));
+    EXPECT_EQ(vcd.status, 2) << vcd.err;
+    EXPECT_NE(vcd.err.find("out/w.vcd: cannot write: the file reached the size limit"), std::string::npos) << vcd.err;
+    EXPECT_TRUE(left().empty()) << left().front();
+    // Without the limit both write everything.
+    EXPECT_EQ(rtsim(dir, "--scene cornell --workload primary --fidelity at --width 32 --height 32 -q --vcd " + dir.file("out/w.vcd") + outs).status, 0);
+    EXPECT_EQ(left().size(), 4u);
+}
+
 // rtsim with no arguments runs nothing: it prints the usage and exits 2; the usage lines name
 // every option of the --help table.
 // A camera near the float limit makes every primary ray invalid: the run is all misses, which
