@@ -11,6 +11,8 @@
 #include <optional>
 
 #include <csignal>
+#include <cstring>
+#include <unistd.h>
 
 #include <nlohmann/json.hpp>
 
@@ -28,16 +30,27 @@ using namespace rtu;
 namespace {
 
 // SIGINT, SIGTERM and SIGHUP (a dropped SSH session) request a stop (model/stop_request.h): the
-// run ends at its next clean point and writes its statistics so far. The handler is reset by its
-// first signal, so a second one ends rtsim at once.
+// run ends at its next clean point and writes its statistics so far. A second one ends rtsim at
+// once, as the signal's default would, after removing the VCD it was writing under its temporary
+// name (unlink is async-signal-safe; the name is set before the run starts), so that no cut
+// waveform is left behind.
 std::atomic<int> stop_signal{0};
-extern "C" void on_stop_signal(int sig) { stop_signal.store(sig, std::memory_order_relaxed); }
+char vcd_in_progress[4096] = {0};
+extern "C" void on_stop_signal(int sig) {
+    if (stop_signal.load(std::memory_order_relaxed) == 0) {
+        stop_signal.store(sig, std::memory_order_relaxed);
+        return;
+    }
+    if (vcd_in_progress[0]) ::unlink(vcd_in_progress);
+    ::signal(sig, SIG_DFL);
+    ::raise(sig);
+}
 
 void install_stop_handlers() {
     struct sigaction sa {};
     sa.sa_handler = on_stop_signal;
     sigemptyset(&sa.sa_mask);
-    sa.sa_flags = SA_RESETHAND | SA_RESTART;
+    sa.sa_flags = SA_RESTART;
     sigaction(SIGINT, &sa, nullptr);
     sigaction(SIGTERM, &sa, nullptr);
     sigaction(SIGHUP, &sa, nullptr);
@@ -126,6 +139,8 @@ int run(const Args& given) {
         vcd = spec.run.vcd + ".vcd";
         spec.run.vcd = temporary_beside(vcd);
         outputs.adopt(spec.run.vcd + ".vcd", vcd);
+        const std::string temporary = spec.run.vcd + ".vcd";
+        if (temporary.size() < sizeof vcd_in_progress) std::memcpy(vcd_in_progress, temporary.c_str(), temporary.size() + 1);
     }
     const RunResult r = run_simulation(spec, a.quiet ? nullptr : &std::cout);
     // SystemC does not report a failed write: a full filesystem is the one way the VCD is cut.

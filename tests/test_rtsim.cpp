@@ -1651,7 +1651,8 @@ struct Stopped {
     std::string err;
 };
 
-Stopped stop_rtsim(const TempDir& dir, std::vector<std::string> args, const std::string& marker, int signal) {
+// Sends `signal` `times` times (20 ms apart) once `marker` shows in rtsim's messages.
+Stopped stop_rtsim(const TempDir& dir, std::vector<std::string> args, const std::string& marker, int signal, int times = 1) {
     const std::string err = dir.file("stderr.txt");
     args.insert(args.begin(), RTU_RTSIM);
     std::vector<char*> argv;
@@ -1672,7 +1673,10 @@ Stopped stop_rtsim(const TempDir& dir, std::vector<std::string> args, const std:
     for (int i = 0; i < 1200 && !sent; ++i) {  // up to 120 s for the marker
         if (waitpid(pid, &status, WNOHANG) == pid) return {-2, read_text(err)};
         if (read_text(err).find(marker) != std::string::npos) {
-            kill(pid, signal);
+            for (int k = 0; k < times; ++k) {
+                if (k) usleep(20000);
+                kill(pid, signal);
+            }
             sent = true;
         } else {
             usleep(100000);
@@ -1733,6 +1737,18 @@ TEST(Rtsim, SignalsStopTheRunAndKeepWhatItSimulated) {
             EXPECT_EQ(w.back(), '\n') << "the VCD was not closed";
         }
     }
+}
+
+// A second SIGINT ends rtsim at once, by the signal, and leaves no cut VCD behind (neither under
+// its name nor under the temporary one it was written to).
+TEST(Rtsim, ASecondSignalEndsAtOnceAndLeavesNoCutVcd) {
+    TempDir dir;
+    std::filesystem::create_directory(dir.file("out"));
+    const Stopped r = stop_rtsim(dir, {"--scene", "wknd", "--fidelity", "at", "--width", "1024", "--height", "1024", "--vcd", dir.file("out/w.vcd"),
+                                       "--stats", dir.file("out/s.json")}, "cycle ", SIGINT, 2);
+    ASSERT_NE(r.status, -2) << "the run finished before its progress line showed\n" << r.err;
+    EXPECT_EQ(r.status, -1) << "not ended by the signal\n" << r.err;
+    EXPECT_TRUE(std::filesystem::is_empty(dir.file("out")));
 }
 
 // A stop before anything is simulated (here in the sampling pre-pass) writes nothing.
