@@ -138,11 +138,22 @@ std::vector<std::string> mesh_files_in(const std::string& dir) {
     std::vector<std::string> names;
     std::error_code ec;
     for (const auto& e : fs::directory_iterator(dir, ec)) {
-        if (!e.is_regular_file()) continue;
         const std::string n = e.path().filename().string();
-        if (e.path().extension() == ".obj" || e.path().extension() == ".ply" ||
-            (n.size() > 7 && n.compare(n.size() - 7, 7, ".ply.gz") == 0))
-            names.push_back(n);
+        const bool mesh = e.path().extension() == ".obj" || e.path().extension() == ".ply" ||
+                          (n.size() > 7 && n.compare(n.size() - 7, 7, ".ply.gz") == 0);
+        // Without throwing: a link that loops or leads nowhere must not end the run as an
+        // internal error. Anything but a mesh file is passed over; a mesh's name that is not a
+        // readable file is refused, since leaving it out would renumber the scene's geometry.
+        std::error_code link;
+        const bool file = e.is_regular_file(link);
+        if (!mesh) continue;
+        if (!file) {
+            std::error_code l2;
+            throw input_error(e.path().string(), 0,
+                              e.is_symlink(l2) ? "a symbolic link that loops or leads nowhere; fix or remove it (the scene's files are numbered in name order)"
+                                               : "not a regular file; rename or remove it (the scene's files are numbered in name order)");
+        }
+        names.push_back(n);
     }
     if (ec) throw input_error(dir, 0, "cannot list folder: " + ec.message());
     std::sort(names.begin(), names.end());  // byte-wise (LumiBench takes the file system's order, which it does not fix)
@@ -389,6 +400,8 @@ Scene load_scene(const std::string& name, const std::string& assets) {
             load_mesh_file(s, name);
             add_identity_instances(s);
             s.camera = default_camera(s.world_bounds());
+        } else if (fs::is_symlink(name, ec)) {
+            throw InputError("--scene '" + name + "': a symbolic link that loops or leads nowhere");
         } else {
             std::string names;
             for (const auto& n : scene_names()) names += (names.empty() ? "" : ", ") + n;
