@@ -56,6 +56,8 @@ void check_distinct_outputs(const Args& a) {
                                        {"--dump-hits", a.dump_hits}, {"--sample-plan", plan}}) {
         if (path.empty()) continue;
         std::error_code ec;
+        const fs::file_status st = fs::status(path, ec);
+        if (fs::exists(st) && !fs::is_regular_file(st) && !fs::is_directory(st)) continue;  // /dev/null twice is fine
         fs::path file = fs::weakly_canonical(fs::absolute(path), ec);
         if (ec) file = fs::absolute(path).lexically_normal();
         for (const auto& [other, other_option] : seen)

@@ -6,6 +6,9 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <sstream>
+#include <fstream>
+#include <fcntl.h>
 #include <sys/resource.h>
 #include <sys/stat.h>
 #include <sys/statvfs.h>
@@ -29,11 +32,19 @@ void check_writable_folder(const std::string& option, const std::string& path) {
     const fs::path target(path);
     const fs::path dir = folder_of(target);
     std::error_code ec;
+    // A FIFO or a device (/dev/null) is written into, not replaced: its own permission counts.
+    const fs::file_status st = fs::status(target, ec);
+    if (fs::exists(st) && !fs::is_regular_file(st) && !fs::is_directory(st)) {
+        if (::access(path.c_str(), W_OK) != 0) throw InputError(option + " " + path + ": cannot write: " + std::strerror(errno));
+        return;
+    }
     if (!fs::is_directory(dir, ec))
         throw InputError(option + " " + path + ": the folder " + dir.string() + " does not exist (rtsim makes no folders)");
     if (::access(dir.c_str(), W_OK) != 0)
         throw InputError(option + " " + path + ": cannot write in " + dir.string() + ": " + std::strerror(errno));
     if (fs::is_directory(target, ec)) throw InputError(option + " " + path + ": is a folder, not a file");
+    if (fs::is_symlink(fs::symlink_status(target, ec)) && !fs::exists(fs::status(target, ec)))
+        throw InputError(option + " " + path + ": a symbolic link that loops or leads nowhere (rtsim writes through a link, never over it)");
 }
 
 namespace {
@@ -67,13 +78,61 @@ std::string write_temporary(const std::string& path, const std::string& content)
 }
 }  // namespace
 
+namespace {
+// Where an output goes: through a link to the file it names (the link stays), and into a FIFO, a
+// device or a socket directly (/dev/null, a pipe), never replacing it with a regular file.
+struct Destination {
+    std::string file;
+    bool special = false;
+};
+Destination destination(const std::string& path) {
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    const fs::file_status st = fs::status(path, ec);  // follows links
+    if (fs::exists(st) && !fs::is_regular_file(st) && !fs::is_directory(st)) return {path, true};
+    if (fs::is_symlink(fs::symlink_status(path, ec))) {
+        const fs::path real = fs::canonical(path, ec);
+        if (ec) throw input_error(path, 0, "a symbolic link that loops or leads nowhere (rtsim writes through a link, never over it)");
+        return {real.string(), false};
+    }
+    return {path, false};
+}
+
+void write_into(const std::string& path, const std::string& content) {
+    const int fd = ::open(path.c_str(), O_WRONLY | O_CLOEXEC);
+    if (fd < 0) throw input_error(path, 0, std::string("cannot write: ") + std::strerror(errno));
+    for (size_t done = 0; done < content.size();) {
+        const ssize_t n = ::write(fd, content.data() + done, content.size() - done);
+        if (n <= 0) {
+            const int err = n < 0 ? errno : ENOSPC;
+            ::close(fd);
+            throw input_error(path, 0, std::string("cannot write: ") + std::strerror(err));
+        }
+        done += size_t(n);
+    }
+    if (::close(fd) != 0) throw input_error(path, 0, std::string("cannot write: ") + std::strerror(errno));
+}
+
+std::string read_whole(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    std::ostringstream text;
+    text << in.rdbuf();
+    return text.str();
+}
+}  // namespace
+
 OutputFiles::~OutputFiles() {
     for (const auto& [temporary, target] : staged_) ::unlink(temporary.c_str());
+    for (const auto& [temporary, target] : adopted_special_) ::unlink(temporary.c_str());
 }
 
 void OutputFiles::stage(const std::string& path, const std::string& content) {
     try {
-        staged_.emplace_back(write_temporary(path, content), path);
+        const Destination d = destination(path);
+        if (d.special)
+            special_.emplace_back(d.file, content);
+        else
+            staged_.emplace_back(write_temporary(d.file, content), d.file);
     } catch (...) {
         for (const auto& [temporary, target] : staged_) ::unlink(temporary.c_str());
         staged_.clear();
@@ -81,7 +140,13 @@ void OutputFiles::stage(const std::string& path, const std::string& content) {
     }
 }
 
-void OutputFiles::adopt(const std::string& temporary, const std::string& path) { staged_.emplace_back(temporary, path); }
+void OutputFiles::adopt(const std::string& temporary, const std::string& path) {
+    const Destination d = destination(path);
+    if (d.special)
+        adopted_special_.emplace_back(temporary, d.file);
+    else
+        staged_.emplace_back(temporary, d.file);
+}
 
 void OutputFiles::commit() {
     while (!staged_.empty()) {
@@ -91,6 +156,15 @@ void OutputFiles::commit() {
             throw input_error(target, 0, std::string("cannot write: ") + std::strerror(err));  // the destructor removes the rest
         }
         staged_.erase(staged_.begin());
+    }
+    // Special files last: what is written into them cannot be taken back.
+    for (const auto& [file, content] : special_) write_into(file, content);
+    special_.clear();
+    while (!adopted_special_.empty()) {
+        const auto [temporary, target] = adopted_special_.front();
+        write_into(target, read_whole(temporary));
+        ::unlink(temporary.c_str());
+        adopted_special_.erase(adopted_special_.begin());
     }
 }
 

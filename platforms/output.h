@@ -18,7 +18,9 @@ void write_file_atomic(const std::string& path, const std::string& content);
 std::string png_bytes(int width, int height, const std::vector<glm::vec3>& rgb);
 void write_png_atomic(const std::string& path, int width, int height, const std::vector<glm::vec3>& rgb);
 
-// A run's outputs, all or none. stage() writes each whole to a temporary file beside its target;
+// A run's outputs, all or none. stage() writes each whole to a temporary file beside its target
+// (through a symbolic link, beside the file it names: the link stays; into a FIFO or a device
+// such as /dev/null, directly and last, at commit(), since such a file cannot be replaced);
 // adopt() takes a file the run wrote itself under a temporary name (the VCD); commit() renames
 // them over their targets once every one is written. If staging fails, or the object goes before
 // commit(), every temporary is removed: a failed run leaves none of its outputs. (The renames
@@ -35,7 +37,9 @@ public:
     void commit();
 
 private:
-    std::vector<std::pair<std::string, std::string>> staged_;  // (temporary, target)
+    std::vector<std::pair<std::string, std::string>> staged_;           // (temporary, target)
+    std::vector<std::pair<std::string, std::string>> special_;          // (FIFO or device, content)
+    std::vector<std::pair<std::string, std::string>> adopted_special_;  // (temporary, FIFO or device)
 };
 
 // A name for a temporary file beside `path` (hidden, with the process id), for a file written by

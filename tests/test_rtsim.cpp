@@ -4,11 +4,13 @@
 #include <fcntl.h>
 #include <signal.h>
 #include <sys/resource.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <zlib.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <thread>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -195,6 +197,41 @@ TEST(Rtsim, BrokenLinksInASceneAreNamed) {
     const Result self = rtsim(dir, "--scene " + dir.file("self") + " -q");
     EXPECT_EQ(self.status, 2) << self.err;
     EXPECT_NE(self.err.find("a symbolic link that loops or leads nowhere"), std::string::npos) << self.err;
+}
+
+// Outputs go through a symbolic link to the file it names (the link stays) and into a FIFO or a
+// device such as /dev/null (which stays what it is); a link that leads nowhere is exit 2. (They
+// were replaced by regular files: as root, --stats /dev/null replaced the system's /dev/null.)
+TEST(Rtsim, OutputsGoThroughLinksAndIntoSpecialFiles) {
+    TempDir dir;
+    write_text(dir.file("real.json"), "{}");
+    std::filesystem::create_symlink(dir.file("real.json"), dir.file("link.json"));
+    ASSERT_EQ(::mkfifo(dir.file("hits.fifo").c_str(), 0644), 0);
+    std::string piped;
+    std::thread reader([&] {
+        const int fd = ::open(dir.file("hits.fifo").c_str(), O_RDONLY);
+        char buf[4096];
+        for (ssize_t n; fd >= 0 && (n = ::read(fd, buf, sizeof buf)) > 0;) piped.append(buf, size_t(n));
+        if (fd >= 0) ::close(fd);
+    });
+    const Result r = rtsim(dir, "--scene cornell --width 8 --height 8 -q --stats " + dir.file("link.json") + " --hits " + dir.file("hits.fifo") +
+                                    " --image /dev/null");
+    if (r.status != 0) {  // the reader waits for a writer: give it one
+        const int fd = ::open(dir.file("hits.fifo").c_str(), O_WRONLY);
+        ::close(fd);
+    }
+    reader.join();
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_TRUE(std::filesystem::is_symlink(dir.file("link.json")));
+    EXPECT_EQ(nlohmann::json::parse(read_text(dir.file("real.json")))["scene"], "cornell");
+    EXPECT_EQ(piped.substr(0, 4), "ray,") << piped.substr(0, 40);
+    EXPECT_TRUE(std::filesystem::is_fifo(dir.file("hits.fifo")));
+    EXPECT_TRUE(std::filesystem::is_character_file("/dev/null"));
+    std::filesystem::create_symlink(dir.file("nowhere.json"), dir.file("dangling.json"));
+    const Result dangling = rtsim(dir, "--scene cornell --width 8 --height 8 -q --stats " + dir.file("dangling.json"));
+    EXPECT_EQ(dangling.status, 2);
+    EXPECT_NE(dangling.err.find("leads nowhere"), std::string::npos) << dangling.err;
+    EXPECT_TRUE(std::filesystem::is_symlink(dir.file("dangling.json")));
 }
 
 // A run whose outputs cannot all be written leaves none of them. Under a file-size limit of
