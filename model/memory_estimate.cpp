@@ -23,6 +23,10 @@ namespace {
 constexpr uint64_t kPerSmSystemC = 364 << 10, kPerSmInterval = 30 << 10;
 constexpr uint64_t kPerThread = 2560;
 constexpr uint64_t kPerPath = 176;
+// Functional: cornell primary rays (one ray a path) at 1024x1024 against 64x64, 298 B a path
+// (the traced ray kept, its pixel, the workload's state); path tracing keeps every bounce's ray
+// (1,230 B a path on cornell), so this is a lower bound.
+constexpr uint64_t kPerFunctionalPath = 298;
 
 }  // namespace
 
@@ -67,6 +71,13 @@ MemoryEstimate estimate_memory(const HwConfig& cfg, Fidelity fidelity, uint64_t 
                        threads * kPerThread});
     e.parts.push_back({"the frame's paths (width x height x spp, or the ray file's rays: " + std::to_string(paths) + ")", paths * kPerPath});
     std::stable_sort(e.parts.begin(), e.parts.end(), [](const MemoryEstimate::Part& a, const MemoryEstimate::Part& b) { return a.bytes > b.bytes; });
+    return e;
+}
+
+MemoryEstimate estimate_functional_memory(uint64_t paths) {
+    MemoryEstimate e;
+    e.parts.push_back({"the frame's traced rays, at least one a path (width x height x spp, or the ray file's rays: " + std::to_string(paths) + ")",
+                       paths * kPerFunctionalPath});
     return e;
 }
 

@@ -26,6 +26,8 @@ struct MemoryEstimate {
 // most lines a cache can fill with node data). Scene and image are not included (they are
 // resident already when the estimate is made).
 MemoryEstimate estimate_memory(const HwConfig& cfg, Fidelity fidelity, uint64_t paths, uint64_t image_bytes);
+// The functional fidelity: every traced ray is kept (hits, verification), at least one a path.
+MemoryEstimate estimate_functional_memory(uint64_t paths);
 
 std::string format_bytes(uint64_t bytes);  // "1.5 GiB" (KiB to TiB)
 

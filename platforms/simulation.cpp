@@ -193,7 +193,21 @@ struct WorkloadStage {
     }
 };
 
-void make_workload_stage(WorkloadStage& w, RunRecord& rec) {
+void memory_stage(const WorkloadStage& w, const BvhStats& bs, RunRecord& rec) {
+    const bool timing = is_timing(w.spec.run.fidelity);
+    const MemoryEstimate need = timing ? estimate_memory(w.spec.hw, w.spec.run.fidelity, w.paths(), bs.image_bytes)
+                                       : estimate_functional_memory(w.paths());
+    const HostMemory host = host_memory_available();
+    if (need.total() > host.available)
+        throw InputError("this frame needs about " + format_bytes(need.total()) + " of host memory" +
+                         (timing ? " for the timing model (" : " (") + need.largest() + "), more than the " + format_bytes(host.available) +
+                         " left by " + host.limit +
+                         (timing ? "; make the largest of these smaller (the keys in parentheses), or run on a larger machine"
+                                 : "; make the frame smaller (--width, --height, --spp), or run on a larger machine"));
+    if (timing) rec.estimate_mb = double(need.total()) / (1024.0 * 1024.0);
+}
+
+void make_workload_stage(WorkloadStage& w, const BvhStats& bs, RunRecord& rec) {
     if (w.kind == WorkloadKind::RayFile) {
         w.ray_file = read_ray_file(w.spec.rays);
         size_t warned = 0;
@@ -201,6 +215,8 @@ void make_workload_stage(WorkloadStage& w, RunRecord& rec) {
             if (!e.valid && warned++ < 5) std::cerr << "warning: " << w.spec.rays << ":" << e.line << ": " << e.problem << " (reported as a miss)\n";
         if (warned > 5) std::cerr << "warning: " << warned << " invalid rays in all\n";
     }
+    // The memory the frame needs, before the workload allocates any of it (its per-path state).
+    memory_stage(w, bs, rec);
     w.workload = w.fresh();
     rec.workload = w.kind == WorkloadKind::RayFile ? "rays" : w.spec.workload;
     rec.has_params = w.kind != WorkloadKind::RayFile;
@@ -224,16 +240,6 @@ void dump_stage(const WorkloadStage& w, const BvhImage& image, RunResult& out) {
 
 // A timing run is refused before elaboration if it cannot fit: a configuration of maximal sizes
 // would otherwise exhaust the machine.
-void memory_stage(const WorkloadStage& w, const BvhStats& bs, RunRecord& rec) {
-    const MemoryEstimate need = estimate_memory(w.spec.hw, w.spec.run.fidelity, w.paths(), bs.image_bytes);
-    const HostMemory host = host_memory_available();
-    if (need.total() > host.available)
-        throw InputError("this configuration and frame need about " + format_bytes(need.total()) + " of host memory for the timing model (" +
-                         need.largest() + "), more than the " + format_bytes(host.available) + " left by " + host.limit +
-                         "; make the largest of these smaller (the keys in parentheses), or run on a larger machine");
-    rec.estimate_mb = double(need.total()) / (1024.0 * 1024.0);
-}
-
 // What the fidelity stage leaves behind, for the record.
 struct Ran {
     TimingResult timing;
@@ -420,12 +426,11 @@ RunResult run_simulation(const RunSpec& spec, std::ostream* log) {
     const Scene scene = load_stage(spec, rec);
     const BvhImage image = build_stage(spec, scene, rec, log);
     WorkloadStage w{spec, scene, spec.rays.empty() ? parse_workload(spec.workload) : WorkloadKind::RayFile, {}, nullptr};
-    make_workload_stage(w, rec);
+    make_workload_stage(w, image.stats, rec);
     std::unique_ptr<EmbreeReference> reference;
     if (spec.verify) reference = std::make_unique<EmbreeReference>(scene);
     RunResult out;
     dump_stage(w, image, out);
-    if (timing) memory_stage(w, image.stats, rec);
     Ran ran;
     const auto t0 = Clock::now();
     if (!timing) {

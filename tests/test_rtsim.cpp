@@ -1849,6 +1849,15 @@ TEST(Rtsim, ConfigurationsTooLargeForTheMachineAreRefusedBeforeElaboration) {
     EXPECT_EQ(WIFEXITED(rc) ? WEXITSTATUS(rc) : -1, 2) << read_text(dir.file("e.txt"));
     EXPECT_NE(read_text(dir.file("e.txt")).find("ulimit -v"), std::string::npos) << read_text(dir.file("e.txt"));
     EXPECT_FALSE(exists(stats));
+    // A functional frame too large for the machine is refused by its estimate, before the
+    // workload takes any of it: under 2 GB of address space, not as an allocation failure. (It
+    // once ran 57 s and took 3.2 GB before failing.)
+    const std::string big = "ulimit -v 2000000; " + std::string(RTU_RTSIM) + " --scene cornell --width 16384 --height 16384 -q --stats " + stats +
+                            " > /dev/null 2> " + dir.file("e.txt");
+    const int big_rc = std::system(("bash -c '" + big + "'").c_str());
+    EXPECT_EQ(WIFEXITED(big_rc) ? WEXITSTATUS(big_rc) : -1, 2) << read_text(dir.file("e.txt"));
+    EXPECT_NE(read_text(dir.file("e.txt")).find("the frame's traced rays, at least one a path"), std::string::npos) << read_text(dir.file("e.txt"));
+    EXPECT_FALSE(exists(stats));
 }
 
 // The estimate against the memory actually taken: the growth of peak resident memory from a small
