@@ -547,6 +547,94 @@ TEST(Peripheral, BadJobsGiveErrorCodesAndTheNextJobRuns) {
     EXPECT_EQ(differing_hits(b.ram, in.hit_at(kBvhAt), want), 0u);
 }
 
+// The error paths the test above does not take, on the private memory path: a traversal that
+// reads past BVH_SIZE (code 6), a descriptor chain that loops (7), a ray stride that is not a
+// multiple of 16 (3), and memory faults on the image, the rays and a descriptor (4, at the
+// refused address). Each ends in ERROR with its code and the interrupt, writes no hit (but the
+// looping chain, whose first MAX_CHAIN descriptors ran), and the next job runs whole.
+TEST(Peripheral, EveryErrorPathSetsItsCodeAndTheNextJobRuns) {
+    FsResolution res;
+    Bench b(config_for("lt"));
+    const Inputs in;
+    in.load(b.ram, kBvhAt);
+    const std::vector<rtu_hit> want = in.reference();
+    const uint64_t root = in.root_node(), desc = 0x80100000;
+    rtu_job_desc loop = descriptor(in, kBvhAt, 0, 4, in.hit_at(kBvhAt), 0, 1, desc);  // its own successor
+    std::memcpy(b.ram.at(desc), &loop, sizeof loop);
+    struct Seen {
+        uint32_t status, code;
+        uint64_t addr;
+        bool irq, untouched;
+    };
+    std::vector<Seen> seen;
+    b.cpu.script = [&] {
+        Cpu& c = b.cpu;
+        c.wr(RTU_INT_ENABLE, RTU_INT_ALL);
+        auto run = [&](uint32_t ctrl) {
+            in.clear_hits(b.ram, kBvhAt);
+            c.wr(RTU_CTRL, ctrl);
+            const bool irq = c.wait_irq();
+            seen.push_back({c.rd(RTU_STATUS), c.rd(RTU_ERR_CODE), c.rd64(RTU_ERR_ADDR_LO), irq, in.hits_untouched(b.ram, kBvhAt)});
+            c.wr(RTU_INT_STATUS, c.rd(RTU_INT_STATUS));
+            wait(SC_ZERO_TIME);
+        };
+        // 0: the image cut just after the root node: the root's children lie past BVH_SIZE.
+        program_job(c, in, kBvhAt);
+        c.wr64(RTU_BVH_SIZE_LO, root + 64);
+        run(RTU_CTRL_START);
+        // 1: a chain whose descriptor names itself as the next, with MAX_CHAIN 3.
+        c.wr(RTU_MAX_CHAIN, 3);
+        c.wr64(RTU_DESC_ADDR_LO, desc);
+        run(RTU_CTRL_MODE_CHAIN | RTU_CTRL_START);
+        // 2: a ray stride of 50 bytes.
+        program_job(c, in, kBvhAt);
+        c.wr(RTU_STRIDES, 50u);
+        run(RTU_CTRL_START);
+        c.wr(RTU_STRIDES, 0u);
+        // 3-5: the memory refuses the image's root, the rays, the descriptor.
+        for (const auto& [from, chain] : {std::pair<uint64_t, bool>{kBvhAt + root, false}, {in.ray_at(kBvhAt), false}, {desc, true}}) {
+            b.ram.set_fault(from, from + 64);
+            if (chain) {
+                c.wr64(RTU_DESC_ADDR_LO, desc);
+                run(RTU_CTRL_MODE_CHAIN | RTU_CTRL_START);
+            } else {
+                program_job(c, in, kBvhAt);
+                run(RTU_CTRL_START);
+            }
+            b.ram.set_fault(0, 0);
+        }
+        // 6: a good job.
+        program_job(c, in, kBvhAt);
+        in.clear_hits(b.ram, kBvhAt);
+        c.wr(RTU_CTRL, RTU_CTRL_START);
+        const bool irq = c.wait_irq();
+        seen.push_back({c.rd(RTU_STATUS), c.rd(RTU_ERR_CODE), c.rd64(RTU_ERR_ADDR_LO), irq, in.hits_untouched(b.ram, kBvhAt)});
+    };
+    sc_start();
+    ASSERT_TRUE(b.cpu.finished);
+    ASSERT_EQ(seen.size(), 7u);
+    const uint32_t codes[] = {RTU_ERR_BVH_OUT_OF_RANGE, RTU_ERR_CHAIN_LOOP, RTU_ERR_BAD_ALIGN, RTU_ERR_MEM_FAULT, RTU_ERR_MEM_FAULT, RTU_ERR_MEM_FAULT};
+    for (int i = 0; i < 6; ++i) {
+        SCOPED_TRACE(i);
+        EXPECT_EQ(seen[i].status & 0xFFu, RTU_STATUS_ERROR);
+        EXPECT_EQ(RTU_STATUS_ERR_CODE(seen[i].status), codes[i]);
+        EXPECT_EQ(seen[i].code, codes[i]);
+        EXPECT_TRUE(seen[i].irq);
+        // The looping chain's first MAX_CHAIN descriptors are whole jobs, run before the loop shows.
+        if (i != 1) {
+            EXPECT_TRUE(seen[i].untouched) << "a failed job wrote hits";
+        }
+    }
+    EXPECT_EQ(seen[1].addr, desc);  // the descriptor one past MAX_CHAIN
+    EXPECT_EQ(seen[3].addr, kBvhAt + root);
+    EXPECT_EQ(seen[4].addr, in.ray_at(kBvhAt));
+    EXPECT_EQ(seen[5].addr, desc);
+    EXPECT_EQ(seen[6].status & 0xFFu, RTU_STATUS_DONE);
+    EXPECT_EQ(seen[6].code, 0u);
+    EXPECT_TRUE(seen[6].irq);
+    EXPECT_EQ(differing_hits(b.ram, in.hit_at(kBvhAt), want), 0u);
+}
+
 // ABORT mid-job: ABORTED, and no hit written after it.
 TEST(Peripheral, AbortStopsTheJobWithoutWritingHits) {
     FsResolution res;
