@@ -364,6 +364,14 @@ TEST(SectorCache, AnL2SliceUsesAllItsSets) {
 
 // A configuration file whose number JSON cannot hold (1e400) is bad input naming the file, not an
 // internal error (issue 16: it ended in exit 3).
+// A configuration saved with a UTF-8 byte-order mark (as some Windows editors do) reads as
+// without it (docs/robustness.md).
+TEST(Config, AByteOrderMarkIsRead) {
+    rtu::test::TempDir dir;
+    const std::string path = rtu::test::write_text(dir.file("bom.json"), "\xEF\xBB\xBF{\"gpu\": {\"sms\": 4}}");
+    EXPECT_EQ(Config::load(path).resolve().sms, 4u);
+}
+
 TEST(Config, OutOfRangeNumbersAndDeepNestingAreConfigErrors) {
     rtu::test::TempDir dir;
     const std::string path = rtu::test::write_text(dir.file("big.json"), "{\"l1\": {\"size_kb\": 1e400}}");
