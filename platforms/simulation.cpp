@@ -194,6 +194,7 @@ struct WorkloadStage {
 };
 
 void memory_stage(const WorkloadStage& w, const BvhStats& bs, RunRecord& rec) {
+    if (w.kind != WorkloadKind::RayFile) check_workload_params(w.spec.params);  // a frame that cannot be made is said as such
     const bool timing = is_timing(w.spec.run.fidelity);
     const MemoryEstimate need = timing ? estimate_memory(w.spec.hw, w.spec.run.fidelity, w.paths(), bs.image_bytes)
                                        : estimate_functional_memory(w.paths());

@@ -76,7 +76,7 @@ private:
 
 }  // namespace
 
-std::unique_ptr<Workload> make_scene_workload(WorkloadKind kind, const Scene& scene, const WorkloadParams& p) {
+void check_workload_params(const WorkloadParams& p) {
     if (p.width < 1 || p.height < 1 || p.width > 16384 || p.height > 16384)
         throw InputError("--width/--height must be 1..16384 (got " + std::to_string(p.width) + "x" + std::to_string(p.height) + ")");
     if (p.spp < 1 || p.spp > 4096) throw InputError("--spp must be 1..4096 (got " + std::to_string(p.spp) + ")");
@@ -86,6 +86,10 @@ std::unique_ptr<Workload> make_scene_workload(WorkloadKind kind, const Scene& sc
     if (paths > UINT32_MAX)
         throw InputError("--width x --height x --spp = " + std::to_string(paths) + " paths: at most " + std::to_string(UINT32_MAX) +
                          " (paths are numbered in 32 bits)");
+}
+
+std::unique_ptr<Workload> make_scene_workload(WorkloadKind kind, const Scene& scene, const WorkloadParams& p) {
+    check_workload_params(p);
     if (kind == WorkloadKind::RayFile) throw std::logic_error("ray files use make_ray_file_workload");
     return lumibench::make_workload(kind, scene, p);
 }

@@ -67,6 +67,9 @@ public:
     virtual bool runs_shaders() const { return true; }
 };
 
+// The frame's size, samples and bounces within their ranges, and at most 2^32 - 1 paths;
+// InputError naming the options otherwise.
+void check_workload_params(const WorkloadParams& p);
 // The scene's workload as LumiBench's application casts it (workloads/lumibench.h).
 std::unique_ptr<Workload> make_scene_workload(WorkloadKind kind, const Scene& scene, const WorkloadParams& p);
 
