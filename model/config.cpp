@@ -86,6 +86,8 @@ const Key kSchema[] = {
     {"prefetch.treelet_heuristic", "", Type::Text, 0, 0, false, "Treelet: always (prefetch the RT unit's most popular treelet whenever it changes; the Treelet code's 0) or popularity (only above treelet_threshold; its 1)"},
     {"prefetch.treelet_layout", "", Type::Text, 0, 0, false, "Treelet traversal: bvh (nodes where the BVH builder put them) or contiguous (each treelet in a block of its own, for the memory system)"},
     {"prefetch.treelet_stride", "bytes", Type::Int, 0, 1 << 20, false, "Treelet, contiguous layout: bytes between treelet blocks beyond the budget (the Treelet code's treelet_remap_stride)"},
+    {"prefetch.treelet_queue_limit", "entries", Type::Int, 1, 1 << 30, false, "Treelet: a treelet is enqueued only if its nodes plus the chunks already in the RT unit's prefetch queue are at most this (the Treelet code's max_prefetch_queue_size, which mixes the two units)"},
+    {"prefetch.treelet_vote_period", "cycles", Type::Int, 1, 1 << 20, false, "Treelet: cycles between two votes for the most popular treelet (the Treelet code's prefetch_delay)"},
     {"prefetch.ttp_depth_s1", "entries", Type::Int, 0, 64, false, "TTP (DFS): entries prefetched on the first pop after a push"},
     {"prefetch.ttp_depth_s2", "entries", Type::Int, 0, 64, false, "TTP (DFS): on the second consecutive pop"},
     {"prefetch.ttp_depth_s3", "entries", Type::Int, 0, 64, false, "TTP (DFS): on the third and later consecutive pops"},
@@ -393,6 +395,8 @@ HwConfig Config::resolve() const {
     if (layout != "bvh" && layout != "contiguous") throw ConfigError("key 'prefetch.treelet_layout' = '" + layout + "': allowed are bvh, contiguous");
     h.prefetch.treelet_contiguous = layout == "contiguous";
     h.prefetch.treelet_stride = u32("prefetch.treelet_stride");
+    h.prefetch.treelet_queue_limit = u32("prefetch.treelet_queue_limit");
+    h.prefetch.treelet_vote_period = u32("prefetch.treelet_vote_period");
     h.energy = {num("energy.l1_access_pj"), num("energy.l2_access_pj"), num("energy.dram_read_pj"),
                 num("energy.dram_write_pj"), num("energy.dram_activate_pj"), num("energy.static_w")};
     h.quantum = values_.at("sim.quantum").get<uint64_t>();

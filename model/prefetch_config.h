@@ -38,6 +38,8 @@ struct PrefetchConfig {
     TreeletHeuristic treelet_heuristic = TreeletHeuristic::Always;
     bool treelet_contiguous = false;          // Treelet: each treelet laid out in a block of its own (model/treelet.h)
     uint32_t treelet_stride = 256;            // Treelet, contiguous layout: bytes between blocks beyond the budget
+    uint32_t treelet_queue_limit = 1000000;   // Treelet: a treelet is enqueued only if its nodes + the queue's chunks fit
+    uint32_t treelet_vote_period = 1;         // Treelet: cycles between two votes
 };
 
 }  // namespace rtu

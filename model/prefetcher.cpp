@@ -95,17 +95,31 @@ private:
 };
 
 // Treelet (Chou et al.), as their published code runs with treelet_prefetch on (shader.cc of
-// branch treelet_traversal, l.3419-3640): each cycle, over every live thread of the RT unit,
-// the treelet of the node each will read next gets a vote; the most popular treelet (ties: the
-// smaller root address, as the code's map keyed by the root) is prefetched whole, unless it is
-// the one prefetched last. Heuristic `always` (the code's 0, which the TTP paper ran) always
-// submits it; `popularity` (1) only when its votes are at least treelet_threshold of all.
+// branch treelet_traversal, l.3419-3640): every treelet_vote_period cycles (its prefetch_delay,
+// l.3378), over every live thread of the RT unit, the treelet of the node each will read next
+// gets a vote; the most popular treelet (ties: the smaller root address, as the code's map keyed
+// by the root) is prefetched whole, unless it is the one prefetched last, and only if its nodes
+// plus the chunks already in the prefetch queue are at most treelet_queue_limit (l.3577: a
+// treelet too large for that is never enqueued; the code compares nodes with chunks, and so does
+// this). Heuristic `always` (the code's 0, which the TTP paper ran) always submits it;
+// `popularity` (1) only when its votes are at least treelet_threshold of all.
+// The RT unit calls this only in cycles in which some thread's next node changed; between two
+// such cycles the votes would not change, so the vote of a period is taken at its first such
+// cycle (at most treelet_vote_period - 1 cycles after the code's), and a treelet refused by the
+// size check is voted on again at the next one.
 class TreeletPrefetcher : public Prefetcher {
 public:
     TreeletPrefetcher(const PrefetchConfig& c, const Treelets& t)
-        : Prefetcher(OnCycle), always_(c.treelet_heuristic == TreeletHeuristic::Always), threshold_(c.treelet_threshold), treelets_(t) {}
+        : Prefetcher(OnCycle),
+          always_(c.treelet_heuristic == TreeletHeuristic::Always),
+          threshold_(c.treelet_threshold),
+          queue_limit_(c.treelet_queue_limit),
+          period_(c.treelet_vote_period),
+          treelets_(t) {}
     PrefetcherKind kind() const override { return PrefetcherKind::Treelet; }
-    void on_cycle(const UnitThreads& threads, PrefetchSink& sink) override {
+    void on_cycle(const UnitThreads& threads, PrefetchSink& sink, uint64_t now) override {
+        if (now / period_ == voted_in_) return;
+        voted_in_ = now / period_;
         votes_.clear();
         uint32_t total = 0;
         threads.for_each_live([&](const TraversalThread& t) {
@@ -119,6 +133,7 @@ public:
             if (c > count || (c == count && treelets_.nodes[id][0].addr < treelets_.nodes[best][0].addr)) best = id, count = c;
         if (best == ~0u || best == last_) return;
         if (!always_ && double(count) < threshold_ * double(total)) return;
+        if (treelets_.nodes[best].size() + sink.queued() > queue_limit_) return;
         last_ = best;
         for (const StackEntry& e : treelets_.nodes[best]) sink.prefetch(e, ~0ull);
     }
@@ -126,9 +141,11 @@ public:
 private:
     bool always_;
     double threshold_;
+    uint64_t queue_limit_, period_;
     const Treelets& treelets_;
     std::map<uint32_t, uint32_t> votes_;
-    uint32_t last_ = ~0u;  // the treelet prefetched last
+    uint32_t last_ = ~0u;            // the treelet prefetched last
+    uint64_t voted_in_ = ~0ull;      // the period of the last vote
 };
 
 // The limit studies (paper section 6.1): node reads of some pop-streak classes always hit L1.

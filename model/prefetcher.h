@@ -85,6 +85,8 @@ public:
     virtual void prefetch(const StackEntry& node, uint64_t deadline) = 0;
     // A pick the thread's window dropped (prefetch.thread_window), for the statistics.
     virtual void window_drop() = 0;
+    // Chunks waiting in the RT unit's prefetch queue (the Treelet code's size check reads it).
+    virtual size_t queued() const { return 0; }
 };
 
 // The RT unit's threads as the Treelet prefetcher reads them: every live thread of every warp
@@ -116,7 +118,7 @@ public:
     virtual void on_node_test(const StepInfo& step, const std::deque<StackEntry>& stack, uint64_t test_end, PrefetchSink&) {}
     // A cycle of the RT unit in which some thread's next node changed (a warp came in, or a
     // node's tests ran), before the warp scheduler picks: `threads` are the unit's live threads.
-    virtual void on_cycle(const UnitThreads& threads, PrefetchSink&) {}
+    virtual void on_cycle(const UnitThreads& threads, PrefetchSink&, uint64_t now) {}
     // Limit studies: a node fetch of pop-streak class `fetch_class` is answered as an L1 hit.
     virtual bool answered_as_l1_hit(uint8_t fetch_class) const { return false; }
 

@@ -135,6 +135,8 @@ void RtUnitCore::pop_request(uint64_t now) {
     ++stats_.prefetch_queue.sent;
 }
 
+size_t RtUnitCore::Sink::queued() const { return core.maq_.prefetches().size(); }
+
 void RtUnitCore::Sink::prefetch(const StackEntry& e, uint64_t deadline) {
     PrefetchQueue& q = core.maq_.prefetches();
     for (uint32_t c = 0; c < chunks_of(e.type); ++c) {
@@ -179,7 +181,7 @@ void RtUnitCore::cycle(uint64_t now) {
     if ((prefetcher_->hooks() & Prefetcher::OnCycle) && next_nodes_changed_) {
         next_nodes_changed_ = false;
         sink_.warp = sink_.thread = 0;
-        prefetcher_->on_cycle(UnitView(warps_), sink_);
+        prefetcher_->on_cycle(UnitView(warps_), sink_, now);
     }
     schedule_warp(now);
 }

@@ -122,6 +122,7 @@ private:
     struct Sink : PrefetchSink {
         explicit Sink(RtUnitCore& c) : core(c) {}
         void prefetch(const StackEntry& node, uint64_t deadline) override;
+        size_t queued() const override;
         void window_drop() override { ++core.stats_.prefetch_queue.window_dropped; }
         RtUnitCore& core;
         uint32_t warp = 0, thread = 0;

@@ -338,8 +338,10 @@ struct FakeUnit : UnitThreads {
 };
 struct Recording : PrefetchSink {
     std::vector<uint64_t> nodes;
+    size_t waiting = 0;  // chunks the prefetch queue is said to hold
     void prefetch(const StackEntry& e, uint64_t) override { nodes.push_back(e.addr); }
     void window_drop() override {}
+    size_t queued() const override { return waiting; }
 };
 }  // namespace
 
@@ -391,23 +393,57 @@ TEST(Treelets, PrefetcherPicksTheUnitsMostPopularTreeletOnce) {
     auto p = make(TreeletHeuristic::Always, 0.75);
     EXPECT_EQ(p->hooks(), unsigned(Prefetcher::OnCycle));
     Recording out;
-    p->on_cycle(unit, out);
+    p->on_cycle(unit, out, 0);
     EXPECT_EQ(out.nodes, whole(target[1]));
     out.nodes.clear();
-    p->on_cycle(unit, out);
+    p->on_cycle(unit, out, 1);
     EXPECT_TRUE(out.nodes.empty());  // the last one prefetched: not again
     // A tie goes to the treelet whose root has the smaller address.
     unit.threads = {heading[0], heading[1]};
     const uint32_t smaller = t.nodes[target[0]][0].addr < t.nodes[target[1]][0].addr ? target[0] : target[1];
     auto q = make(TreeletHeuristic::Always, 0.75);
-    q->on_cycle(unit, out);
+    q->on_cycle(unit, out, 0);
     EXPECT_EQ(out.nodes, whole(smaller));
     // Popularity: 2 of 3 votes (67 %) is below 75 %: nothing; at 60 % the winner goes.
     unit.threads = {heading[0], heading[1], heading[1]};
     out.nodes.clear();
-    make(TreeletHeuristic::Popularity, 0.75)->on_cycle(unit, out);
+    make(TreeletHeuristic::Popularity, 0.75)->on_cycle(unit, out, 0);
     EXPECT_TRUE(out.nodes.empty());
-    make(TreeletHeuristic::Popularity, 0.6)->on_cycle(unit, out);
+    make(TreeletHeuristic::Popularity, 0.6)->on_cycle(unit, out, 0);
+    EXPECT_EQ(out.nodes, whole(target[1]));
+
+    // The code's size check (shader.cc l.3577): the treelet's nodes plus the chunks waiting in
+    // the queue must be at most treelet_queue_limit, or it is not enqueued (and the vote is taken
+    // again later). Its votes come every treelet_vote_period cycles.
+    const size_t n = t.nodes[target[1]].size();
+    auto gated = [&](uint32_t limit, uint32_t period) {
+        PrefetchConfig c;
+        c.kind = PrefetcherKind::Treelet;
+        c.treelet_queue_limit = limit;
+        c.treelet_vote_period = period;
+        return make_prefetcher(c, TraversalOrder::Treelet, RtLatency{}, &t);
+    };
+    out.nodes.clear();
+    auto small = gated(uint32_t(n - 1), 1);
+    small->on_cycle(unit, out, 0);
+    EXPECT_TRUE(out.nodes.empty()) << n << " nodes over a limit of " << n - 1;
+    auto fits = gated(uint32_t(n), 1);
+    out.waiting = 1;  // nodes and chunks counted together: n + 1 > n
+    fits->on_cycle(unit, out, 0);
+    EXPECT_TRUE(out.nodes.empty());
+    out.waiting = 0;
+    fits->on_cycle(unit, out, 1);  // refused before, so voted on again
+    EXPECT_EQ(out.nodes, whole(target[1]));
+    out.nodes.clear();
+    auto slow = gated(1000000, 32);
+    unit.threads = {heading[0], heading[0], heading[1]};  // A leads
+    slow->on_cycle(unit, out, 5);
+    EXPECT_EQ(out.nodes, whole(target[0]));
+    out.nodes.clear();
+    unit.threads = {heading[1], heading[1], heading[0]};  // B leads, within the same period
+    slow->on_cycle(unit, out, 31);
+    EXPECT_TRUE(out.nodes.empty());
+    slow->on_cycle(unit, out, 32);
     EXPECT_EQ(out.nodes, whole(target[1]));
 }
 
