@@ -5,6 +5,7 @@ Every figure of ours stands next to the paper's, and every comparison (direction
 share of the paper's gain) is computed from the data: the paper's figures are the constants in
 PAPER below, each with the place in the paper it comes from."""
 import datetime
+import json
 import math
 import os
 import pathlib
@@ -20,6 +21,8 @@ from report_util import Markdown, direction, geomean, load, mean, number, order,
 
 SCENES = ["wknd", "cornell", "ship", "bunny", "ref", "bath", "sprng", "party"]
 PAPER_SCENES = [s for s in SCENES if s != "cornell"]  # geometric means that compare with the paper's
+# The scenes on which the paper's Treelet loses (tex l.711: "the performance loss in the scenes ship, spnza, crnvl, and fox"), among ours.
+PAPER_TREELET_LOSSES = ["ship"]
 
 # The paper's figures (ISCA 2026, ../shared/paper/ttp-isca2026.tex), in one place.
 PAPER = {
@@ -157,9 +160,10 @@ def main():
     R.p("The `paper` preset is the TTP authors' MOBILE setup key by key (docs/paper-preset.md gives every key's source); "
         "the `mobile` column, where shown, is the paper's Table 2 alone, without the details of the authors' simulator "
         "(two-step leaf read, 100-cycle DRAM front end, 16 resident warps per SM, their address mapping and set hashing, "
-        "oldest-first RT warp scheduling, a 16-entry per-thread prefetch window); the difference between the two columns is what "
-        "those details weigh. The paper's figures are over its 16 LumiBench scenes; ours are over the stand-ins we have "
-        "(see the gap table at the end).")
+        "oldest-first RT warp scheduling, a 16-entry per-thread prefetch window, the kernel launch, the shader time measured "
+        "on their simulator, Treelet's default treelet size, queue check and vote period); the difference between the two columns is what those details "
+        "weigh. The paper's figures are over its 16 LumiBench scenes; ours are over the scenes of `../shared/scenes`, built "
+        "and cast as LumiBench does (docs/lumibench.md; some assets are stand-ins or partial, see the gap table at the end).")
     R.p()
     if failed:
         R.p("Failed runs (see their .err files): " + ", ".join("/".join(k) for k in failed))
@@ -473,9 +477,12 @@ def main():
     # 16. Treelet.
     R.p("## Treelet prefetcher against TTP (paper Figures 'treeletvs_pt', 'treeletres', 'treelet_dram_reads')")
     R.p()
+    pf = json.loads((pathlib.Path(__file__).resolve().parents[2] / "platforms" / "configs" / "paper.json").read_text())["prefetch"]
     R.p("Treelet = treelet traversal (two stacks) with whole-treelet prefetching as the code the paper ran "
-        "(branch treelet_traversal): 512 B treelets formed until the first node that does not fit, the RT unit's most popular "
-        "next treelet prefetched each time it changes, in the BVH's own layout; normalised to the DFS baseline at the same "
+        f"(branch treelet_traversal), with the `paper` preset's keys: {pf['treelet_budget']:,} B treelets formed until the first "
+        f"node that does not fit; every {pf['treelet_vote_period']} cycles the RT unit's most popular next treelet is prefetched "
+        f"unless it was the last one or its nodes plus the chunks already queued exceed {pf['treelet_queue_limit']:,}; "
+        f"{'in the BVH' + chr(39) + 's own layout' if pf['treelet_layout'] == 'bvh' else 'each treelet in a block of its own'}; normalised to the DFS baseline at the same "
         "resolution, as in the paper. 'contiguous' moves each treelet into a block of its own (the Treelet paper's layout, "
         "which the TTP paper did not use).")
     R.p()
@@ -499,10 +506,23 @@ def main():
     R.table(["resolution", "Treelet (ours)", "Treelet, contiguous layout", "Treelet (paper)", "TTP (ours)", "TTP (paper)",
              "Treelet DRAM reads vs baseline", "TTP above Treelet, as in the paper"], rows)
     R.bars("treelet", "Treelet and TTP speed-ups by resolution", ser)
-    sc = R.scenes_with("treelet_trav", "base")
+    sc = R.scenes_with("treelet_trav", "treelet", "base")
     if sc:
+        R.p(f"Per scene at {size}, over the DFS baseline:")
+        R.p()
+        R.table(["scene", "Treelet", "treelet traversal alone", "chunks prefetched per node read"],
+                [[x, times(R.speedup("treelet", "base", x)), times(R.speedup("treelet_trav", "base", x)),
+                  f"{R.val('treelet', x, 'pf_sent') / R.val('treelet', x, 'node_fetches'):.2f}" if R.val("treelet", x, "node_fetches") else "-"]
+                 for x in sc])
         R.p(f"Treelet traversal alone (no prefetching) runs at {times(R.gm({x: R.speedup('treelet_trav', 'base', x) for x in sc}))} "
             "of the DFS baseline.")
+        losses = [x for x in sc if x in PAPER_TREELET_LOSSES]
+        for x in losses:
+            t_x, tr_x = R.speedup("treelet", "base", x), R.speedup("treelet_trav", "base", x)
+            R.p(f"The paper's Treelet loses on {x}; ours {'loses' if t_x < 1 else 'gains'} there ({times(t_x)}), and the treelet "
+                f"traversal order alone accounts for {times(tr_x)} of it. Suspected: the authors' treelet traversal keeps its "
+                "current treelet as a host address after the first switch while it looks nodes up by device address, so past the "
+                "root treelet it walks in DFS order (read in their code, not run); ours walks treelet-first throughout.")
         R.p()
     R.p(f"Paper: Treelet raises DRAM reads {times(PAPER['treelet_dram'], 2)}.")
     R.p()
@@ -619,22 +639,24 @@ def main():
         rows.append([label, show(ours), show(paper), f"{int(round(100 * diff)):+d} %" if diff is not None else "-",
                      ("within 3 %; " if close else "") + what])
     gap("TTP geomean", g_sp, PAPER["ttp"], lambda x: times(x, 2),
-        "the means are over different scenes: the paper's 16 against our " + str(len(paper_sp)) + ", and our stand-ins differ "
-        "(nodes per DFS ray where they differ by more than 20 %, ours/paper: " + (", ".join(small) if small else "none") + f"); wknd's baseline L1 "
-        f"miss rate is {pct(R.val('base', 'wknd', 'l1_miss_rate'))}, so TTP has little to hide there (measured)")
+        "the means are over different scenes: the paper's 16 against our " + str(len(paper_sp)) + "; nodes per DFS ray where ours "
+        "differ from Table 1 by more than 20 %, ours/paper: " + (", ".join(small) if small else "none") + " (the authors' simulator "
+        "casts the same paths as ours on these scenes, `reports/correlation`, so the scenes themselves differ: suspected, the "
+        f"assets); wknd's baseline L1 miss rate is {pct(R.val('base', 'wknd', 'l1_miss_rate'))}, so TTP has little to hide there (measured)")
     gap("TTP max", mx, PAPER["ttp_max"], lambda x: times(x, 2), f"ours on {peak_scene}; the paper's peak is on a scene we do not have")
     gap("perfect-up limit", gu, PAPER["perfect_up"], lambda x: times(x, 2),
-        "not modelled: the 64 B BVH header read at ray start and after each instance leaf (vrt.cc ~l.848, ~l.1060) and the "
-        "hit-result stores, which take priority over demand reads (abstract_hardware_model.cc ~l.855-887); both add memory "
-        "time to every ray in the authors' simulator (effect not measured)")
+        "not modelled: the hit-result stores, which take priority over demand reads (abstract_hardware_model.cc ~l.855-887), "
+        "and the shaders' own loads through the same L1 and L2 (most of the authors' DRAM reads, `reports/correlation`); both "
+        "add memory time to every ray in the authors' simulator (effect not measured)")
     gap("perfect-down limit", gd, PAPER["perfect_down"], lambda x: times(x, 2),
         "measured: perfect-down beats perfect-up on " + (", ".join(f"{x} ({pct(1 - later_share[x], 0)})" for x in down_wins) or "no scene") +
         ", the share of the pops' DRAM misses that are first pops in brackets: where first pops carry most misses, making them "
-        "hit is worth more. Our stand-ins for bunny, ref and sprng are smaller than the paper's (suspected link)")
+        "hit is worth more. Suspected link: shorter paths than the paper's (" + (", ".join(small) if small else "none") + ")")
     gap("DRAM bandwidth rise with TTP", m_bw, PAPER["dram_bw_overhead"], pct,
         f"measured: our traffic changes by {times(g_tr, 3)}, so our bandwidth rises with the speed-up; the paper's rises less "
-        "than its speed-up with traffic unchanged too, so its figure must include time or traffic TTP does not change, such as "
-        "the shader cores' own loads and kernel launch, which rtunit does not model (reasoned)")
+        "than its speed-up with traffic unchanged too, so its figure must include traffic TTP does not change, such as the "
+        "shader cores' own loads, which rtunit does not model (reasoned; they are most of the authors' DRAM reads, "
+        "`reports/correlation`)")
     gap("L1 accuracy (authors' code)", a_l1, PAPER["l1_accuracy"], pct,
         f"measured: the same runs give {pct(m(acc, 'l1'))} by the text's definition; the authors' code counts a line used unless "
         "it is evicted unread, and lines still cached at the end as used")
@@ -649,10 +671,11 @@ def main():
     tl_bw = [(x, R.val("base", x, "dram_bw"), R.val("treelet", x, "dram_bw")) for x in R.scenes_with("base", "treelet") if x in PAPER_SCENES]
     tl_top = max(tl_bw, key=lambda t: t[2] or 0, default=None)
     gap(f"Treelet at {size}", t128, PAPER["treelet_128"], lambda x: times(x, 2),
-        "rtunit's Treelet follows the code the paper ran (formation, popularity vote, BVH layout). The paper blames "
-        "Treelet's loss at 128x128 on saturated DRAM bandwidth (spnza 58 % -> 80 %); ours peaks at " +
-        (f"{pct(tl_top[1], 0)} -> {pct(tl_top[2], 0)} ({tl_top[0]})" if tl_top else "-") +
-        ", far from the bus limit, so its excess prefetches cost little here (measured; our stand-in scenes are smaller)")
+        "rtunit's Treelet follows the code the paper ran (formation, popularity vote, BVH layout), with the code's default "
+        "48 KB treelets, its prefetch-queue size check of 500 (which keeps treelets of more nodes than that from ever being "
+        "prefetched) and its vote every 32 cycles (the paper ran it unmodified, docs/paper-preset.md). The paper blames Treelet's loss at 128x128 on "
+        "saturated DRAM bandwidth (spnza 58 % -> 80 %); ours peaks at " +
+        (f"{pct(tl_top[1], 0)} -> {pct(tl_top[2], 0)} ({tl_top[0]})" if tl_top else "-") + " of the bus (measured)")
     gap("Park", g_park, PAPER["park"], lambda x: times(x, 2),
         "the authors' Park code is not public ('to the best of our ability'); ours prefetches from the stack during a leaf's "
         "test, one 32 B chunk a cycle for the test's 8 cycles, next pop first, and drops the rest. Measured: ours covers "
@@ -663,17 +686,16 @@ def main():
         "their weight is not measured:")
     R.p()
     for item in (
-            "the 64 B BVH header read at a ray's start and after each instance leaf (vrt.cc ~l.848, ~l.1060): one more "
-            "dependent read per ray, mostly an L1 hit;",
             "a 32 B store for every triangle hit and the traversal results, which take precedence over new demand reads and "
             "which a warp waits for before it leaves (ahm.cc l.855-887, shader.cc l.3283-3291): more memory time per ray in "
             "both runs;",
             "the L1's streaming allocation (cfg l.101 `s`: a line is taken when its data arrives, not at the miss) and the L1 "
             "filled when the RT unit drains its response FIFO rather than when the data arrives (shader.cc l.3025-3030): "
             "these change how long a prefetched line waits to be useful;",
-            "the shader code between trace calls and the kernel launch latency of 5,000 cycles (cfg l.13); rtunit charges a "
-            "fixed shading latency (docs/timing.md). Time TTP cannot shorten lowers a speed-up, so this pushes the paper's "
-            "figures below ours, not above (reasoned);",
+            "the shader code between trace calls, its time and its loads and stores through the L1 and L2: rtunit charges "
+            "a constant measured on the authors' simulator (docs/paper-preset.md, `workload.shade_latency`) and no traffic. "
+            "The shaders' loads are most of the authors' DRAM reads (`reports/correlation`); they compete with the RT "
+            "unit's misses and evict its nodes from L1 (suspected to change the speed-ups either way);",
             "the DRAM's read-to-precharge time (RTPL=4) and write-to-read turn (CDLR=9); reads alone do not reach the "
             "second, and the RT unit's stores are not modelled."):
         R.p("- " + item)
