@@ -381,11 +381,13 @@ TEST(Treelets, PrefetcherPicksTheUnitsMostPopularTreeletOnce) {
         for (const StackEntry& e : t.nodes[id]) v.push_back(e.addr);
         return v;
     };
-    auto make = [&](TreeletHeuristic h, double threshold) {
+    auto make = [&](TreeletHeuristic h, double threshold, uint32_t queue_limit = 1000000, uint32_t vote_period = 1) {
         PrefetchConfig c;
         c.kind = PrefetcherKind::Treelet;
         c.treelet_heuristic = h;
         c.treelet_threshold = threshold;
+        c.treelet_queue_limit = queue_limit;
+        c.treelet_vote_period = vote_period;
         return make_prefetcher(c, TraversalOrder::Treelet, RtLatency{}, &t);
     };
     FakeUnit unit;
@@ -416,13 +418,7 @@ TEST(Treelets, PrefetcherPicksTheUnitsMostPopularTreeletOnce) {
     // the queue must be at most treelet_queue_limit, or it is not enqueued (and the vote is taken
     // again later). Its votes come every treelet_vote_period cycles.
     const size_t n = t.nodes[target[1]].size();
-    auto gated = [&](uint32_t limit, uint32_t period) {
-        PrefetchConfig c;
-        c.kind = PrefetcherKind::Treelet;
-        c.treelet_queue_limit = limit;
-        c.treelet_vote_period = period;
-        return make_prefetcher(c, TraversalOrder::Treelet, RtLatency{}, &t);
-    };
+    auto gated = [&](uint32_t limit, uint32_t period) { return make(TreeletHeuristic::Always, 0.75, limit, period); };
     out.nodes.clear();
     auto small = gated(uint32_t(n - 1), 1);
     small->on_cycle(unit, out, 0);
