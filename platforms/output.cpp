@@ -6,8 +6,9 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
-#include <sstream>
 #include <fstream>
+#include <sstream>
+
 #include <fcntl.h>
 #include <sys/resource.h>
 #include <sys/stat.h>
@@ -76,9 +77,7 @@ std::string write_temporary(const std::string& path, const std::string& content)
     }
     return tmpl;
 }
-}  // namespace
 
-namespace {
 // Where an output goes: through a link to the file it names (the link stays), and into a FIFO, a
 // device or a socket directly (/dev/null, a pipe), never replacing it with a regular file.
 struct Destination {
@@ -153,7 +152,13 @@ void OutputFiles::commit() {
         const auto [temporary, target] = staged_.front();
         if (std::rename(temporary.c_str(), target.c_str()) != 0) {
             const int err = errno;
-            throw input_error(target, 0, std::string("cannot write: ") + std::strerror(err));  // the destructor removes the rest
+            if (err != EXDEV) throw input_error(target, 0, std::string("cannot write: ") + std::strerror(err));  // the destructor removes the rest
+            // An adopted file beside a link whose target is on another filesystem: copied there
+            // whole first, then renamed.
+            const std::string copy = write_temporary(target, read_whole(temporary));
+            ::unlink(temporary.c_str());
+            staged_.front().first = copy;
+            continue;
         }
         staged_.erase(staged_.begin());
     }
