@@ -143,7 +143,8 @@ int run(const Args& given) {
         if (temporary.size() < sizeof vcd_in_progress) std::memcpy(vcd_in_progress, temporary.c_str(), temporary.size() + 1);
     }
     const RunResult r = run_simulation(spec, a.quiet ? nullptr : &std::cout);
-    // SystemC does not report a failed write: a full filesystem is the one way the VCD is cut.
+    // SystemC does not report a failed write: a full filesystem or the file-size limit cuts a VCD
+    // without a word, so both are checked.
     if (!vcd.empty()) check_written_whole(spec.run.vcd + ".vcd", vcd);
     if (r.interrupted) {
         // Only the statistics and the waveforms: the frame, the hits and the dumps are not whole.
