@@ -42,22 +42,26 @@ std::vector<std::string> segment_args(const Args& a) {
     return base;
 }
 
+// --vcd FILE names the waveforms FILE, or FILE.vcd if it does not end so; SystemC takes the name
+// without the extension.
+std::string vcd_base(const std::string& vcd) {
+    return vcd.size() > 4 && vcd.compare(vcd.size() - 4, 4, ".vcd") == 0 ? vcd.substr(0, vcd.size() - 4) : vcd;
+}
+
 // Two outputs on one file: the one written last would replace the other (the hits lost under
 // the statistics, say). Compared as the files they are (symlinks and ".." resolved as far as the
 // path exists); the VCD as the file it becomes (FILE.vcd).
 void check_distinct_outputs(const Args& a) {
     namespace fs = std::filesystem;
-    std::string vcd = a.vcd;
-    if (!vcd.empty() && !(vcd.size() > 4 && vcd.compare(vcd.size() - 4, 4, ".vcd") == 0)) vcd += ".vcd";
+    const std::string vcd = a.vcd.empty() ? std::string() : vcd_base(a.vcd) + ".vcd";
     const std::string plan = a.sample_plan.empty() || fs::is_directory(a.sample_plan) ? std::string() : a.sample_plan;
     std::vector<std::pair<fs::path, std::string>> seen;
     for (const auto& [option, path] : {std::pair<const char*, std::string>{"--stats", a.stats}, {"--image", a.image}, {"--hits", a.hits},
                                        {"--vcd", vcd}, {"--dump-bvh", a.dump_bvh}, {"--dump-rays", a.dump_rays},
                                        {"--dump-hits", a.dump_hits}, {"--sample-plan", plan}}) {
         if (path.empty()) continue;
+        if (is_special_file(path)) continue;  // /dev/null twice is fine
         std::error_code ec;
-        const fs::file_status st = fs::status(path, ec);
-        if (fs::exists(st) && !fs::is_regular_file(st) && !fs::is_directory(st)) continue;  // /dev/null twice is fine
         fs::path file = fs::weakly_canonical(fs::absolute(path), ec);
         if (ec) file = fs::absolute(path).lexically_normal();
         for (const auto& [other, other_option] : seen)
@@ -168,8 +172,7 @@ RunSpec spec_of(const Args& a, const std::atomic<int>* stop) {
     if (a.segment) run.sample_segment = uint32_t(*a.segment);
     run.sample_plan = a.sample_plan;
     run.sample_threads = unsigned(a.threads);
-    run.vcd = a.vcd;
-    if (run.vcd.size() > 4 && run.vcd.compare(run.vcd.size() - 4, 4, ".vcd") == 0) run.vcd.resize(run.vcd.size() - 4);
+    run.vcd = vcd_base(a.vcd);
     if (!a.trace_warp.empty()) std::tie(run.trace_sm, run.trace_warp) = parse_trace_warp(a.trace_warp, spec.hw);
     run.keep_rays = !a.hits.empty() || a.verify;  // else memory for the rays in flight only
     run.progress = !a.quiet;

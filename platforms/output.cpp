@@ -26,7 +26,28 @@ namespace {
 std::filesystem::path folder_of(const std::filesystem::path& target) {
     return target.has_parent_path() ? target.parent_path() : std::filesystem::path(".");
 }
+
+// Writes all of `content` to `fd` and closes it; on failure closes it and returns the errno
+// (ENOSPC for a write that took nothing), else 0.
+int write_all_and_close(int fd, const std::string& content) {
+    for (size_t done = 0; done < content.size();) {
+        const ssize_t n = ::write(fd, content.data() + done, content.size() - done);
+        if (n <= 0) {
+            const int err = n < 0 ? errno : ENOSPC;
+            ::close(fd);
+            return err;
+        }
+        done += size_t(n);
+    }
+    return ::close(fd) != 0 ? errno : 0;
+}
 }  // namespace
+
+bool is_special_file(const std::string& path) {
+    std::error_code ec;
+    const std::filesystem::file_status st = std::filesystem::status(path, ec);  // follows links
+    return std::filesystem::exists(st) && !std::filesystem::is_regular_file(st) && !std::filesystem::is_directory(st);
+}
 
 void check_writable_folder(const std::string& option, const std::string& path) {
     namespace fs = std::filesystem;
@@ -34,8 +55,7 @@ void check_writable_folder(const std::string& option, const std::string& path) {
     const fs::path dir = folder_of(target);
     std::error_code ec;
     // A FIFO or a device (/dev/null) is written into, not replaced: its own permission counts.
-    const fs::file_status st = fs::status(target, ec);
-    if (fs::exists(st) && !fs::is_regular_file(st) && !fs::is_directory(st)) {
+    if (is_special_file(path)) {
         if (::access(path.c_str(), W_OK) != 0) throw InputError(option + " " + path + ": cannot write: " + std::strerror(errno));
         return;
     }
@@ -58,20 +78,8 @@ std::string write_temporary(const std::string& path, const std::string& content)
     std::string tmpl = (dir / ("." + target.filename().string() + ".tmp.XXXXXX")).string();
     const int fd = mkstemp(tmpl.data());
     if (fd < 0) throw input_error(path, 0, std::string("cannot write: ") + std::strerror(errno));
-    size_t done = 0;
-    while (done < content.size()) {
-        const ssize_t n = ::write(fd, content.data() + done, content.size() - done);
-        if (n <= 0) {
-            const int err = n < 0 ? errno : ENOSPC;
-            ::close(fd);
-            ::unlink(tmpl.c_str());
-            throw input_error(path, 0, std::string("cannot write: ") + std::strerror(err));
-        }
-        done += size_t(n);
-    }
     fchmod(fd, 0644);
-    if (::close(fd) != 0) {
-        const int err = errno;
+    if (const int err = write_all_and_close(fd, content)) {
         ::unlink(tmpl.c_str());
         throw input_error(path, 0, std::string("cannot write: ") + std::strerror(err));
     }
@@ -87,8 +95,7 @@ struct Destination {
 Destination destination(const std::string& path) {
     namespace fs = std::filesystem;
     std::error_code ec;
-    const fs::file_status st = fs::status(path, ec);  // follows links
-    if (fs::exists(st) && !fs::is_regular_file(st) && !fs::is_directory(st)) return {path, true};
+    if (is_special_file(path)) return {path, true};
     if (fs::is_symlink(fs::symlink_status(path, ec))) {
         const fs::path real = fs::canonical(path, ec);
         if (ec) throw input_error(path, 0, "a symbolic link that loops or leads nowhere (rtsim writes through a link, never over it)");
@@ -100,16 +107,7 @@ Destination destination(const std::string& path) {
 void write_into(const std::string& path, const std::string& content) {
     const int fd = ::open(path.c_str(), O_WRONLY | O_CLOEXEC);
     if (fd < 0) throw input_error(path, 0, std::string("cannot write: ") + std::strerror(errno));
-    for (size_t done = 0; done < content.size();) {
-        const ssize_t n = ::write(fd, content.data() + done, content.size() - done);
-        if (n <= 0) {
-            const int err = n < 0 ? errno : ENOSPC;
-            ::close(fd);
-            throw input_error(path, 0, std::string("cannot write: ") + std::strerror(err));
-        }
-        done += size_t(n);
-    }
-    if (::close(fd) != 0) throw input_error(path, 0, std::string("cannot write: ") + std::strerror(errno));
+    if (const int err = write_all_and_close(fd, content)) throw input_error(path, 0, std::string("cannot write: ") + std::strerror(err));
 }
 
 std::string read_whole(const std::string& path) {

@@ -12,6 +12,9 @@ namespace rtu {
 // is writable, and the path itself is not a folder: checked before a run, so that a bad output
 // path does not wait for the simulation.
 void check_writable_folder(const std::string& option, const std::string& path);
+// Whether `path` (following links) is a FIFO, a device or a socket: an output written into, never
+// replaced.
+bool is_special_file(const std::string& path);
 // Throws InputError naming the path if it cannot be written.
 void write_file_atomic(const std::string& path, const std::string& content);
 // Linear RGB, row-major from the top row; tone-mapped (clamp, gamma 2.2) to 8-bit PNG.
