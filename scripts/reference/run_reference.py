@@ -68,6 +68,9 @@ import sys
 import threading
 import time
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "sweep"))
+from manifest import sha256 as sha256_file  # noqa: E402  (the sweeps' file hash)
+
 # ----------------------------------------------------------------------------------------------
 # Scenes and configurations
 # ----------------------------------------------------------------------------------------------
@@ -418,14 +421,6 @@ def parse_stats(log_text):
 # ----------------------------------------------------------------------------------------------
 # Helpers
 # ----------------------------------------------------------------------------------------------
-
-def sha256_file(path):
-    h = hashlib.sha256()
-    with open(path, "rb") as f:
-        for chunk in iter(lambda: f.read(1 << 20), b""):
-            h.update(chunk)
-    return h.hexdigest()
-
 
 def sha256_listing(files):
     """Short fingerprint of a set of files: sha256 over sorted "name sha256" lines."""
