@@ -88,10 +88,11 @@ const Key kSchema[] = {
     {"prefetch.treelet_stride", "bytes", Type::Int, 0, 1 << 20, false, "Treelet, contiguous layout: bytes between treelet blocks beyond the budget (the Treelet code's treelet_remap_stride)"},
     {"prefetch.treelet_queue_limit", "entries", Type::Int, 1, 1 << 30, false, "Treelet: a treelet is enqueued only if its nodes plus the chunks already in the RT unit's prefetch queue are at most this (the Treelet code's max_prefetch_queue_size, which mixes the two units)"},
     {"prefetch.treelet_vote_period", "cycles", Type::Int, 1, 1 << 20, false, "Treelet: cycles between two votes for the most popular treelet (the Treelet code's prefetch_delay)"},
-    {"prefetch.ttp_depth_s1", "entries", Type::Int, 0, 64, false, "TTP (DFS): entries prefetched on the first pop after a push"},
-    {"prefetch.ttp_depth_s2", "entries", Type::Int, 0, 64, false, "TTP (DFS): on the second consecutive pop"},
-    {"prefetch.ttp_depth_s3", "entries", Type::Int, 0, 64, false, "TTP (DFS): on the third and later consecutive pops"},
-    {"prefetch.bfs_n", "entries", Type::Int, 0, 64, false, "TTP (BFS): queue entries prefetched per pop"},
+    {"prefetch.ttp_depth_s1", "entries", Type::Int, 0, 64, false, "TTP (DFS; BFS under the trend policy): entries prefetched on the first pop after a push"},
+    {"prefetch.ttp_depth_s2", "entries", Type::Int, 0, 64, false, "TTP (DFS; BFS under trend): on the second consecutive pop"},
+    {"prefetch.ttp_depth_s3", "entries", Type::Int, 0, 64, false, "TTP (DFS; BFS under trend): on the third and later consecutive pops"},
+    {"prefetch.bfs_n", "entries", Type::Int, 0, 64, false, "TTP (BFS), fixed policy: queue entries prefetched per pop"},
+    {"prefetch.bfs_policy", "", Type::Text, 0, 0, false, "TTP (BFS): fixed (bfs_n entries from the queue's head a pop, the paper's section 4) or trend (the DFS state machine's ttp_depth_s1..s3 from the head, as the TTP authors' code runs BFS)"},
     {"prefetch.queue", "chunks", Type::Int, 0, 1 << 20, false, "prefetch queue entries per RT unit (0: unbounded, as the TTP authors' RT unit); a chunk that finds it full is dropped"},
     {"prefetch.thread_window", "nodes", Type::Int, 0, 1024, false, "TTP: a node among the thread's last this many prefetches is not prefetched again (0: off; the TTP authors' RT unit: 16)"},
     {"prefetch.priority_after", "core cycles", Type::Int, 0, 1e6, false, "0: prefetch only in cycles without demand; X: prefetch first if none sent in X cycles"},
@@ -382,6 +383,10 @@ HwConfig Config::resolve() const {
     }
     h.prefetch.depth = {u32("prefetch.ttp_depth_s1"), u32("prefetch.ttp_depth_s2"), u32("prefetch.ttp_depth_s3")};
     h.prefetch.bfs_n = u32("prefetch.bfs_n");
+    const std::string bfs_policy = values_.at("prefetch.bfs_policy").get<std::string>();
+    if (bfs_policy != "fixed" && bfs_policy != "trend")
+        throw ConfigError("key 'prefetch.bfs_policy' = '" + bfs_policy + "': allowed are fixed, trend");
+    h.prefetch.bfs_policy = bfs_policy == "fixed" ? BfsPolicy::Fixed : BfsPolicy::Trend;
     h.prefetch.priority_after = u32("prefetch.priority_after");
     h.prefetch.queue = u32("prefetch.queue");
     h.prefetch.thread_window = u32("prefetch.thread_window");

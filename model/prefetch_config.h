@@ -12,6 +12,8 @@ namespace rtu {
 enum class PrefetcherKind : uint8_t { None, Ttp, Park, Treelet, PerfectUp, PerfectDown };
 // When the Treelet prefetcher submits the RT unit's most popular treelet (model/prefetcher.cpp).
 enum class TreeletHeuristic : uint8_t { Always, Popularity };
+// How many queue entries TTP prefetches per pop under BFS (model/prefetcher.h TtpBfs).
+enum class BfsPolicy : uint8_t { Fixed, Trend };
 PrefetcherKind parse_prefetcher(const std::string& name);  // throws std::invalid_argument
 const char* prefetcher_name(PrefetcherKind k);
 
@@ -27,7 +29,8 @@ struct PrefetchObserver {
 struct PrefetchConfig {
     PrefetcherKind kind = PrefetcherKind::None;
     std::array<uint32_t, 3> depth{1, 2, 16};  // TTP DFS depths of S1, S2, S3
-    uint32_t bfs_n = 1;                       // TTP BFS: entries prefetched per pop
+    uint32_t bfs_n = 1;                       // TTP BFS, fixed policy: entries prefetched per pop
+    BfsPolicy bfs_policy = BfsPolicy::Fixed;  // TTP BFS: fixed (bfs_n a pop) or trend (the depths above)
     uint32_t priority_after = 0;              // 0: prefetch only in cycles without a demand request;
                                               // X: a prefetch goes first if none was sent in the last X cycles
     uint32_t queue = 0;                       // prefetch queue entries per RT unit (0: unbounded)

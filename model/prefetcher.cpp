@@ -32,7 +32,10 @@ public:
         picks_.clear();
         // The stack after the pop is the current one without its top (DFS) or head (BFS).
         if (bfs_) {
-            s.bfs.on_pop(st.size() - 1, cfg_.bfs_n, picks_);
+            if (cfg_.bfs_policy == BfsPolicy::Trend)
+                s.bfs.on_pop_trend(st.size() - 1, cfg_.depth, picks_);
+            else
+                s.bfs.on_pop(st.size() - 1, cfg_.bfs_n, picks_);
             for (size_t pos : picks_) send(s, st[pos + 1], sink);
         } else {
             s.dfs.on_pop(st.size() - 1, cfg_.depth, picks_);
@@ -41,11 +44,12 @@ public:
         if (cfg_.observer) {
             std::vector<uint64_t> picked;
             for (size_t i : picks_) picked.push_back(bfs_ ? st[i + 1].addr : st[i].addr);
-            cfg_.observer->on_pop(bfs_ ? st.front().addr : st.back().addr, bfs_ ? 0 : s.dfs.state(), picked);
+            cfg_.observer->on_pop(bfs_ ? st.front().addr : st.back().addr, bfs_ ? s.bfs.state() : s.dfs.state(), picked);
         }
     }
     void on_push(PrefetchThreadState& s, size_t size) override {
         s.dfs.on_push(size);
+        s.bfs.on_push();
         if (cfg_.observer) cfg_.observer->on_push(size);
     }
 

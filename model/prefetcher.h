@@ -12,8 +12,11 @@
 // until the next push. Paper example: with L, N, O, P on the stack (P on top), popping P
 // prefetches O (S1); popping O then prefetches N and L (S2).
 //
-// TTP for BFS: the stack is a FIFO queue; each pop prefetches up to N entries from the head
-// that have not been prefetched yet.
+// TTP for BFS: the stack is a FIFO queue; each pop prefetches entries from the head that have not
+// been prefetched yet: N of them (prefetch.bfs_policy = fixed, the paper's section 4), or as many
+// as the DFS state machine's state gives (trend: the TTP authors' code runs the same S1..S3 trend
+// for BFS, a push resetting it, and prefetches from the queue's head, vulkan_ray_tracing.cc
+// l.551-568 pop_ts_trend, l.662-718 generate_prefetches_BFS, l.1745-1747).
 #pragma once
 #include <array>
 #include <cstddef>
@@ -58,15 +61,25 @@ private:
 
 class TtpBfs {
 public:
+    // A push happened (children join the tail; the head entries already prefetched stay so).
+    void on_push() { state_ = 0; }
     // A pop from the head happened; `size` is the queue size after it. Appends queue positions
-    // (0 = head) to prefetch.
+    // (0 = head) to prefetch, at most `n` positions deep.
     void on_pop(size_t size, uint32_t n, std::vector<size_t>& out) {
         if (ahead_ > 0) --ahead_;
         for (; ahead_ < n && ahead_ < size; ++ahead_) out.push_back(ahead_);
     }
+    // The same pop under the trend policy: the state advances as DFS's does (S1..S3,
+    // saturating) and picks the depth of `depth`.
+    void on_pop_trend(size_t size, const std::array<uint32_t, 3>& depth, std::vector<size_t>& out) {
+        if (state_ < 3) ++state_;
+        on_pop(size, depth[state_ - 1], out);
+    }
+    int state() const { return state_; }
 
 private:
     size_t ahead_ = 0;  // head entries already prefetched
+    int state_ = 0;     // trend policy: 0 after a push, then S1..S3
 };
 
 // A prefetcher's state per thread, beside the thread's traversal stack in the warp buffer (TTP:

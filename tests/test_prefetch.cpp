@@ -88,6 +88,42 @@ TEST(Ttp, BfsPrefetchesUpToNFromTheHeadOnce) {
     EXPECT_EQ(out, (std::vector<size_t>{}));  // position 0 already prefetched, nothing beyond
 }
 
+// The TTP authors' BFS (vulkan_ray_tracing.cc l.551-568, 662-718): the DFS trend's depths from
+// the queue's head, a push resetting the state. Hand-worked with depths 1, 2, 16 on a queue of 20
+// entries after the first pop: pop 1 (S1) takes position 0; pop 2 (S2) pops that entry and takes
+// positions 0 and 1, neither taken yet; pop 3 (S3) takes positions 1..15 (0 was taken at pop 2);
+// a push resets the state: pop 4 (S1) and pop 5 (S2) take nothing, the 15 and then 14 entries
+// ahead of the head already prefetched covering their depths.
+TEST(Ttp, BfsTrendPolicyTakesTheDfsDepthsFromTheHead) {
+    const std::array<uint32_t, 3> depth{1, 2, 16};
+    TtpBfs bfs;
+    std::vector<size_t> out;
+    bfs.on_pop_trend(20, depth, out);
+    EXPECT_EQ(bfs.state(), 1);
+    EXPECT_EQ(out, (std::vector<size_t>{0}));
+    out.clear();
+    bfs.on_pop_trend(19, depth, out);
+    EXPECT_EQ(out, (std::vector<size_t>{0, 1}));
+    out.clear();
+    bfs.on_pop_trend(18, depth, out);
+    EXPECT_EQ(bfs.state(), 3);
+    std::vector<size_t> s3;
+    for (size_t i = 1; i < 16; ++i) s3.push_back(i);
+    EXPECT_EQ(out, s3);
+    out.clear();
+    bfs.on_push();
+    EXPECT_EQ(bfs.state(), 0);
+    bfs.on_pop_trend(20, depth, out);
+    EXPECT_EQ(bfs.state(), 1);
+    EXPECT_TRUE(out.empty());
+    bfs.on_pop_trend(19, depth, out);
+    EXPECT_TRUE(out.empty());
+    // The fixed policy never leaves S0.
+    TtpBfs fixed;
+    fixed.on_pop(5, 2, out);
+    EXPECT_EQ(fixed.state(), 0);
+}
+
 // Hand-built sequence: sector A prefetched then read (useful), B prefetched then read while
 // still in flight (useful and late), C prefetched and evicted unread (unused).
 TEST(PrefetchAccounting, UsefulLateAndUnusedOnAHandBuiltSequence) {

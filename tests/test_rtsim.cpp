@@ -1447,7 +1447,7 @@ TEST(RtsimConfig, EveryKeyOfEveryPresetIsRead) {
         {{"prefetch.treelet_stride=1024"}, treelet + " --set prefetch.treelet_layout=contiguous"},
         {{"prefetch.treelet_queue_limit=2"}, treelet}, {{"prefetch.treelet_vote_period=64"}, treelet},
         {{"prefetch.ttp_depth_s1=4"}, ttp}, {{"prefetch.ttp_depth_s2=8"}, ttp}, {{"prefetch.ttp_depth_s3=2"}, ttp},
-        {{"prefetch.bfs_n=4"}, ttp + " --traversal bfs"}, {{"prefetch.priority_after=5"}, ttp}, {{"prefetch.queue=1"}, ttp}, {{"prefetch.thread_window=2"}, ttp},
+        {{"prefetch.bfs_n=4"}, ttp + " --traversal bfs"}, {{"prefetch.bfs_policy=fixed|trend"}, ttp + " --traversal bfs"}, {{"prefetch.priority_after=5"}, ttp}, {{"prefetch.queue=1"}, ttp}, {{"prefetch.thread_window=2"}, ttp},
         {{"energy.l1_access_pj=40"}}, {{"energy.l2_access_pj=160"}}, {{"energy.dram_read_pj=1000"}},
         {{"energy.dram_activate_pj=2000"}}, {{"energy.static_w=10"}},
         {{"sim.watchdog=1000"}, "--set workload.shade_latency=200000", true},
