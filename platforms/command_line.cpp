@@ -1,5 +1,7 @@
 #include "command_line.h"
 
+#include <sched.h>
+
 #include <filesystem>
 #include <iostream>
 #include <tuple>
@@ -16,6 +18,12 @@
 namespace po = boost::program_options;
 
 namespace rtu {
+
+unsigned usable_cores() {
+    cpu_set_t set;
+    if (sched_getaffinity(0, sizeof set, &set) == 0) return std::max(1, CPU_COUNT(&set));
+    return std::max(1u, std::thread::hardware_concurrency());
+}
 namespace {
 
 std::pair<int, int> parse_trace_warp(const std::string& s, const HwConfig& hw) {
@@ -132,7 +140,7 @@ RunSpec spec_of(const Args& a, const std::atomic<int>* stop) {
         throw InputError("--merge-segments: " + std::to_string(a.merge_segments.size()) + " files for --sample-segments " +
                          std::to_string(a.sample_segments) + ": give each segment's statistics once");
     if (a.threads < 1 || a.threads > 4096)
-        throw InputError("--threads " + std::to_string(a.threads) + ": the sampling pre-pass takes 1 to 4096 threads");
+        throw InputError("--threads " + std::to_string(a.threads) + ": allowed are 1 to 4096 threads");
     // Outputs are checked before anything runs: a bad path should not wait for the simulation.
     for (const auto& [option, path] : {std::pair<const char*, std::string>{"--stats", a.stats}, {"--image", a.image},
                                        {"--hits", a.hits}, {"--vcd", a.vcd}, {"--dump-bvh", a.dump_bvh},
@@ -171,7 +179,7 @@ RunSpec spec_of(const Args& a, const std::atomic<int>* stop) {
     run.sample_segments = uint32_t(a.sample_segments);
     if (a.segment) run.sample_segment = uint32_t(*a.segment);
     run.sample_plan = a.sample_plan;
-    run.sample_threads = unsigned(a.threads);
+    run.threads = unsigned(a.threads);
     run.vcd = vcd_base(a.vcd);
     if (!a.trace_warp.empty()) std::tie(run.trace_sm, run.trace_warp) = parse_trace_warp(a.trace_warp, spec.hw);
     run.keep_rays = !a.hits.empty() || a.verify;  // else memory for the rays in flight only
@@ -202,8 +210,9 @@ std::optional<int> parse_command_line(int argc, char** argv, Args& a) {
         "             [--width W --height H --spp N --bounces B --seed S] [--traversal dfs|bfs|treelet] [--flatten]\n"
         "             [--fidelity functional|at|lt|interval] [--config NAME|FILE] [--set KEY=VALUE]... [--quantum CYCLES]\n"
         "             [--prefetcher none|ttp|park|treelet|perfect-up|perfect-down]\n"
-        "             [--sample RATE [--sample-seed S] [--sample-unchecked] [--threads N]\n"
+        "             [--sample RATE [--sample-seed S] [--sample-unchecked]\n"
         "              [--sample-plan FILE] [--sample-segments K [--segment I | --merge-segments FILE...]]] [--check-error N]\n"
+        "             [--threads N]\n"
         "             [--stats FILE.json] [--image FILE.png] [--vcd FILE] [--trace-warp SM:WARP] [--verify] [--quiet]\n"
         "             [--dump-bvh FILE] [--dump-rays FILE] [--dump-hits FILE]\n"
         "       rtsim --stats-schema | --help\n"
@@ -249,7 +258,8 @@ std::optional<int> parse_command_line(int argc, char** argv, Args& a) {
         ("merge-segments", po::value(&a.merge_segments)->multitoken(),
          "with --sample-segments K and the same frame options: merge the K segments' --stats files into the frame's estimate")
         ("threads", po::value(&a.threads)->default_value(a.threads),
-         "threads for --sample's functional pre-pass (the simulation itself runs on one; results do not depend on it)")
+         "threads of the functional pass, --verify's checks against Embree and --sample's pre-pass (default: the cores this "
+         "process may use; the timing fidelities simulate on one; results do not depend on it)")
         ("check-error", po::value<uint64_t>()->notifier([&a](uint64_t v) {
              if (v == 0) throw po::validation_error(po::validation_error::invalid_option_value, "check-error", "0");
              a.check_error = v;

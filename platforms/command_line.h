@@ -13,6 +13,9 @@
 
 namespace rtu {
 
+// The cores this process may run on (its CPU affinity mask; at least 1).
+unsigned usable_cores();
+
 struct Args {
     std::string scene = "wknd", assets, workload = "pt", rays, hits, traversal = "dfs", fidelity = "functional";
     std::string stats, image, config = "mobile", vcd, trace_warp, prefetcher;
@@ -29,9 +32,10 @@ struct Args {
     std::optional<uint64_t> segment;  // --segment I
     std::vector<std::string> merge_segments;  // --merge-segments FILE...
     std::string sample_plan;  // --sample-plan FILE
-    // The sampling pre-pass's threads; read as signed so that a negative number is an error,
-    // not a wrap to 4 billion.
-    long long threads = std::max(1u, std::thread::hardware_concurrency());
+    // Threads of the functional work (the functional pass, --verify's checks, the sampling
+    // pre-pass); default: the cores this process may run on. Read as signed so that a negative
+    // number is an error, not a wrap to 4 billion.
+    long long threads = usable_cores();
     std::vector<std::string> stray;  // arguments that are no option's
     bool verify = false, quiet = false, flatten = false;
 };

@@ -2,7 +2,12 @@
 
 #include <chrono>
 #include <cmath>
+#include <algorithm>
+#include <atomic>
+#include <exception>
+#include <functional>
 #include <iostream>
+#include <thread>
 
 namespace rtu {
 namespace {
@@ -38,6 +43,43 @@ std::optional<Agreement> verify_ray(const Scene& scene, const EmbreeReference& r
     return classify(scene, ray, hit, ref, ref_closest);
 }
 
+namespace {
+
+// Runs body(i) for every i in [0, n) on `threads` threads (the calling one among them), in
+// blocks of 64 taken in turn; rethrows the first exception any of them threw. Each i writes only
+// its own slots, so the results do not depend on the thread count.
+void for_each_index(unsigned threads, size_t n, const std::function<void(size_t)>& body) {
+    constexpr size_t kBlock = 64;
+    std::atomic<size_t> next{0};
+    auto work = [&] {
+        for (size_t b; (b = next.fetch_add(kBlock)) < n;)
+            for (size_t i = b; i < std::min(n, b + kBlock); ++i) body(i);
+    };
+    const unsigned helpers = unsigned(std::min<size_t>(threads, (n + kBlock - 1) / kBlock)) - (n > 0);
+    std::vector<std::thread> pool;
+    std::vector<std::exception_ptr> failed(helpers + 1);
+    for (unsigned t = 0; t < helpers; ++t)
+        pool.emplace_back([&, t] {
+            try {
+                work();
+            } catch (...) {
+                failed[t + 1] = std::current_exception();
+                next = n;  // the others stop at their next block
+            }
+        });
+    try {
+        work();
+    } catch (...) {
+        failed[0] = std::current_exception();
+        next = n;
+    }
+    for (std::thread& th : pool) th.join();
+    for (const std::exception_ptr& e : failed)
+        if (e) std::rethrow_exception(e);
+}
+
+}  // namespace
+
 FunctionalResult run_functional(const Scene& scene, const BvhImage& image, Workload& workload, const FunctionalOptions& opt,
                                 const EmbreeReference* reference) {
     FunctionalResult res;
@@ -46,37 +88,56 @@ FunctionalResult run_functional(const Scene& scene, const BvhImage& image, Workl
     std::vector<uint32_t> next_seq;
     auto last_report = Clock::now();
     const auto start = Clock::now();
+    // A wave is traced in batches: the batch's rays (and their checks against Embree) on
+    // opt.threads threads, each into its own slot; then, on this thread and in the wave's order,
+    // the results are recorded and handed to the workload, whose follow-up rays (random numbers
+    // included) therefore come out the same for every thread count. A stop ends the run between
+    // two batches.
+    constexpr size_t kBatch = 16384;
+    std::vector<TraceResult> traced;
+    std::vector<std::optional<Agreement>> agreed;
     while (!wave.empty() && !res.interrupted) {
         next.clear();
-        for (const WorkRay& w : wave) {
-            if (opt.stop.requested()) {  // a clean point: between two rays
+        for (size_t b = 0; b < wave.size(); b += kBatch) {
+            if (opt.stop.requested()) {  // a clean point: between two batches
                 res.interrupted = true;
                 break;
             }
-            const uint64_t index = res.rays.size();
-            const bool valid = is_valid_ray(w.ray);
-            const TraceResult tr = trace_ray(image, w.ray, opt.order, opt.treelets);
-            res.rays.push_back(w.ray);
-            res.hits.push_back(tr.hit);
-            if (next_seq.size() <= w.path) next_seq.resize(w.path + 1, 0);
-            res.path.push_back(w.path);
-            res.seq.push_back(next_seq[w.path]++);
-            if (!valid) ++res.invalid_rays;
-            res.nodes_visited += tr.nodes_visited;
-            res.max_nodes_per_ray = std::max(res.max_nodes_per_ray, tr.nodes_visited);
-            res.hit_count += tr.hit.hit;
-            if (reference && valid) {
-                const auto a = verify_ray(scene, *reference, w.ray, tr.hit);
-                if (!a) {
-                    ++res.verify.skipped;
-                } else {
-                    ++res.verify.by_class[size_t(*a)];
-                    ++res.verify.rays;
-                    if (*a == Agreement::Mismatch && res.mismatch_rays.size() < 100) res.mismatch_rays.push_back(index);
+            const size_t n = std::min(kBatch, wave.size() - b);
+            traced.assign(n, TraceResult{});
+            agreed.assign(n, std::nullopt);
+            for_each_index(std::max(1u, opt.threads), n, [&](size_t i) {
+                const Ray& ray = wave[b + i].ray;
+                traced[i] = trace_ray(image, ray, opt.order, opt.treelets);
+                if (reference && is_valid_ray(ray)) agreed[i] = verify_ray(scene, *reference, ray, traced[i].hit);
+            });
+            for (size_t i = 0; i < n; ++i) {
+                const WorkRay& w = wave[b + i];
+                const TraceResult& tr = traced[i];
+                const uint64_t index = res.rays.size();
+                const bool valid = is_valid_ray(w.ray);
+                res.rays.push_back(w.ray);
+                res.hits.push_back(tr.hit);
+                if (next_seq.size() <= w.path) next_seq.resize(w.path + 1, 0);
+                res.path.push_back(w.path);
+                res.seq.push_back(next_seq[w.path]++);
+                if (!valid) ++res.invalid_rays;
+                res.nodes_visited += tr.nodes_visited;
+                res.max_nodes_per_ray = std::max(res.max_nodes_per_ray, tr.nodes_visited);
+                res.hit_count += tr.hit.hit;
+                if (reference && valid) {
+                    const std::optional<Agreement>& a = agreed[i];
+                    if (!a) {
+                        ++res.verify.skipped;
+                    } else {
+                        ++res.verify.by_class[size_t(*a)];
+                        ++res.verify.rays;
+                        if (*a == Agreement::Mismatch && res.mismatch_rays.size() < 100) res.mismatch_rays.push_back(index);
+                    }
                 }
+                workload.complete(w, tr.hit, next);
             }
-            workload.complete(w, tr.hit, next);
-            if (opt.progress && (index & 1023) == 0 && seconds_since(last_report) > 2.0) {
+            if (opt.progress && seconds_since(last_report) > 2.0) {
                 last_report = Clock::now();
                 std::cerr << "\r  traced " << res.rays.size() << " rays (" << wave.size() << " in this wave), "
                           << uint64_t(res.rays.size() / std::max(1e-9, seconds_since(start))) << " rays/s   " << std::flush;

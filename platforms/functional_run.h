@@ -1,6 +1,7 @@
 // The functional fidelity: every ray traced to completion by our per-thread traversal over the
 // BVH image, wave by wave (a workload's follow-up rays form the next wave), optionally checked
-// ray by ray against Embree.
+// ray by ray against Embree. Rays are traced on FunctionalOptions::threads threads; the rays,
+// hits and counts are the same for every thread count.
 #pragma once
 #include <cstdint>
 #include <optional>
@@ -18,6 +19,7 @@ namespace rtu {
 struct FunctionalOptions {
     TraversalOrder order = TraversalOrder::DFS;
     const Treelets* treelets = nullptr;  // required for TraversalOrder::Treelet
+    unsigned threads = 1;         // threads tracing (and checking) each batch of a wave; results do not depend on it
     bool progress = false;        // rays done and rate on stderr every few seconds
     bool measure_speed = false;   // afterwards, re-trace all rays with ours (and Embree's, if given) for rays/s
     StopRequest stop;             // requested: the run ends between two rays (FunctionalResult::interrupted)

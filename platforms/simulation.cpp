@@ -260,6 +260,7 @@ void functional_stage(const WorkloadStage& w, const BvhImage& image, const Embre
         fo.treelets = treelets.get();
     }
     fo.progress = w.spec.run.progress;
+    fo.threads = w.spec.run.threads;
     fo.measure_speed = w.spec.verify;
     fo.stop = w.spec.run.stop;
     const FunctionalResult r = run_functional(w.scene, image, *w.workload, fo, reference);

@@ -34,7 +34,7 @@ struct TimingOptions {
     // Sampled runs: makes fresh instances of the workload for the functional pre-pass
     // (docs/sampling.md), one per thread; empty: the plain stratified estimate.
     std::function<std::unique_ptr<Workload>()> sample_workload;
-    unsigned sample_threads = 1;
+    unsigned threads = 1;  // --threads: the functional pass, --verify's checks and the sampling pre-pass
     // A sample split into independent segments (docs/sampling.md, "Segments"): this run simulates
     // segment `sample_segment` of `sample_segments` (SamplingOptions::segment).
     uint32_t sample_segments = 1;
