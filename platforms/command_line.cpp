@@ -8,6 +8,7 @@
 
 #include <boost/program_options.hpp>
 
+#include "build_info.h"
 #include "child_runs.h"
 #include "fidelity_run.h"
 #include "model/prefetcher.h"
@@ -151,8 +152,9 @@ RunSpec spec_of(const Args& a, const std::atomic<int>* stop) {
     check_distinct_outputs(a);
     if (!(a.sample > 0.0 && a.sample <= 1.0))
         throw InputError("--sample " + std::to_string(a.sample) + ": the share of the frame to simulate must be in (0, 1]");
-    // Configuration first: a bad key should not wait for a scene to load.
-    if (timing) {
+    // Configuration first, whatever the fidelity: a bad key should not wait for a scene to load,
+    // and a functional run's statistics record the configuration too.
+    {
         try {
             spec.config = Config::load(a.config);
             for (const auto& s : a.sets) spec.config.set(s);
@@ -191,6 +193,7 @@ RunSpec spec_of(const Args& a, const std::atomic<int>* stop) {
     spec.dump_rays = a.dump_rays;
     spec.dump_hits = a.dump_hits;
     spec.check_error = a.check_error;
+    spec.command_line = a.command_line;
     // Child runs of rtsim itself: the segments of a split sample, one after another, and the
     // check's two runs.
     if (a.sample_segments > 1 && !a.segment && a.merge_segments.empty())
@@ -215,7 +218,7 @@ std::optional<int> parse_command_line(int argc, char** argv, Args& a) {
         "             [--threads N]\n"
         "             [--stats FILE.json] [--image FILE.png] [--vcd FILE] [--trace-warp SM:WARP] [--verify] [--quiet]\n"
         "             [--dump-bvh FILE] [--dump-rays FILE] [--dump-hits FILE]\n"
-        "       rtsim --stats-schema | --help\n"
+        "       rtsim --stats-schema | --help | --version\n"
         "exit status: 0 ok, 1 a check failed (--verify mismatches), 2 bad input, 3 internal error,\n"
         "             130 / 143 stopped by SIGINT / SIGTERM (statistics so far written, \"interrupted\": true)\n";
     if (argc <= 1) {
@@ -226,6 +229,7 @@ std::optional<int> parse_command_line(int argc, char** argv, Args& a) {
     po::options_description desc(usage + "options");
     desc.add_options()
         ("help,h", "this help")
+        ("version", "print rtsim's version and the git commit it was built from, and exit")
         ("stats-schema", "print every key --stats can write (key, unit, description; tab-separated) and exit")
         ("scene", po::value(&a.scene)->default_value(a.scene), "wknd, cornell, ship, bunny, ref, bath, sprng, party, a mesh file or a folder")
         ("assets", po::value(&a.assets), "asset folder of a LumiBench scene (e.g. ../shared/scenes/bunny)")
@@ -276,6 +280,7 @@ std::optional<int> parse_command_line(int argc, char** argv, Args& a) {
         ("dump-hits", po::value(&a.dump_hits), "write the golden 48-byte hit records of the --dump-rays rays")
         ("flatten", po::bool_switch(&a.flatten), "scenes whose meshes are all placed as they are: one single-level BVH instead of TLAS + BLAS")
         ("quiet,q", po::bool_switch(&a.quiet), "no progress or summary");
+    a.command_line.assign(argv, argv + argc);
     try {
         po::variables_map vm;
         const po::parsed_options parsed = po::command_line_parser(argc, argv).options(desc).run();
@@ -283,6 +288,10 @@ std::optional<int> parse_command_line(int argc, char** argv, Args& a) {
         a.stray = po::collect_unrecognized(parsed.options, po::include_positional);
         if (vm.count("help")) {
             std::cout << desc << "\n";
+            return 0;
+        }
+        if (vm.count("version")) {
+            std::cout << "rtsim " << rtunit_version() << " (commit " << rtunit_commit() << ")\n";
             return 0;
         }
         if (vm.count("stats-schema")) {

@@ -37,11 +37,12 @@ struct Args {
     // number is an error, not a wrap to 4 billion.
     long long threads = usable_cores();
     std::vector<std::string> stray;  // arguments that are no option's
+    std::vector<std::string> command_line;  // argv as given, for the statistics' provenance
     bool verify = false, quiet = false, flatten = false;
 };
 
 // Reads the command line into `a`. Returns the exit status when rtsim is done without a run
-// (--help, --stats-schema: 0; no arguments or a malformed option: 2, said on stderr), else
+// (--help, --version, --stats-schema: 0; no arguments or a malformed option: 2, said on stderr), else
 // nothing.
 std::optional<int> parse_command_line(int argc, char** argv, Args& a);
 

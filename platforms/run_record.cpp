@@ -2,6 +2,7 @@
 
 #include <set>
 
+#include "build_info.h"
 #include "sample_segments.h"
 #include "timing_stats.h"
 
@@ -42,6 +43,13 @@ void write_error_estimate(StatsOut& out, const ErrorEstimate& e) {
 }  // namespace
 
 void write_stats(StatsOut& out, const RunRecord& r) {
+    {
+        StatsOut p = out.child("provenance", "what made this file, to reproduce it from the file alone (with config)");
+        p.value("version", std::string(rtunit_version()), "", "rtsim's version");
+        p.value("commit", std::string(rtunit_commit()), "", "the git commit rtsim was built from (-dirty: with changes to it; unknown: not built from a git checkout)");
+        p.json()["command_line"] = r.command_line ? nlohmann::ordered_json(*r.command_line) : nlohmann::ordered_json::array();
+        p.note("command_line", "", "the program and its arguments, as given");
+    }
     out.value("scene", r.scene, "", "the scene's name");
     out.value("workload", r.workload, "", "primary, pt, ao, sh, or rays (a ray file)");
     out.value("fidelity", fidelity_name(r.fidelity), "", "functional, at, lt or interval");
@@ -106,8 +114,10 @@ void write_stats(StatsOut& out, const RunRecord& r) {
         StatsOut rate = out.child("simulation_rate", "the simulator's speed");
         rate.value("rays_per_s", r.run_s > 0 ? double(r.rays) / r.run_s : 0.0, "rays / s", "rays over time_s.run");
         rate.value("cycles_per_s", r.run_s > 0 ? double(t.cycles) / r.run_s : 0.0, "cycles / s", "cycles over time_s.run");
+    }
+    if (r.config) {
         out.json()["config"] = r.config->to_json();
-        out.note("config", "", "the effective configuration (platforms/configs/*.json keys)");
+        out.note("config", "", "the effective configuration (platforms/configs/*.json keys; a functional run reads none of them)");
         std::set<std::string> groups;
         for (const Config::KeyInfo& k : Config::keys()) {
             for (size_t dot = k.name.find('.'); dot != std::string::npos; dot = k.name.find('.', dot + 1))

@@ -37,6 +37,7 @@ struct RunRecord {
     ErrorEstimate error;                   // timing runs
     const HwConfig* hw = nullptr;
     const Config* config = nullptr;
+    const std::vector<std::string>* command_line = nullptr;  // the provenance's (none: not written)
     double sample_rate = 1.0;
     const VerifyCounts* verify = nullptr;  // --verify
     const std::vector<uint64_t>* mismatch_rays = nullptr;

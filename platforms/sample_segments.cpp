@@ -55,18 +55,19 @@ void write_segment(StatsOut& out, const TimingResult& r, uint32_t index, uint32_
     o.value("payloads_allocated", r.payloads_allocated, "payloads", "TLM payloads the pool made (AT, LT; 0: interval)");
     o.json()["warps"] = segment_warps_json(r.segment_records);
     o.note("warps", "", kSegmentWarpsNote);
-    o.value("checksum", std::string(), "", "FNV-1a (64 bits, hex) of the file's compact JSON with this key empty and without time_s, simulation_rate and memory_mb: a file changed since it was written is refused by --merge-segments");
+    o.value("checksum", std::string(), "", "FNV-1a (64 bits, hex) of the file's compact JSON with this key empty and without time_s, simulation_rate, memory_mb and provenance: a file changed since it was written is refused by --merge-segments");
 }
 
 namespace {
 // The checksum of `doc` with its segment.checksum emptied (the key keeps its place: ordered JSON
 // dumps keys in the order written, and numbers print back as they were read, integers exactly and
 // doubles by nlohmann's shortest round-trip form, so a reader's dump is the writer's) and without
-// the keys that measure the host (wall time, speed, memory), which the merge does not read: the
-// same segment run twice has the same checksum.
+// the keys that measure the host (wall time, speed, memory) or name the run (its provenance: the
+// command line), which the merge does not read: the same segment run twice, or with another
+// --stats or --sample-plan path, has the same checksum.
 std::string segment_checksum(nlohmann::ordered_json doc) {
     doc["segment"]["checksum"] = "";
-    for (const char* host : {"time_s", "simulation_rate", "memory_mb"}) doc.erase(host);
+    for (const char* host : {"time_s", "simulation_rate", "memory_mb", "provenance"}) doc.erase(host);
     const std::string text = doc.dump();
     char hex[17];
     std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(fnv1a(text.data(), text.size())));

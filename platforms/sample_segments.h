@@ -31,7 +31,7 @@ void write_segment(StatsOut& out, const TimingResult& r, uint32_t index, uint32_
 
 // Seals a segment's finished statistics: `segment.checksum` becomes the 64-bit FNV-1a of the
 // document's compact JSON with that key empty and without the host's keys (time_s,
-// simulation_rate, memory_mb), so that a file whose bytes are not the ones
+// simulation_rate, memory_mb) and the provenance, so that a file whose bytes are not the ones
 // written is refused by the merge (a flipped digit in a counter or a residence changes the
 // estimate silently otherwise). Nothing to do for a document without a "segment" section.
 void seal_segment(nlohmann::ordered_json& stats);

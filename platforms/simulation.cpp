@@ -326,7 +326,6 @@ void timing_stage(const WorkloadStage& w, const BvhImage& image, Ran& ran, RunRe
     rec.hits = t.summary.hits;
     rec.timing = &t;
     rec.hw = &spec.hw;
-    rec.config = &spec.config;
     rec.sample_rate = spec.run.sample_rate;
     rec.interrupted = t.interrupted;
 }
@@ -425,6 +424,8 @@ RunResult run_simulation(const RunSpec& spec, std::ostream* log) {
     RunRecord rec;
     rec.fidelity = spec.run.fidelity;
     rec.order = spec.run.order;
+    rec.config = &spec.config;
+    rec.command_line = &spec.command_line;
     const Scene scene = load_stage(spec, rec);
     const BvhImage image = build_stage(spec, scene, rec, log);
     WorkloadStage w{spec, scene, spec.rays.empty() ? parse_workload(spec.workload) : WorkloadKind::RayFile, {}, nullptr};

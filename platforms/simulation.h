@@ -49,6 +49,7 @@ struct RunSpec {
     std::vector<std::string> merge_segments;
     std::function<std::vector<SegmentRun>()> run_segments;
     bool verify = false;       // every ray against Embree (robust mode)
+    std::vector<std::string> command_line;  // the program's arguments, for the statistics' provenance
     // The SoC peripheral's inputs (docs/peripheral.md): the BVH image's bytes, the workload's
     // first rays as 48-byte ray records, and their golden 48-byte hit records (RunResult::files).
     std::string dump_bvh, dump_rays, dump_hits;

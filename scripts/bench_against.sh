@@ -46,9 +46,9 @@ import json, sys, pathlib
 d, reps, kinds = pathlib.Path(sys.argv[1]), int(sys.argv[2]), [k.split("|")[0] for k in sys.argv[3:]]
 print("| run | old s (fastest) | new s (fastest) | new / old | spread of old runs | same statistics |")
 print("|---|---|---|---|---|---|")
-def stats(k, side):  # the first repetition's statistics, wall times and host memory aside
+def stats(k, side):  # the first repetition's statistics, wall times, host memory and provenance aside
     j = json.loads((d / f"{k}.{side}.1.json").read_text())
-    for key in ("time_s", "simulation_rate", "memory_mb"):
+    for key in ("time_s", "simulation_rate", "memory_mb", "provenance"):
         j.pop(key, None)
     return j
 for k in kinds:

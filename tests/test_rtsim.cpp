@@ -1,6 +1,8 @@
 // The rtsim program as users and scripts see it: file formats, exit status, messages.
 #include <gtest/gtest.h>
 
+#include <regex>
+
 #include <fcntl.h>
 #include <signal.h>
 #include <sys/resource.h>
@@ -16,6 +18,7 @@
 #include <cstring>
 #include <filesystem>
 #include <functional>
+#include <regex>
 #include <iterator>
 #include <map>
 #include <set>
@@ -65,7 +68,7 @@ bool exists(const std::string& p) { return std::filesystem::exists(p); }
 // A run's statistics without what measures the host rather than the model: wall-clock time, the
 // simulation rate and the peak resident memory, which vary from run to run.
 void erase_host_keys(nlohmann::json& j) {
-    for (const char* k : {"time_s", "simulation_rate", "memory_mb"}) j.erase(k);
+    for (const char* k : {"time_s", "simulation_rate", "memory_mb", "provenance"}) j.erase(k);
 }
 
 }  // namespace
@@ -139,6 +142,8 @@ TEST(Rtsim, BadInputExitsWithStatus2AndWritesNothing) {
         {"--scene cornell --fidelity at --set l1.size_kb=0", "l1.size_kb"},
         {"--scene cornell --fidelity at --set l1.bogus=1", "unknown key 'l1.bogus'"},
         {"--scene cornell --fidelity at --config nope.json", "nope.json"},
+        // Every option is checked whatever the fidelity (a functional run once took any --config).
+        {"--scene cornell --config nope.json", "nope.json"},
         {"--scene cornell --vcd x.vcd", "need --fidelity at, lt or interval"},
         {"--scene cornell --fidelity interval --vcd x.vcd", "need --fidelity at or lt"},
         {"--scene cornell --fidelity interval --prefetcher park", "prefetchers none and ttp, not 'park'"},
@@ -382,6 +387,42 @@ TEST(Rtsim, MainJobWritesStatsAndImage) {
     int files = 0;
     for (const auto& e : std::filesystem::directory_iterator(dir.path())) files += e.path().filename().string()[0] == '.';
     EXPECT_EQ(files, 0);
+}
+
+// Provenance: --version names the commit, and a statistics file holds the version, the commit,
+// the command line and the resolved configuration, so that the run can be made again from the
+// file alone: rerunning its command line gives the same statistics.
+TEST(Rtsim, AStatisticsFileReproducesItsRun) {
+    TempDir dir;
+    const Result v = rtsim(dir, "--version");
+    ASSERT_EQ(v.status, 0);
+    const std::regex version(R"(rtsim (\d+\.\d+\.\d+) \(commit (([0-9a-f]{12}(-dirty)?)|unknown)\)\n)");
+    std::smatch m;
+    ASSERT_TRUE(std::regex_match(v.out, m, version)) << v.out;
+    const std::string args = "--scene cornell --width 16 --height 16 --fidelity interval --set l1.size_kb=16 --seed 3 -q --stats ";
+    ASSERT_EQ(rtsim(dir, args + dir.file("a.json")).status, 0);
+    auto a = nlohmann::json::parse(read_text(dir.file("a.json")));
+    EXPECT_EQ(a["provenance"]["version"], m[1].str());
+    EXPECT_EQ(a["provenance"]["commit"], m[2].str());
+    EXPECT_EQ(a["config"]["l1"]["size_kb"], 16);
+    // The command line as given, program first; rerun with another --stats.
+    const auto& cl = a["provenance"]["command_line"];
+    ASSERT_GE(cl.size(), 2u);
+    std::string again;
+    for (size_t i = 1; i < cl.size(); ++i) {
+        std::string arg = cl[i].get<std::string>();
+        if (arg == dir.file("a.json")) arg = dir.file("b.json");
+        again += (i > 1 ? " " : "") + arg;
+    }
+    EXPECT_EQ(again, args + dir.file("b.json"));
+    ASSERT_EQ(rtsim(dir, again).status, 0);
+    auto b = nlohmann::json::parse(read_text(dir.file("b.json")));
+    EXPECT_EQ(a["provenance"]["commit"], b["provenance"]["commit"]);
+    for (auto* j : {&a, &b}) erase_host_keys(*j);  // the provenance too: the command lines differ in --stats
+    EXPECT_EQ(a, b);
+    // A functional run records its configuration too.
+    ASSERT_EQ(rtsim(dir, "--scene cornell --width 8 --height 8 --config paper -q --stats " + dir.file("f.json")).status, 0);
+    EXPECT_EQ(nlohmann::json::parse(read_text(dir.file("f.json")))["config"]["l1"]["size_kb"], 32);
 }
 
 TEST(Rtsim, SameSeedSameStatistics) {
@@ -894,7 +935,7 @@ TEST(RtsimSampling, SegmentsMergedEqualTheSingleProcessRun) {
             for (auto& w : j["segment"]["warps"]) w.erase(6), w.erase(5);
             j["segment"]["checksum"] = "";
             nlohmann::ordered_json model = j;
-            for (const char* k : {"time_s", "simulation_rate", "memory_mb"}) model.erase(k);
+            for (const char* k : {"time_s", "simulation_rate", "memory_mb", "provenance"}) model.erase(k);
             uint64_t h = 14695981039346656037ull;
             for (const unsigned char c : model.dump()) h = (h ^ c) * 1099511628211ull;
             char hex[17];

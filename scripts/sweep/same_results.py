@@ -18,7 +18,7 @@ sys.path.insert(0, str(HERE))
 import manifest  # noqa: E402
 
 WALL_CLOCK_COLUMNS = {"wall_s", "sim_s"}
-HOST = ("time_s", "simulation_rate", "speed", "memory_mb.peak_resident")
+HOST = ("time_s", "simulation_rate", "speed", "memory_mb.peak_resident", "provenance")
 
 
 def host_keys():
