@@ -14,6 +14,7 @@ packages=(
   libstb-dev                # PNG output
   libabsl-dev               # Abseil flat hash maps (cache tags, MSHRs)
   parallel                  # the sweeps' local engine, which the test suite runs (tests/sweep_*_test.sh)
+  python3-pandas            # statistics as DataFrames (scripts/python/rtunit_stats): the main job's summary and its test
 )
 # --reports: also what the experiment reports need (matplotlib).
 if [ "${1:-}" = "--reports" ]; then packages+=(python3-matplotlib gawk); fi

@@ -64,6 +64,7 @@ rm "$work/out/results.csv"
 "$src/scripts/sweep/run.sh" --jobs 1 "$work/m.tsv" "$work/out" 2>"$work/err3" || rc=$?
 check "resuming runs the interrupted run again and exits 0 (got $rc)" '[ "$rc" = 0 ]'
 check "whose stats are now whole" '! grep -q "\"interrupted\": true" "$work/out/t/r3.json"'
-check "and results.csv has it with exit 0" 'grep -q "^t/r3,t,r3,0," "$work/out/results.csv"'
+check "results.csv has the swept key, the seed, as a column after the run's id" 'head -1 "$work/out/results.csv" | grep -q "^id,experiment,scene,params.seed,exit,"'
+check "and r3 with its seed and exit 0" 'grep -q "^t/r3,t,r3,3,0," "$work/out/results.csv"'
 echo "$pass passed, $fail failed"
 [ "$fail" = 0 ]

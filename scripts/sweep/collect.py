@@ -1,6 +1,10 @@
 #!/usr/bin/env python3
 """Collects the stats of every run of a sweep manifest into OUTDIR/results.csv (one row per run,
-in manifest order; a run without stats is listed with its exit status).
+in manifest order; a run without stats is listed with its exit status). After the run's id come
+the swept keys, one column each: every configuration key (as `config.l1.size_kb` is written,
+`l1.size_kb`), frame parameter (`params.width`) and run option (`fidelity`, `traversal`,
+`workload`) whose value differs between the sweep's finished runs, read from their statistics
+files, so that results group by parameter without the manifest.
 
 Every column names a statistic by its key in `rtsim --stats-schema` (RTSIM: the rtsim binary,
 default build/rtsim). The collector stops with status 1 if a column's key is not in the schema (a
@@ -62,6 +66,28 @@ def get(d, path):
     return d
 
 
+def settings(j):
+    """A run's settings, by key: its fidelity, traversal and workload, its frame parameters and
+    every configuration key."""
+    out = {k: j.get(k) for k in ("fidelity", "traversal", "workload")}
+    out.update({f"params.{k}": v for k, v in j.get("params", {}).items()})
+
+    def walk(d, prefix):
+        for k, v in d.items():
+            if isinstance(v, dict):
+                walk(v, f"{prefix}{k}.")
+            else:
+                out[f"{prefix}{k}"] = json.dumps(v) if isinstance(v, list) else v
+    walk(j.get("config", {}), "")
+    return out
+
+
+def swept(all_settings):
+    """The keys whose value is not the same in every run that has settings (in first-seen order)."""
+    keys = list(dict.fromkeys(k for s in all_settings for k in s))
+    return [k for k in keys if len({json.dumps(s.get(k)) for s in all_settings}) > 1]
+
+
 def schema_keys():
     rtsim = os.environ.get("RTSIM", str(HERE.parent.parent / "build" / "rtsim"))
     out = subprocess.run([rtsim, "--stats-schema"], capture_output=True, text=True, check=True).stdout
@@ -74,7 +100,7 @@ def main():
     unknown = [path for _, path in ALWAYS + TIMING + SAMPLED if path not in keys]
     if unknown:
         sys.exit(f"collect: statistics not in rtsim --stats-schema: {', '.join(unknown)}")
-    rows, missing = [], []
+    rows, missing, run_settings = [], [], []
     for run in manifest.read(manifest_path):
         rid = run.id
         exp, scene = rid.split("/", 1)
@@ -85,6 +111,8 @@ def main():
             row["exit"], row["wall_s"] = st["exit"], st["wall_s"]
         if manifest.finished(outdir, run):
             j = json.loads(stats.read_text())
+            row["_settings"] = settings(j)
+            run_settings.append(row["_settings"])
             wanted = ALWAYS + (TIMING if "timing" in j else []) + (SAMPLED if "sampling" in j.get("timing", {}) else [])
             for name, path in wanted:
                 try:
@@ -100,7 +128,11 @@ def main():
         rows.append(row)
     if missing:
         sys.exit("collect: runs lack statistics they must have:\n  " + "\n  ".join(missing[:20]))
-    fields = ["id", "experiment", "scene", "exit", "wall_s"] + [c for c, _ in ALWAYS + TIMING] + \
+    sweep_keys = swept(run_settings)
+    for r in rows:
+        r.update({k: r.get("_settings", {}).get(k, "") for k in sweep_keys})
+        r.pop("_settings", None)
+    fields = ["id", "experiment", "scene"] + sweep_keys + ["exit", "wall_s"] + [c for c, _ in ALWAYS + TIMING] + \
              ["cycles_simulated", "rate_simulated"] + DERIVED
     with open(outdir / "results.csv", "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=fields)
