@@ -340,6 +340,17 @@ TEST(Rtsim, DumpsAreThePeripheralsInputsAndHits) {
     const Result t = rtsim(dir, "--scene cornell --rays " + rays + " --traversal treelet --dump-hits " + dir.file("t.hits"));
     EXPECT_EQ(t.status, 2) << t.err;
     EXPECT_FALSE(exists(dir.file("t.hits")));
+    // --rays reads the dumped records back: the same rays, so the same hits file (the invalid
+    // one warned about as a record). Other binary data is refused naming the file.
+    const Result back = rtsim(dir, "--scene cornell --rays " + rec + " --hits " + dir.file("back.csv"));
+    ASSERT_EQ(back.status, 0) << back.err;
+    EXPECT_EQ(read_text(dir.file("back.csv")), read_text(hits));
+    EXPECT_NE(back.err.find("c.rays:5: record 5: invalid ray"), std::string::npos) << back.err;
+    const std::string garbage = write_text(dir.file("garbage.bin"), std::string("\x7f" "ELF\0\0\0\x01", 8) + std::string(42, 'x'));
+    const Result bad = rtsim(dir, "--scene cornell --rays " + garbage + " --stats " + dir.file("bad.json"));
+    EXPECT_EQ(bad.status, 2) << bad.err;
+    EXPECT_NE(bad.err.find("garbage.bin: binary data of 50 bytes"), std::string::npos) << bad.err;
+    EXPECT_FALSE(exists(dir.file("bad.json")));
 }
 
 TEST(Rtsim, NoArgumentsPrintsAUsageThatNamesEveryOption) {

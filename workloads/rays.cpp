@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <iostream>
 #include <sstream>
 
@@ -94,8 +95,48 @@ std::unique_ptr<Workload> make_scene_workload(WorkloadKind kind, const Scene& sc
     return lumibench::make_workload(kind, scene, p);
 }
 
+namespace {
+
+// The 48-byte ray records of rtsim --dump-rays and the peripheral (include/rtunit/rtu_regs.h,
+// rtu_ray): org[3], tnear, dir[3], tfar as little-endian floats at bytes 0-31, flags at 32 (bit 0:
+// any hit; any other bit makes the ray invalid), user at 36, reserved at 40-47.
+constexpr size_t kRayRecordBytes = 48;
+
+std::vector<RayFileEntry> read_ray_records(const std::string& path, const std::string& bytes) {
+    if (bytes.size() % kRayRecordBytes != 0)
+        throw InputError(path + ": binary data of " + std::to_string(bytes.size()) +
+                         " bytes: neither a text ray file (one ray a line) nor a whole number of 48-byte ray records "
+                         "(rtsim --dump-rays, include/rtunit/rtu_regs.h)");
+    std::vector<RayFileEntry> rays(bytes.size() / kRayRecordBytes);
+    for (size_t i = 0; i < rays.size(); ++i) {
+        const char* r = bytes.data() + i * kRayRecordBytes;
+        float v[8];
+        uint32_t flags;
+        std::memcpy(v, r, sizeof v);
+        std::memcpy(&flags, r + 32, sizeof flags);
+        RayFileEntry& e = rays[i];
+        e.line = i + 1;
+        e.ray.org = {v[0], v[1], v[2]};
+        e.ray.tnear = v[3];
+        e.ray.dir = {v[4], v[5], v[6]};
+        e.ray.tfar = v[7];
+        if (flags & 1u) e.ray.query = Query::Any;
+        if (flags & ~1u) e.problem = "record " + std::to_string(i + 1) + ": flags " + std::to_string(flags) + " (only bit 0, any hit, is defined)";
+        else if (!is_valid_ray(e.ray)) e.problem = "record " + std::to_string(i + 1) + ": invalid ray (a NaN, an infinite origin or direction, a zero direction, or tnear < 0 or > tfar)";
+        e.valid = e.problem.empty();
+        if (!e.valid) e.ray.org.x = NAN;
+    }
+    return rays;
+}
+
+}  // namespace
+
 std::vector<RayFileEntry> read_ray_file(const std::string& path) {
-    std::istringstream in(read_file_maybe_gz(path));
+    const std::string bytes = read_file_maybe_gz(path);
+    // A NUL byte never occurs in a text ray file and always in a ray record (its reserved words):
+    // such a file is read as records, or refused.
+    if (bytes.find('\0') != std::string::npos) return read_ray_records(path, bytes);
+    std::istringstream in(bytes);
     std::vector<RayFileEntry> rays;
     std::string line;
     size_t lineno = 0;

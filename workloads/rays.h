@@ -73,7 +73,9 @@ void check_workload_params(const WorkloadParams& p);
 // The scene's workload as LumiBench's application casts it (workloads/lumibench.h).
 std::unique_ptr<Workload> make_scene_workload(WorkloadKind kind, const Scene& scene, const WorkloadParams& p);
 
-// Ray file (shared/interfaces.md): one ray per line "ox oy oz dx dy dz tnear tfar [closest|any]".
+// Ray file (shared/interfaces.md): one ray per line "ox oy oz dx dy dz tnear tfar [closest|any]";
+// or 48-byte ray records as rtsim --dump-rays writes them (a file with a NUL byte; `line` is then
+// the record's number). Binary data that is not whole records is an InputError.
 struct RayFileEntry {
     Ray ray;
     size_t line = 0;
