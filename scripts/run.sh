@@ -28,9 +28,9 @@ given --config || defaults+=(--config paper)
 
 echo "run: [1/4] setting up (Debian packages; nothing to do when they are installed)" >&2
 scripts/setup.sh --reports
-echo "run: [2/4] building rtunit (Release) in build/" >&2
+echo "run: [2/4] building rtsim (Release) in build/" >&2
 # CMake's progress lines and any error; the whole output with scripts/build.sh.
-if ! scripts/build.sh 2>&1 | sed -u -n -E '/^\[ *[0-9]+%\]|[Ee]rror/s/^/  /p'; then
+if ! scripts/build.sh rtsim 2>&1 | sed -u -n -E '/^\[ *[0-9]+%\]|[Ee]rror/s/^/  /p'; then
   echo "run: the build failed (the lines above); scripts/build.sh shows its whole output" >&2
   exit 1
 fi

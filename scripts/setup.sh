@@ -16,13 +16,19 @@ packages=(
   parallel                  # the sweeps' local engine, which the test suite runs (tests/sweep_*_test.sh)
   python3-pandas            # statistics as DataFrames (scripts/python/rtunit_stats): the main job's summary and its test
 )
-# --reports: also what the experiment reports need (matplotlib).
-if [ "${1:-}" = "--reports" ]; then packages+=(python3-matplotlib gawk); fi
-# --slurm: also Slurm's controller, node daemon and client (scripts/sweep/test_slurm.sh starts a
-# throw-away cluster with them; the packages' own services are not started).
-if [ "${1:-}" = "--slurm" ]; then packages+=(slurmctld slurmd slurm-client); fi
-# --fuzz: also clang and its libFuzzer runtime (scripts/fuzz.sh).
-if [ "${1:-}" = "--fuzz" ]; then packages+=(clang libclang-rt-14-dev); fi
+# Options, any number of them together (scripts/setup.sh --reports --fuzz):
+#   --reports: also what the experiment reports need (matplotlib);
+#   --slurm: also Slurm's controller, node daemon and client (scripts/sweep/test_slurm.sh starts a
+#            throw-away cluster with them; the packages' own services are not started);
+#   --fuzz: also clang and its libFuzzer runtime (scripts/fuzz.sh).
+for option in "$@"; do
+  case $option in
+    --reports) packages+=(python3-matplotlib gawk) ;;
+    --slurm) packages+=(slurmctld slurmd slurm-client) ;;
+    --fuzz) packages+=(clang libclang-rt-14-dev) ;;
+    *) echo "setup: unknown option '$option' (allowed: --reports, --slurm, --fuzz, any of them together)" >&2; exit 2 ;;
+  esac
+done
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
@@ -52,7 +58,18 @@ apt_step() {  # apt_step NAME ARGS...: runs apt-get ARGS, retrying while a lock 
   log=$(mktemp)
   while true; do
     rc=0
-    $SUDO apt-get -o DPkg::Lock::Timeout=10 "$@" >"$log" 2>&1 || rc=$?
+    # apt-get in the background, its last line of progress said every 15 s (a large install
+    # takes minutes, and a silent terminal looks hung).
+    $SUDO apt-get -o DPkg::Lock::Timeout=10 "$@" >"$log" 2>&1 &
+    local pid=$! said=$SECONDS
+    while kill -0 "$pid" 2>/dev/null; do
+      sleep 1
+      if [ $((SECONDS - said)) -ge 15 ]; then
+        said=$SECONDS
+        echo "setup: $name: working ($((SECONDS - start)) s): $(grep -a -E '^(Get:|Unpacking|Setting up|Fetched)' "$log" | tail -n 1 | cut -c1-100)" >&2
+      fi
+    done
+    wait "$pid" || rc=$?
     if [ $rc -eq 0 ]; then rm -f "$log"; return 0; fi
     if grep -q -e "Could not get lock" -e "Unable to acquire the dpkg frontend lock" -e "Unable to lock directory" "$log" \
        && [ "$waited" -lt "$wait_limit" ]; then
