@@ -103,6 +103,7 @@ FunctionalResult run_functional(const Scene& scene, const BvhImage& image, Workl
                 res.interrupted = true;
                 break;
             }
+            if (opt.snapshot && opt.stop.snapshot_requested()) opt.snapshot(res);
             const size_t n = std::min(kBatch, wave.size() - b);
             traced.assign(n, TraceResult{});
             agreed.assign(n, std::nullopt);

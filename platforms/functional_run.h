@@ -4,6 +4,7 @@
 // hits and counts are the same for every thread count.
 #pragma once
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <vector>
 
@@ -16,13 +17,18 @@
 
 namespace rtu {
 
+struct FunctionalResult;
+
 struct FunctionalOptions {
     TraversalOrder order = TraversalOrder::DFS;
     const Treelets* treelets = nullptr;  // required for TraversalOrder::Treelet
     unsigned threads = 1;         // threads tracing (and checking) each batch of a wave; results do not depend on it
     bool progress = false;        // rays done and rate on stderr every few seconds
     bool measure_speed = false;   // afterwards, re-trace all rays with ours (and Embree's, if given) for rays/s
-    StopRequest stop;             // requested: the run ends between two rays (FunctionalResult::interrupted)
+    StopRequest stop;             // requested: the run ends between two batches of rays (FunctionalResult::interrupted)
+    // Called with the result so far when stop.snapshot_requested() (SIGUSR1), between two
+    // batches; the run then goes on. Empty: not asked for.
+    std::function<void(const FunctionalResult&)> snapshot;
 };
 
 struct FunctionalResult {

@@ -34,6 +34,7 @@ public:
     uint64_t stopped_at = 0;
     std::string report;
     std::function<std::string()> describe_stuck;
+    std::function<void(uint64_t)> snapshot;  // the statistics so far at a core cycle (SIGUSR1)
     TimingProgress progress;
 
 private:
@@ -46,6 +47,7 @@ private:
             sc_stop();
             return;
         }
+        if (snapshot && stop_.snapshot_requested()) snapshot(c);
         if (c > driver_.last_progress() + watchdog_) {
             stuck = true;
             report = "no ray retired for " + std::to_string(c - driver_.last_progress()) + " cycles (sim.watchdog = " +
@@ -106,6 +108,33 @@ struct GpuPlatform::Impl {
           gpu("gpu", c, img, o.order, driver, o.fidelity, treelets.get(), o.check_protocol),
           core(gpu.core_clock()),
           mem(gpu.memory_clock()) {}
+
+    // The statistics of what has been simulated up to core cycle `cycles` (`partial`: rays are
+    // still in flight, and no estimate is made). At the run's end (`at_end`) each thread's cycles
+    // are first accounted up to `cycles`; a snapshot on the way (SIGUSR1) only reads, so that it
+    // changes nothing: its threads' cycles count up to each one's last change of status (in LT an
+    // RT unit runs ahead of the monitor's time, and accounting to an earlier cycle would change
+    // the final figures).
+    TimingResult so_far(uint64_t cycles, bool partial, bool at_end) {
+        TimingResult r;
+        r.cycles_simulated = r.cycles = cycles;
+        r.interrupted = partial;
+        take_estimate(r, sample.get(), driver);
+        r.rays = driver.results();
+        r.summary = driver.summary();
+        r.counts.cycles_simulated = cycles;
+        r.counts.core_period_fs = double(core.period_fs());
+        r.counts.memory_cycles = double(cycles) * double(core.period_fs()) / double(mem.period_fs());
+        for (const auto& u : gpu.rt_units()) {
+            if (at_end) u->core().account(cycles);
+            r.counts.rt.push_back(u->core().stats());
+        }
+        for (const auto& c : gpu.l1()) r.counts.l1.push_back(c->tags().counts());
+        for (const auto& c : gpu.l2()) r.counts.l2.push_back(c->tags().counts());
+        r.counts.dram = gpu.dram().stats();
+        r.payloads_allocated = gpu.pool().allocated();
+        return r;
+    }
 };
 
 // rtsim's platform: the RT complex fed by the workload driver, the monitor, the waveforms. Its
@@ -202,6 +231,11 @@ GpuPlatform::GpuPlatform(const HwConfig& cfg, const BvhImage& image, Workload& w
     // The monitor's period does not depend on tracing (see sample_windows).
     const uint64_t period = std::max<uint64_t>(1, std::min<uint64_t>(cfg.watchdog / 4, 100000));
     m.monitor.reset(new Monitor("monitor", m.driver, m.core, cfg.watchdog, opt.progress, period, opt.stop));
+    if (opt.snapshot)
+        m.monitor->snapshot = [this](uint64_t c) {
+            Impl& i = *impl_;
+            i.opt.snapshot(i.so_far(std::max(i.driver.last_progress(), c), true, false));
+        };
     m.monitor->describe_stuck = [this]() {
         std::string s;
         for (const auto& u : impl_->gpu.rt_units()) {
@@ -251,33 +285,16 @@ GpuPlatform::~GpuPlatform() {
 TimingResult GpuPlatform::run() {
     Impl& m = *impl_;
     sc_start();
-    TimingResult r;
     m.monitor->progress.finish();
     // The frame ends when its last ray retires (the monitor may wake once more after that).
-    r.cycles_simulated = r.cycles = m.driver.last_progress();
-    r.interrupted = m.monitor->interrupted;
-    if (r.interrupted) r.cycles_simulated = r.cycles = std::max(r.cycles, m.monitor->stopped_at);
-    take_estimate(r, m.sample.get(), m.driver);
+    TimingResult r = m.so_far(m.monitor->interrupted ? std::max(m.driver.last_progress(), m.monitor->stopped_at) : m.driver.last_progress(),
+                              m.monitor->interrupted, true);
     r.stuck = m.monitor->stuck;
     r.stuck_report = m.monitor->report;
     if (!r.stuck && !r.interrupted && !m.driver.finished()) {
         r.stuck = true;
         r.stuck_report = "simulation ran out of events with rays outstanding; oldest trace: " + m.driver.oldest_in_flight();
     }
-    r.rays = m.driver.results();
-    r.summary = m.driver.summary();
-
-    r.counts.cycles_simulated = r.cycles_simulated;
-    r.counts.core_period_fs = double(m.core.period_fs());
-    r.counts.memory_cycles = double(r.cycles_simulated) * double(m.core.period_fs()) / double(m.mem.period_fs());
-    for (const auto& u : m.gpu.rt_units()) {
-        u->core().account(r.cycles_simulated);
-        r.counts.rt.push_back(u->core().stats());
-    }
-    for (const auto& c : m.gpu.l1()) r.counts.l1.push_back(c->tags().counts());
-    for (const auto& c : m.gpu.l2()) r.counts.l2.push_back(c->tags().counts());
-    r.counts.dram = m.gpu.dram().stats();
-    r.payloads_allocated = m.gpu.pool().allocated();
     for (const auto& c : m.gpu.checkers()) {
         r.protocol_transactions += c->transactions();
         r.protocol_violations.insert(r.protocol_violations.end(), c->violations().begin(), c->violations().end());

@@ -31,10 +31,31 @@ TimingResult run_interval(const HwConfig& cfg, const BvhImage& image, Workload& 
     uint64_t end = 0;
     TimingProgress progress(opt.progress);
     bool interrupted = false;
+    // The statistics of what has been simulated: the frame's up to the last ray retired, `end`
+    // (`partial`: rays are still in flight; no estimate is made). Reads the model, changes nothing.
+    auto so_far = [&](uint64_t upto, bool partial) {
+        TimingResult r;
+        r.cycles = r.cycles_simulated = upto;  // the frame ends when its last ray retires
+        r.interrupted = partial;
+        take_estimate(r, sample.get(), driver);
+        r.rays = driver.results();
+        r.summary = driver.summary();
+        r.counts.rt = gpu.rt_stats();
+        for (const CacheBookings& c : gpu.l1()) r.counts.l1.push_back(c.tags().counts());
+        for (const CacheBookings& c : gpu.l2()) r.counts.l2.push_back(c.tags().counts());
+        r.counts.dram = gpu.dram_stats();
+        r.counts.cycles_simulated = upto;
+        r.counts.core_period_fs = double(gpu.core_period_fs());
+        r.counts.memory_cycles = double(gpu.memory_cycle(upto));
+        return r;
+    };
     for (uint64_t step = 1;; ++step) {
-        if ((step & 4095) == 0 && opt.stop.requested()) {  // a clean point: between two events
-            interrupted = true;
-            break;
+        if ((step & 4095) == 0) {  // a clean point: between two events
+            if (opt.stop.requested()) {
+                interrupted = true;
+                break;
+            }
+            if (opt.snapshot && opt.stop.snapshot_requested()) opt.snapshot(so_far(end, true));
         }
         const uint64_t slot_at = free_slots.empty() ? ~0ull : free_slots.top().first, fetch_at = gpu.next_event();
         if (slot_at == ~0ull && fetch_at == ~0ull) break;
@@ -67,19 +88,7 @@ TimingResult run_interval(const HwConfig& cfg, const BvhImage& image, Workload& 
     }
     progress.finish();
 
-    TimingResult r;
-    r.cycles = r.cycles_simulated = end;  // the frame ends when its last ray retires
-    r.interrupted = interrupted;
-    take_estimate(r, sample.get(), driver);
-    r.rays = driver.results();
-    r.summary = driver.summary();
-    r.counts.rt = gpu.rt_stats();
-    for (const CacheBookings& c : gpu.l1()) r.counts.l1.push_back(c.tags().counts());
-    for (const CacheBookings& c : gpu.l2()) r.counts.l2.push_back(c.tags().counts());
-    r.counts.dram = gpu.dram_stats();
-    r.counts.cycles_simulated = end;
-    r.counts.core_period_fs = double(gpu.core_period_fs());
-    r.counts.memory_cycles = double(gpu.memory_cycle(end));
+    TimingResult r = so_far(end, interrupted);
     if (interrupted) return r;  // rays are in flight: the invariants of a whole frame do not hold
     if (!driver.finished() || driver.rays_retired() != driver.rays_issued()) r.invariant_failures.push_back("not every ray retired");
     for (const std::string& f : counter_invariants(r.counts, r.summary)) r.invariant_failures.push_back(f);

@@ -46,6 +46,17 @@ extern "C" void on_stop_signal(int sig) {
     ::raise(sig);
 }
 
+// SIGUSR1 asks for the statistics so far, as gem5's does: the run writes them (the --stats file,
+// replaced whole) at its next clean point and goes on; its end replaces them with the final
+// statistics, and a run that then fails removes them with its other outputs.
+std::atomic<int> snapshot_signal{0};
+extern "C" void on_snapshot_signal(int) { snapshot_signal.store(1, std::memory_order_relaxed); }
+std::string snapshot_written;  // the --stats file a snapshot was written to (empty: none)
+void drop_snapshot() {
+    if (!snapshot_written.empty()) std::remove(snapshot_written.c_str());
+    snapshot_written.clear();
+}
+
 void install_stop_handlers() {
     struct sigaction sa {};
     sa.sa_handler = on_stop_signal;
@@ -54,6 +65,11 @@ void install_stop_handlers() {
     sigaction(SIGINT, &sa, nullptr);
     sigaction(SIGTERM, &sa, nullptr);
     sigaction(SIGHUP, &sa, nullptr);
+    struct sigaction su {};
+    su.sa_handler = on_snapshot_signal;
+    sigemptyset(&su.sa_mask);
+    su.sa_flags = SA_RESTART;
+    sigaction(SIGUSR1, &su, nullptr);
 }
 
 const char* signal_name(int sig) {
@@ -131,6 +147,18 @@ int run(const Args& given) {
         a.sample_plan = (plan_dir->path / "plan.bin").string();
     }
     RunSpec spec = spec_of(a, &stop_signal);
+    spec.run.stop.snapshot = &snapshot_signal;
+    spec.write_snapshot = [&a](const std::string& stats, const std::string& what) {
+        if (a.stats.empty()) {
+            std::cerr << "rtsim: SIGUSR1: " << what << " (no --stats file asked for); the run goes on\n";
+        } else if (is_special_file(a.stats)) {
+            std::cerr << "rtsim: SIGUSR1: " << what << "; " << a.stats << " is not a regular file, so the statistics so far are not written; the run goes on\n";
+        } else {
+            write_file_atomic(a.stats, stats);
+            snapshot_written = a.stats;
+            std::cerr << "rtsim: SIGUSR1: " << what << "; statistics so far written to " << a.stats << " (\"snapshot\": true); the run goes on\n";
+        }
+    };
     // The VCD, which SystemC writes as the run goes, is written under a temporary name and renamed
     // with the other outputs; a run that fails leaves none of them (OutputFiles).
     OutputFiles outputs;
@@ -161,6 +189,7 @@ int run(const Args& given) {
     }
     if (!r.stuck.empty()) {
         // The waveforms are what shows why the model stopped moving: kept; nothing else.
+        drop_snapshot();
         outputs.commit();
         std::cerr << "error: " << r.stuck << (vcd.empty() ? "" : " (waveforms in " + vcd + ")") << "\n";
         return 1;
@@ -208,18 +237,22 @@ int sc_main(int argc, char** argv) {
     try {
         return run(a);
     } catch (const Interrupted&) {
+        drop_snapshot();
         return interrupted();
     } catch (const InputError& e) {
+        drop_snapshot();
         if (stop_signal.load()) return interrupted();
         std::cerr << "rtsim: " << e.what() << "\n";
         return 2;
     } catch (const std::bad_alloc&) {
+        drop_snapshot();
         // The input asked for more than this machine holds; nothing was written (outputs are
         // written whole at the end).
         std::cerr << "rtsim: out of memory for a frame of " << a.width << "x" << a.height << " at " << a.spp
                   << " spp; try a smaller frame, fewer samples per pixel, or --sample\n";
         return 2;
     } catch (const std::exception& e) {
+        drop_snapshot();
         if (stop_signal.load()) return interrupted();
         std::cerr << "rtsim: internal error: " << e.what() << "\n";
         return 3;

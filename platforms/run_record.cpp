@@ -55,8 +55,11 @@ void write_stats(StatsOut& out, const RunRecord& r) {
     out.value("fidelity", fidelity_name(r.fidelity), "", "functional, at, lt or interval");
     out.value("traversal", traversal_name(r.order), "", "dfs, bfs or treelet");
     out.value("interrupted", r.interrupted, "",
-              "stopped by SIGINT, SIGTERM or SIGHUP before the end: every figure is of what was simulated so far, and cycles are the "
-              "cycles simulated, not the frame's (docs/robustness.md)");
+              "stopped by SIGINT, SIGTERM or SIGHUP before the end, or a snapshot: every figure is of what was simulated so far, and "
+              "cycles are the cycles simulated, not the frame's (docs/robustness.md)");
+    out.value("snapshot", r.snapshot, "",
+              "written on SIGUSR1 while the run went on (its end replaces this file with the final statistics); the threads' cycles "
+              "count up to each thread's last change of status");
     if (r.has_params) {
         StatsOut p = out.child("params", "the scene workload's parameters");
         p.value("width", r.params.width, "pixels", "frame width");

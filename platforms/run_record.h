@@ -45,6 +45,7 @@ struct RunRecord {
     uint64_t speed_rays = 0;
     double ours_s = 0, embree_s = 0;
     bool interrupted = false;  // stopped by RunSpec::stop before the end
+    bool snapshot = false;     // the statistics so far of a run that went on (SIGUSR1)
     // One segment of a split sample (--segment): its "segment" section instead of an estimate.
     const std::vector<IdentityKey>* segment_identity = nullptr;
     uint32_t segment = 0, segments = 0;

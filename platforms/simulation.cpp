@@ -249,6 +249,20 @@ struct Ran {
     std::vector<IdentityKey> identity;  // one segment's, for the merge
 };
 
+// A functional result's figures into the record; `verify`: with its checks so far.
+void record_functional(RunRecord& rec, const FunctionalResult& r, bool verify) {
+    rec.nodes_visited = r.nodes_visited;
+    rec.max_nodes = r.max_nodes_per_ray;
+    rec.interrupted = r.interrupted;
+    rec.rays = r.rays.size();
+    rec.invalid = r.invalid_rays;
+    rec.hits = r.hit_count;
+    if (verify) {
+        rec.verify = &r.verify;
+        rec.mismatch_rays = &r.mismatch_rays;
+    }
+}
+
 // Run, functional fidelity: every ray traced, checked against Embree with --verify.
 void functional_stage(const WorkloadStage& w, const BvhImage& image, const EmbreeReference* reference, Ran& ran, RunRecord& rec,
                       RunResult& out) {
@@ -263,6 +277,17 @@ void functional_stage(const WorkloadStage& w, const BvhImage& image, const Embre
     fo.threads = w.spec.run.threads;
     fo.measure_speed = w.spec.verify;
     fo.stop = w.spec.run.stop;
+    // SIGUSR1: the statistics so far, from a copy of the record.
+    if (w.spec.write_snapshot)
+        fo.snapshot = [&w, &rec, reference](const FunctionalResult& so_far) {
+            RunRecord snap = rec;
+            record_functional(snap, so_far, reference != nullptr);
+            snap.interrupted = snap.snapshot = true;
+            nlohmann::ordered_json j;
+            StatsOut out(j);
+            write_stats(out, snap);
+            w.spec.write_snapshot(j.dump(2) + "\n", std::to_string(so_far.rays.size()) + " rays traced so far");
+        };
     const FunctionalResult r = run_functional(w.scene, image, *w.workload, fo, reference);
     out.rays = traced_from(r);
     ran.verify = r.verify;
@@ -271,14 +296,20 @@ void functional_stage(const WorkloadStage& w, const BvhImage& image, const Embre
     rec.speed_rays = out.rays.size();
     rec.ours_s = r.trace_seconds;
     rec.embree_s = r.embree_seconds;
-    rec.nodes_visited = r.nodes_visited;
-    rec.max_nodes = r.max_nodes_per_ray;
-    rec.interrupted = r.interrupted;
-    rec.rays = out.rays.size();
-    for (const TracedRay& t : out.rays) {
-        rec.invalid += !t.valid;
-        rec.hits += t.hit.hit;
-    }
+    record_functional(rec, r, false);
+}
+
+// A timing result's figures into the record.
+void record_timing(RunRecord& rec, const TimingResult& t, const RunSpec& spec) {
+    rec.nodes_visited = t.summary.nodes_visited;
+    rec.max_nodes = t.summary.max_nodes;
+    rec.rays = t.summary.rays;
+    rec.invalid = t.summary.invalid;
+    rec.hits = t.summary.hits;
+    rec.timing = &t;
+    rec.hw = &spec.hw;
+    rec.sample_rate = spec.run.sample_rate;
+    rec.interrupted = t.interrupted;
 }
 
 // Run, a timing fidelity (or the merge of a split sample's segments).
@@ -292,6 +323,18 @@ void timing_stage(const WorkloadStage& w, const BvhImage& image, Ran& ran, RunRe
     // A sampled run traces the whole frame functionally first, with fresh instances of the
     // workload (the run's own one accumulates the simulated image).
     if (spec.run.sample_rate < 1.0) to.sample_workload = [&w] { return w.fresh(); };
+    // SIGUSR1: the statistics so far, from a copy of the record (the run's own is filled at its end).
+    if (spec.write_snapshot)
+        to.snapshot = [&spec, &rec](const TimingResult& so_far) {
+            RunRecord snap = rec;
+            record_timing(snap, so_far, spec);
+            snap.snapshot = true;
+            nlohmann::ordered_json j;
+            StatsOut out(j);
+            write_stats(out, snap);
+            spec.write_snapshot(j.dump(2) + "\n", std::to_string(so_far.summary.rays) + " rays retired and " +
+                                                      std::to_string(so_far.cycles_simulated) + " cycles simulated so far");
+        };
     TimingResult& t = ran.timing;
     const bool merge = spec.run.sample_segments > 1 && spec.run.sample_segment >= spec.run.sample_segments;
     if (merge) {  // the segments ran elsewhere (files) or as child processes: merged into one estimate
@@ -319,15 +362,7 @@ void timing_stage(const WorkloadStage& w, const BvhImage& image, Ran& ran, RunRe
         ran.identity = segment_identity(spec, w.scene.name);
         rec.segment_identity = &ran.identity;
     }
-    rec.nodes_visited = t.summary.nodes_visited;
-    rec.max_nodes = t.summary.max_nodes;
-    rec.rays = t.summary.rays;
-    rec.invalid = t.summary.invalid;
-    rec.hits = t.summary.hits;
-    rec.timing = &t;
-    rec.hw = &spec.hw;
-    rec.sample_rate = spec.run.sample_rate;
-    rec.interrupted = t.interrupted;
+    record_timing(rec, t, spec);
 }
 
 // A timing run's rays against Embree (--verify).

@@ -50,6 +50,9 @@ struct RunSpec {
     std::function<std::vector<SegmentRun>()> run_segments;
     bool verify = false;       // every ray against Embree (robust mode)
     std::vector<std::string> command_line;  // the program's arguments, for the statistics' provenance
+    // On a snapshot request (RunSpec::run.stop, SIGUSR1): the statistics so far as JSON text and a
+    // sentence on what was simulated; the caller writes them. Empty: snapshots are not taken.
+    std::function<void(const std::string& stats, const std::string& what)> write_snapshot;
     // The SoC peripheral's inputs (docs/peripheral.md): the BVH image's bytes, the workload's
     // first rays as 48-byte ray records, and their golden 48-byte hit records (RunResult::files).
     std::string dump_bvh, dump_rays, dump_hits;

@@ -20,6 +20,7 @@
 namespace rtu {
 
 struct Treelets;
+struct TimingResult;
 
 struct TimingOptions {
     Fidelity fidelity = Fidelity::AT;  // run_timing dispatches on it (platforms/fidelity_run.h)
@@ -48,6 +49,10 @@ struct TimingOptions {
     // Requested: the run ends at its next clean point with what it simulated so far
     // (TimingResult::interrupted; AT and LT at the monitor's next wake-up).
     StopRequest stop;
+    // Called with the statistics so far when stop.snapshot_requested() (SIGUSR1), at the same
+    // clean points; the run then goes on, its results unchanged (TimingResult::interrupted is set
+    // in what it is given: the figures of what was simulated so far). Empty: not asked for.
+    std::function<void(const TimingResult&)> snapshot;
 };
 
 struct TimingResult {

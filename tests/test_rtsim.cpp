@@ -1872,6 +1872,61 @@ TEST(Rtsim, SignalsStopTheRunAndKeepWhatItSimulated) {
     }
 }
 
+// SIGUSR1 writes the statistics so far ("snapshot": true, "interrupted": true) into the --stats
+// file and the run goes on; its end replaces them with the final statistics, the same as a run
+// that was never asked (observing changes nothing). The interval fidelity, wknd 640x640: about
+// 5 s, the signal when its progress line shows (after 2 s).
+TEST(Rtsim, Sigusr1WritesTheStatisticsSoFarAndTheRunGoesOn) {
+    TempDir dir;
+    const std::string stats = dir.file("s.json"), err = dir.file("stderr.txt");
+    std::vector<std::string> args = {RTU_RTSIM, "--scene", "wknd", "--fidelity", "interval", "--width", "640", "--height", "640", "--stats", stats};
+    std::vector<char*> argv;
+    for (std::string& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    const pid_t pid = fork();
+    if (pid == 0) {
+        const int fd = ::open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+        const int null = ::open("/dev/null", O_RDWR);
+        dup2(fd, 2);
+        dup2(null, 1);
+        execv(argv[0], argv.data());
+        _exit(127);
+    }
+    int status = 0;
+    bool sent = false, snapshot_seen = false;
+    nlohmann::json snapshot;
+    for (int i = 0; i < 1200 && waitpid(pid, &status, WNOHANG) != pid; ++i) {  // up to 120 s
+        const std::string e = read_text(err);
+        if (!sent && e.find("cycle ") != std::string::npos) {
+            kill(pid, SIGUSR1);
+            sent = true;
+        }
+        if (sent && !snapshot_seen && e.find("SIGUSR1: ") != std::string::npos) {
+            snapshot = nlohmann::json::parse(read_text(stats));  // written whole (renamed) before the line
+            snapshot_seen = true;
+        }
+        usleep(50000);
+    }
+    ASSERT_TRUE(WIFEXITED(status)) << read_text(err);
+    ASSERT_EQ(WEXITSTATUS(status), 0) << read_text(err);
+    ASSERT_TRUE(sent) << "the run finished before its progress line showed: make the frame larger";
+    ASSERT_TRUE(snapshot_seen) << read_text(err);
+    EXPECT_NE(read_text(err).find("the run goes on"), std::string::npos);
+    EXPECT_TRUE(snapshot["snapshot"].get<bool>());
+    EXPECT_TRUE(snapshot["interrupted"].get<bool>());
+    auto final_stats = nlohmann::json::parse(read_text(stats));
+    EXPECT_FALSE(final_stats["snapshot"].get<bool>());
+    EXPECT_GT(snapshot["rays"].get<uint64_t>(), 0u);
+    EXPECT_LT(snapshot["rays"].get<uint64_t>(), final_stats["rays"].get<uint64_t>());
+    EXPECT_LT(snapshot["cycles"].get<uint64_t>(), final_stats["cycles"].get<uint64_t>());
+    EXPECT_LE(snapshot["timing"]["l1"]["demand"]["accesses"].get<uint64_t>(), final_stats["timing"]["l1"]["demand"]["accesses"].get<uint64_t>());
+    const Result plain = rtsim(dir, "--scene wknd --fidelity interval --width 640 --height 640 -q --stats " + dir.file("plain.json"));
+    ASSERT_EQ(plain.status, 0) << plain.err;
+    auto unobserved = nlohmann::json::parse(read_text(dir.file("plain.json")));
+    for (auto* j : {&final_stats, &unobserved}) erase_host_keys(*j);
+    EXPECT_EQ(final_stats, unobserved);
+}
+
 // A second SIGINT ends rtsim at once, by the signal, and leaves no cut VCD behind (neither under
 // its name nor under the temporary one it was written to).
 TEST(Rtsim, ASecondSignalEndsAtOnceAndLeavesNoCutVcd) {
