@@ -37,6 +37,7 @@ public:
         age_[demand.warp] = age;
     }
     PrefetchQueue& prefetches() { return prefetch_; }
+    const PrefetchQueue& prefetches() const { return prefetch_; }
     size_t depth() const { return depth_; }  // demand requests waiting
     bool empty() const { return depth_ == 0 && prefetch_.empty(); }
 

@@ -56,6 +56,18 @@ int RtUnitCore::stack_depth(uint32_t w, uint32_t t) const {
     return int(warps_[w].threads[t].rt.trav.stack().size());
 }
 
+uint32_t RtUnitCore::ready_warps() const {
+    uint32_t n = 0;
+    for (const Warp& w : warps_) n += w.used && w.ready > 0;
+    return n;
+}
+
+int RtUnitCore::ttp_state(uint32_t w, uint32_t t) const {
+    if (w >= warps_.size() || !warps_[w].used || t >= warps_[w].threads.size()) return -1;
+    const PrefetchThreadState& p = warps_[w].threads[t].rt.prefetch;
+    return order_ == TraversalOrder::BFS ? p.bfs.state() : p.dfs.state();
+}
+
 bool RtUnitCore::stack_contains(uint32_t w, uint32_t t, uint64_t addr) const {
     if (w >= warps_.size() || !warps_[w].used || t >= warps_[w].threads.size()) return false;
     for (const StackEntry& e : warps_[w].threads[t].rt.trav.stack())
@@ -263,6 +275,8 @@ void RtUnitCore::finish_math(uint64_t now) {
 void RtUnitCore::schedule_warp(uint64_t now) {
     const int picked = scheduler_.pick([&](uint32_t s) { return warps_[s].used && warps_[s].ready > 0; }, [&](uint32_t s) { return warps_[s].age; });
     if (picked < 0) return;
+    picked_ = picked;
+    picked_at_ = now;
     const uint32_t wi = uint32_t(picked);
     Warp& w = warps_[wi];
     coalescer_.clear();

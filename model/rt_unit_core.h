@@ -85,6 +85,14 @@ public:
     size_t memory_access_queue_depth() const { return maq_.depth(); }
     // Stack depth of thread t of slot w (for waveforms); -1 if empty slot.
     int stack_depth(uint32_t w, uint32_t t) const;
+    // For the waveforms (reading them changes nothing): the warp-buffer slot the warp scheduler
+    // picked in cycle `now` (-1: none), the slots holding a warp with ready threads, the chunks
+    // waiting in the prefetch queue, and the TTP state machine of thread t of slot w (0 after a
+    // push, 1..3 for S1..S3; BFS under the fixed policy: 0; -1 if empty slot).
+    int picked_slot(uint64_t now) const { return picked_at_ == now ? picked_ : -1; }
+    uint32_t ready_warps() const;
+    size_t prefetch_queue_depth() const { return maq_.prefetches().size(); }
+    int ttp_state(uint32_t w, uint32_t t) const;
     // Whether thread t of slot w has the node at `addr` in its stack (tests).
     bool stack_contains(uint32_t w, uint32_t t, uint64_t addr) const;
     // Called for every prefetch chunk a policy generates, at the moment it generates it (tests).
@@ -148,6 +156,8 @@ private:
     Sink sink_{*this};
     std::vector<Warp> warps_;
     WarpScheduler scheduler_;
+    int picked_ = -1;             // the slot last picked, in cycle picked_at_ (waveforms)
+    uint64_t picked_at_ = ~0ull;
     MemoryAccessQueue maq_;
     ResponseFifo fifo_;
     absl::flat_hash_set<uint64_t> prefetch_ids_;  // prefetch chunks in flight

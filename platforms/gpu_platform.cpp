@@ -83,6 +83,9 @@ struct GpuPlatform::Impl {
     // Traced values (sampled into the VCD when tracing is on).
     struct RtTrace {
         int warps = 0, maq = 0, fifo = 0, active = 0;
+        int picked = -1, ready = 0, prefetch_queue = 0;  // the warp scheduler; the prefetch queue
+        int sent = 0, dropped = 0, late = 0;              // TTP's prefetches in the last window
+        uint64_t sent_before = 0, dropped_before = 0, late_before = 0;
     };
     std::vector<RtTrace> rt_trace;
     std::vector<int> l1_mshr, l2_mshr;
@@ -91,7 +94,7 @@ struct GpuPlatform::Impl {
     int dram_queue = 0;
     double dram_bw = 0;
     uint64_t dram_prev_busy = 0;
-    std::vector<int> stack_depth;
+    std::vector<int> stack_depth, ttp_state;
     // The windowed values (caches, DRAM) are sampled by the first RT unit to tick at or after a
     // window's end, so that tracing adds no event of its own. (Until 2026-11-26 an extra timed
     // event at the same time as the model's reordered the kernel's same-time processes and changed
@@ -163,13 +166,23 @@ GpuPlatform::GpuPlatform(const HwConfig& cfg, const BvhImage& image, Workload& w
             sc_trace(m.tf, m.rt_trace[s].maq, p + "memory_access_queue_depth");
             sc_trace(m.tf, m.rt_trace[s].fifo, p + "response_fifo_depth");
             sc_trace(m.tf, m.rt_trace[s].active, p + "active_threads");
+            sc_trace(m.tf, m.rt_trace[s].picked, p + "warp_scheduler.picked_slot");
+            sc_trace(m.tf, m.rt_trace[s].ready, p + "warp_scheduler.ready_warps");
+            sc_trace(m.tf, m.rt_trace[s].prefetch_queue, p + "prefetch_queue_depth");
+            sc_trace(m.tf, m.rt_trace[s].sent, p + "ttp.prefetches_sent_window");
+            sc_trace(m.tf, m.rt_trace[s].dropped, p + "ttp.prefetches_dropped_window");
+            sc_trace(m.tf, m.rt_trace[s].late, p + "ttp.prefetches_late_window");
             RtUnit* unit = m.gpu.rt_units()[s].get();
             Impl::RtTrace* tr = &m.rt_trace[s];
             const bool traced_warp = int(s) == opt.trace_sm;
             if (traced_warp) {
                 m.stack_depth.assign(cfg.warp_size, -1);
-                for (uint32_t t = 0; t < cfg.warp_size; ++t)
-                    sc_trace(m.tf, m.stack_depth[t], p + "warp" + std::to_string(opt.trace_warp) + ".thread" + std::to_string(t) + ".stack_depth");
+                m.ttp_state.assign(cfg.warp_size, -1);
+                for (uint32_t t = 0; t < cfg.warp_size; ++t) {
+                    const std::string thread = p + "warp" + std::to_string(opt.trace_warp) + ".thread" + std::to_string(t);
+                    sc_trace(m.tf, m.stack_depth[t], thread + ".stack_depth");
+                    sc_trace(m.tf, m.ttp_state[t], thread + ".ttp_state");
+                }
             }
             Impl* impl = &m;
             unit->on_cycle = [unit, tr, traced_warp, impl](uint64_t cycle) {
@@ -182,9 +195,14 @@ GpuPlatform::GpuPlatform(const HwConfig& cfg, const BvhImage& image, Workload& w
                 tr->maq = int(c.memory_access_queue_depth());
                 tr->fifo = int(c.response_fifo_depth());
                 tr->active = int(c.active_threads());
+                tr->picked = c.picked_slot(cycle);
+                tr->ready = int(c.ready_warps());
+                tr->prefetch_queue = int(c.prefetch_queue_depth());
                 if (traced_warp)
-                    for (size_t t = 0; t < impl->stack_depth.size(); ++t)
+                    for (size_t t = 0; t < impl->stack_depth.size(); ++t) {
                         impl->stack_depth[t] = c.stack_depth(uint32_t(impl->opt.trace_warp), uint32_t(t));
+                        impl->ttp_state[t] = c.ttp_state(uint32_t(impl->opt.trace_warp), uint32_t(t));
+                    }
             };
         }
         auto trace_caches = [&](const std::vector<std::unique_ptr<Cache>>& caches, std::vector<int>& mshr,
@@ -225,6 +243,21 @@ GpuPlatform::GpuPlatform(const HwConfig& cfg, const BvhImage& image, Workload& w
             const double window_mem = double(cycle - impl->last_sample) * impl->core.period_fs() / double(impl->mem.period_fs());
             impl->dram_bw = double(busy - impl->dram_prev_busy) / (window_mem * impl->cfg.dram.channels);
             impl->dram_prev_busy = busy;
+            // TTP's prefetches per RT unit in the window: sent, dropped (a recent pick of the
+            // thread, a chunk already waiting, a full queue, a deadline passed) and late (a demand
+            // read came while the prefetched sector was on its way, at the unit's L1).
+            for (size_t u = 0; u < impl->rt_trace.size(); ++u) {
+                Impl::RtTrace& tr = impl->rt_trace[u];
+                const PrefetchQueueCounts& q = impl->gpu.rt_units()[u]->core().stats().prefetch_queue;
+                const uint64_t dropped = q.window_dropped + q.duplicates_dropped + q.full_dropped + q.expired_unsent;
+                const uint64_t late = impl->gpu.l1()[u]->tags().counts().prefetched.late;
+                tr.sent = int(q.sent - tr.sent_before);
+                tr.dropped = int(dropped - tr.dropped_before);
+                tr.late = int(late - tr.late_before);
+                tr.sent_before = q.sent;
+                tr.dropped_before = dropped;
+                tr.late_before = late;
+            }
             impl->last_sample = cycle;
         };
     }

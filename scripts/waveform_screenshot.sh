@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Makes waveforms/screenshot.png: a real AT trace (cornell, 32x32 path tracing, warp-buffer slot 0
+# Makes waveforms/screenshot.png: a real AT trace (cornell, 32x32 path tracing with TTP, warp-buffer slot 0
 # of SM 0 traced) opened with waveforms/rtunit.gtkw in GTKWave, zoomed to fit, on a virtual X
 # display (Xvfb), captured with xwd and converted by ImageMagick. Needs build/rtsim and the
 # Debian packages gtkwave xvfb x11-apps imagemagick.
@@ -15,7 +15,7 @@ tmp=$(mktemp -d)
 pids=()
 cleanup() { for p in "${pids[@]}"; do kill "$p" 2>/dev/null || true; done; rm -rf "$tmp"; }
 trap cleanup EXIT
-build/rtsim --scene cornell --fidelity at --width 32 --height 32 --vcd "$tmp/wave.vcd" --trace-warp 0:0 -q
+build/rtsim --scene cornell --fidelity at --prefetcher ttp --width 32 --height 32 --vcd "$tmp/wave.vcd" --trace-warp 0:0 -q
 # A display number of its own: Xvfb writes the one it took to the descriptor given.
 exec 3>"$tmp/display"
 Xvfb -displayfd 3 -screen 0 1600x1000x24 -nolisten tcp >"$tmp/xvfb.log" 2>&1 &
