@@ -128,6 +128,29 @@ TEST(MeshFiles, ObjTrianglesAreNumberedInFileOrderAndPolygonsFanned) {
     EXPECT_EQ(m.material[5], m.material[0]);
 }
 
+// A material library that is not one (3 KB of other text, or binary) is read with a warning that
+// says so: the faces then take the default material, not the file's colours (issue 50).
+TEST(MeshFiles, AGarbageMaterialLibraryIsWarnedAbout) {
+    TempDir dir;
+    const std::string obj = write_text(dir.file("g.obj"), "mtllib g.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl red\nf 1 2 3\n");
+    std::string garbage;
+    for (int i = 0; garbage.size() < 3000; ++i) garbage += "lorem ipsum " + std::to_string(i * 7919 % 1000) + " dolor sit amet\n";
+    write_text(dir.file("g.mtl"), garbage);
+    Scene s;
+    testing::internal::CaptureStderr();
+    ASSERT_EQ(load_mesh_file(s, obj), 0u);
+    const std::string err = testing::internal::GetCapturedStderr();
+    EXPECT_NE(err.find("g.mtl: 98 of 98 statements are not material statements (the first at line 1); they are ignored"), std::string::npos) << err;
+    EXPECT_NE(err.find("g.mtl: no material defined"), std::string::npos) << err;
+    // A real library gives no warning.
+    write_text(dir.file("g.mtl"), "# a comment\nnewmtl red\nKd 0.8 0.1 0.1\nKs 0 0 0\nillum 2\nmap_Kd red.png\n");
+    Scene t;
+    testing::internal::CaptureStderr();
+    ASSERT_EQ(load_mesh_file(t, obj), 0u);
+    EXPECT_EQ(testing::internal::GetCapturedStderr(), "");
+    EXPECT_EQ(t.materials[t.meshes[0].material[0]].albedo, glm::vec3(0.8f, 0.1f, 0.1f));
+}
+
 namespace {
 std::string load_error(const std::string& path) {
     Scene s;

@@ -11,6 +11,7 @@
 #include <iostream>
 #include <array>
 #include <map>
+#include <set>
 #include <string_view>
 #include <type_traits>
 
@@ -113,6 +114,15 @@ void fan(Mesh& m, const std::vector<uint32_t>& poly, uint32_t material) {
 
 // --- OBJ -------------------------------------------------------------------------------------
 
+// The statements of the MTL format (Wavefront's, with the common PBR extensions): anything else
+// in a material library is not one.
+bool is_mtl_statement(std::string_view k) {
+    static const std::set<std::string_view> known = {"newmtl", "Ka", "Kd", "Ks", "Ke", "Kt", "Ns", "Ni", "d", "Tr", "Tf", "illum",
+                                                     "sharpness", "bump", "disp", "decal", "refl", "norm", "Pr", "Pm", "Ps",
+                                                     "Pc", "Pcr", "aniso", "anisor"};
+    return known.count(k) || k.substr(0, 4) == "map_";
+}
+
 // Materials as LumiBench's model loader reads them (RayTracingInVulkan src/Assets/Model.cpp
 // l.68-78): each material of the library becomes a Lambertian of its Kd; every other field (Ks,
 // Ke, Ni, illum, d) is ignored. `order` receives the materials' indices in library order.
@@ -127,13 +137,15 @@ void load_mtl(Scene& scene, const std::string& path, std::map<std::string, uint3
     std::string_view line;
     std::vector<std::string_view> t;
     std::vector<Material> mats;
-    size_t lineno = 0;
+    size_t lineno = 0, statements = 0, unknown = 0, first_unknown = 0;
     while (next_line(data, pos, line)) {
         ++lineno;
         const auto hash = line.find('#');
         if (hash != std::string::npos) line = line.substr(0, hash);
         split(line, t);
         if (t.empty()) continue;
+        ++statements;
+        if (!is_mtl_statement(t[0]) && unknown++ == 0) first_unknown = lineno;
         if (t[0] == "newmtl") {
             mats.push_back(Material{});
             mats.back().name = t.size() > 1 ? std::string(t[1]) : "";
@@ -144,6 +156,15 @@ void load_mtl(Scene& scene, const std::string& path, std::map<std::string, uint3
             mats.back().albedo = v;
         }
     }
+    // A library that is not one (a binary or a text of another kind) is read as no materials or
+    // as a few by chance: said, since the scene's colours then are not the file's. An empty one
+    // (comments only: Blender writes them for objects without faces) is not worth a word.
+    if (data.find('\0') != std::string::npos)
+        std::cerr << "warning: " << path << ": binary data, not a material library; its materials are ignored\n";
+    else if (unknown)
+        std::cerr << "warning: " << path << ": " << unknown << " of " << statements
+                  << " statements are not material statements (the first at line " << first_unknown << "); they are ignored\n";
+    if (mats.empty() && statements > 0) std::cerr << "warning: " << path << ": no material defined (no newmtl line); the faces take the default material\n";
     for (Material& m : mats) {
         const uint32_t i = add_material(scene, m);
         by_name[m.name] = i;
