@@ -429,7 +429,8 @@ TEST(Traversal, SameSeedGivesBitIdenticalResults) {
 }
 
 // Coordinates near the float limit made Embree's SAH costs NaN and its builder abort the process
-// (issue 16); they are bad input, named, and the limit itself builds.
+// (issue 16); they are bad input, named with the limit, which depends on the scene's primitives
+// (sqrt(FLT_MAX / 36 N), at most 1e18: workloads/bvh_builder.cpp), and the limit itself builds.
 TEST(BvhBuilder, CoordinatesBeyondTheBuildersRangeAreInputErrors) {
     auto triangle_at = [](float x) {
         Scene s;
@@ -447,10 +448,24 @@ TEST(BvhBuilder, CoordinatesBeyondTheBuildersRangeAreInputErrors) {
         build_bvh_image(triangle_at(3e38f));
         FAIL() << "a triangle at +-3e38 was built";
     } catch (const InputError& e) {
-        EXPECT_NE(std::string(e.what()).find("mesh 0 (huge.obj): vertex 0 coordinate -3e+38 is beyond +-1e15"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("mesh 0 (huge.obj): vertex 0 coordinate -3e+38 is beyond +-1e+18, the coordinates the BVH "
+                                             "builder takes for a scene of 1 primitives"), std::string::npos) << e.what();
     }
-    const BvhImage image = build_bvh_image(triangle_at(1e15f));
-    EXPECT_EQ(image.stats.triangle_leaves, 1u);
+    EXPECT_EQ(build_bvh_image(triangle_at(1e15f)).stats.triangle_leaves, 1u);
+    EXPECT_EQ(build_bvh_image(triangle_at(1e18f)).stats.triangle_leaves, 1u);  // one triangle: up to the cap
+    // 10,000 triangles (and one instance): sqrt(3.4e38 / (36 x 10,001)) = 3.1e16.
+    Scene many = triangle_at(1.0f);
+    for (int i = 1; i < 10000; ++i) many.meshes[0].triangles.push_back({0, 1, 2}), many.meshes[0].material.push_back(0);
+    many.meshes[0].vertices[1].x = 3e16f;
+    EXPECT_EQ(build_bvh_image(many).stats.triangle_leaves, 10000u);
+    many.meshes[0].vertices[1].x = 1e17f;
+    try {
+        build_bvh_image(many);
+        ADD_FAILURE() << "10,000 triangles reaching 1e17 were built";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("vertex 1 coordinate 1e+17 is beyond +-3.1e+16, the coordinates the BVH builder takes for a "
+                                             "scene of 10000 primitives"), std::string::npos) << e.what();
+    }
 }
 
 // Instances: a transform that places a mesh beyond the builder's range, one that is not finite,
@@ -485,7 +500,7 @@ TEST(BvhBuilder, InstanceTransformsBeyondTheBuildersRangeAreInputErrors) {
         }
     };
     refused(scaled(1e20f), "mesh 0 (tri.obj): instance 1 of it, placed by its transform, reaches coordinate");
-    refused(scaled(1.0f, 3e38f), "beyond +-1e15");
+    refused(scaled(1.0f, 3e38f), "beyond +-1e+18");
     refused(scaled(1.0f, INFINITY), "instance 1 of it has a transform with an entry that is not a finite number");
     refused(scaled(0.0f), "singular transform");
     refused(scaled(1e-39f), "inverse overflows a float");  // a determinant of 1e-117

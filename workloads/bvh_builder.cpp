@@ -205,27 +205,43 @@ namespace {
 
 // Coordinates Embree's builder can take. Its SAH multiplies half-areas of boxes by primitive
 // counts in float: coordinates near the float limit (3e38) make areas infinite and the costs NaN,
-// and a debug assertion in the builder aborts the process (issue 16: a triangle at +-3e38). With
-// every coordinate within 1e15, a box's half-area stays below 1.2e31, and times 10 million
-// primitives below FLT_MAX.
-constexpr float kMaxCoordinate = 1e15f;
+// and a debug assertion in the builder aborts the process (issue 16: a triangle at +-3e38). A box
+// within +-E has a half-area of at most 3 (2E)^2 = 12 E^2; times the primitives N of the scene
+// (a bound on any one build's count) it stays within FLT_MAX with a margin of 3 when
+// E <= sqrt(FLT_MAX / (36 N)): 9.7e14 for 10 million primitives, 3.1e18 for one. Beyond 1e18
+// Debian's Embree takes no ray (|component| <= 1.8e18), so no hit there could be checked: that is
+// the cap. Measured (a triangle of vertices at +-E, rtsim --verify): at 1e15, 1e17 and 1e18 rays
+// near it hit as Embree's do; rays from far away miss it as the modelled hardware's float
+// Moller-Trumbore t overflows (verify class simulator_float_overflow, docs/verification.md).
+float max_coordinate(const Scene& scene) {
+    double n = double(scene.instances.size());
+    for (const Mesh& m : scene.meshes) n += double(m.primitives());
+    return float(std::min(1e18, std::sqrt(3.4028234663852886e38 / (36.0 * std::max(1.0, n)))));
+}
 
 void check_coordinates(const Scene& scene) {
-    auto refuse = [](const Mesh& m, size_t geom, const std::string& what, double v) {
+    const float limit_all = max_coordinate(scene);  // for every coordinate of the scene
+    char limit_text[32];
+    std::snprintf(limit_text, sizeof limit_text, "%.2g", double(limit_all));
+    size_t primitives = 0;
+    for (const Mesh& m : scene.meshes) primitives += m.primitives();
+    auto refuse = [&](const Mesh& m, size_t geom, const std::string& what, double v) {
         char value[32];
         std::snprintf(value, sizeof value, "%g", v);
         throw InputError("mesh " + std::to_string(geom) + (m.name.empty() ? std::string() : " (" + m.name + ")") + ": " + what + " " +
-                         value + " is beyond +-1e15, the coordinates the BVH builder takes (scale the scene down)");
+                         value + " is beyond +-" + limit_text + ", the coordinates the BVH builder takes for a scene of " +
+                         std::to_string(primitives) + " primitives (its SAH's areas times counts must stay finite in float; "
+                         "scale the scene down)");
     };
     for (size_t g = 0; g < scene.meshes.size(); ++g) {
         const Mesh& m = scene.meshes[g];
         for (size_t i = 0; i < m.vertices.size(); ++i)
             for (int a = 0; a < 3; ++a)
-                if (!(std::fabs(m.vertices[i][a]) <= kMaxCoordinate)) refuse(m, g, "vertex " + std::to_string(i) + " coordinate", m.vertices[i][a]);
+                if (!(std::fabs(m.vertices[i][a]) <= limit_all)) refuse(m, g, "vertex " + std::to_string(i) + " coordinate", m.vertices[i][a]);
         for (size_t i = 0; i < m.spheres.size(); ++i) {
             const Sphere& sp = m.spheres[i];
             for (int a = 0; a < 3; ++a)
-                if (!(std::fabs(sp.center[a]) + std::fabs(sp.radius) <= kMaxCoordinate))
+                if (!(std::fabs(sp.center[a]) + std::fabs(sp.radius) <= limit_all))
                     refuse(m, g, "sphere " + std::to_string(i) + " extent", std::fabs(sp.center[a]) + std::fabs(sp.radius));
         }
     }
@@ -246,7 +262,7 @@ void check_coordinates(const Scene& scene) {
         // The box is padded outward by about 2^-20 of its extent: a mesh placed as it is, with
         // vertices at the limit itself, stays within the limit widened by 2^-18.
         const Aabb b = transformed_box(m.bounds(), inst.object_to_world);
-        const float limit = kMaxCoordinate * (1.0f + 0x1p-18f);
+        const float limit = limit_all * (1.0f + 0x1p-18f);
         for (int a = 0; a < 3; ++a)
             if (!(std::fabs(b.lo[a]) <= limit && std::fabs(b.hi[a]) <= limit))
                 refuse(m, inst.mesh, which + " it, placed by its transform, reaches coordinate",

@@ -22,6 +22,7 @@ const char* agreement_name(Agreement a) {
         case Agreement::TErrorBound: return "t_within_error_bound";
         case Agreement::EdgeFloatError: return "edge_within_float_error";
         case Agreement::SimulatorOrder: return "simulator_float_order";
+        case Agreement::SimulatorOverflow: return "simulator_float_overflow";
         case Agreement::Mismatch: return "mismatch";
         case Agreement::Count: break;
     }
@@ -109,8 +110,29 @@ bool starts_on_plane(const Scene& scene, const Ray& r, const Hit& h) {
     return off_plane <= kUlpTolerance * 0x1p-24L * scale;
 }
 
+// Embree's hit `h` is one the TTP authors' simulator cannot take: its float Moller-Trumbore t
+// (moller_trumbore_t) is not a number, and the same arithmetic in double has a product beyond
+// the float range (the numerator of t, or the cross product before it). Identity-placed meshes
+// only (the simulator's t is in object space).
+bool simulator_t_overflows(const Scene& scene, const Ray& r, const Hit& h) {
+    const Mesh& m = scene.meshes.at(h.geom);
+    if (!h.hit || m.procedural() || !is_identity(scene.instance_of(h.geom).object_to_world)) return false;
+    const glm::uvec3& tri = m.triangles.at(h.prim);
+    const glm::vec3 &v0 = m.vertices[tri[0]], &v1 = m.vertices[tri[1]], &v2 = m.vertices[tri[2]];
+    float ft;
+    if (moller_trumbore_t(r.org, r.dir, TriangleLeaf{v0, v1, v2, h.geom, h.prim}, &ft)) return false;
+    const double e1[3] = {double(v1.x) - v0.x, double(v1.y) - v0.y, double(v1.z) - v0.z};
+    const double e2[3] = {double(v2.x) - v0.x, double(v2.y) - v0.y, double(v2.z) - v0.z};
+    const double s[3] = {double(r.org.x) - v0.x, double(r.org.y) - v0.y, double(r.org.z) - v0.z};
+    const double q[3] = {s[1] * e1[2] - s[2] * e1[1], s[2] * e1[0] - s[0] * e1[2], s[0] * e1[1] - s[1] * e1[0]};
+    const double num = e2[0] * q[0] + e2[1] * q[1] + e2[2] * q[2];
+    constexpr double kFloatMax = 3.4028234663852886e38;
+    return std::fabs(num) > kFloatMax || std::fabs(q[0]) > kFloatMax || std::fabs(q[1]) > kFloatMax || std::fabs(q[2]) > kFloatMax;
+}
+
 // One side hits (`h`), the other misses.
 Agreement one_sided(const Scene& scene, const Ray& r, const Hit& h, bool ours_hit) {
+    if (!ours_hit && simulator_t_overflows(scene, r, h)) return Agreement::SimulatorOverflow;
     if (near_bound(r, h.t) || near_start(r, h.t) || starts_on_plane(scene, r, h)) return Agreement::BoundaryT;
     if (has_zero_dir(r)) return Agreement::ZeroDirFace;
     if (ours_hit && !is_sphere(scene, h) && at_vertex(h)) return Agreement::VertexEmbreeMiss;

@@ -30,6 +30,9 @@ enum class Agreement : uint8_t {
     SimulatorOrder,   // another triangle, no farther by the TTP authors' simulator's float t (moller_trumbore_t,
                       // which orders hits), the two exact t's closer together than those float t's errors:
                       // near-coincident surfaces (the ship's double-sided sails) that the float t cannot order
+    SimulatorOverflow,  // Embree hits a triangle whose float t by the TTP authors' simulator (moller_trumbore_t,
+                      // by which rtunit accepts a hit) overflows: its triple product |v2 - v0| |o - v0| |v1 - v0|
+                      // passes 3.4e38 (huge scenes seen from far): the modelled hardware misses it, and so do we
     Mismatch,
     Count
 };
