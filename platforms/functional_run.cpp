@@ -1,9 +1,9 @@
 #include "functional_run.h"
 
-#include <chrono>
-#include <cmath>
 #include <algorithm>
 #include <atomic>
+#include <chrono>
+#include <cmath>
 #include <exception>
 #include <functional>
 #include <iostream>

@@ -154,9 +154,13 @@ int run(const Args& given) {
         } else if (is_special_file(a.stats)) {
             std::cerr << "rtsim: SIGUSR1: " << what << "; " << a.stats << " is not a regular file, so the statistics so far are not written; the run goes on\n";
         } else {
-            write_file_atomic(a.stats, stats);
-            snapshot_written = a.stats;
-            std::cerr << "rtsim: SIGUSR1: " << what << "; statistics so far written to " << a.stats << " (\"snapshot\": true); the run goes on\n";
+            try {  // a snapshot that cannot be written does not end the run
+                write_file_atomic(a.stats, stats);
+                snapshot_written = a.stats;
+                std::cerr << "rtsim: SIGUSR1: " << what << "; statistics so far written to " << a.stats << " (\"snapshot\": true); the run goes on\n";
+            } catch (const std::exception& e) {
+                std::cerr << "rtsim: SIGUSR1: " << what << "; the statistics so far could not be written (" << e.what() << "); the run goes on\n";
+            }
         }
     };
     // The VCD, which SystemC writes as the run goes, is written under a temporary name and renamed

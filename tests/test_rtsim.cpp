@@ -1804,9 +1804,8 @@ struct Stopped {
     std::string err;
 };
 
-// Sends `signal` `times` times (20 ms apart) once `marker` shows in rtsim's messages.
-Stopped stop_rtsim(const TempDir& dir, std::vector<std::string> args, const std::string& marker, int signal, int times = 1) {
-    const std::string err = dir.file("stderr.txt");
+// Starts rtsim with `args` in the background, its stderr to `err`, stdout and stdin /dev/null.
+pid_t spawn_rtsim(const std::string& err, std::vector<std::string> args) {
     args.insert(args.begin(), RTU_RTSIM);
     std::vector<char*> argv;
     for (std::string& s : args) argv.push_back(s.data());
@@ -1821,6 +1820,13 @@ Stopped stop_rtsim(const TempDir& dir, std::vector<std::string> args, const std:
         execv(argv[0], argv.data());
         _exit(127);
     }
+    return pid;
+}
+
+// Sends `signal` `times` times (20 ms apart) once `marker` shows in rtsim's messages.
+Stopped stop_rtsim(const TempDir& dir, std::vector<std::string> args, const std::string& marker, int signal, int times = 1) {
+    const std::string err = dir.file("stderr.txt");
+    const pid_t pid = spawn_rtsim(err, std::move(args));
     int status = 0;
     bool sent = false;
     for (int i = 0; i < 1200 && !sent; ++i) {  // up to 120 s for the marker
@@ -1899,19 +1905,7 @@ TEST(Rtsim, SignalsStopTheRunAndKeepWhatItSimulated) {
 TEST(Rtsim, Sigusr1WritesTheStatisticsSoFarAndTheRunGoesOn) {
     TempDir dir;
     const std::string stats = dir.file("s.json"), err = dir.file("stderr.txt");
-    std::vector<std::string> args = {RTU_RTSIM, "--scene", "wknd", "--fidelity", "interval", "--width", "640", "--height", "640", "--stats", stats};
-    std::vector<char*> argv;
-    for (std::string& a : args) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    const pid_t pid = fork();
-    if (pid == 0) {
-        const int fd = ::open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-        const int null = ::open("/dev/null", O_RDWR);
-        dup2(fd, 2);
-        dup2(null, 1);
-        execv(argv[0], argv.data());
-        _exit(127);
-    }
+    const pid_t pid = spawn_rtsim(err, {"--scene", "wknd", "--fidelity", "interval", "--width", "640", "--height", "640", "--stats", stats});
     int status = 0;
     bool sent = false, snapshot_seen = false;
     nlohmann::json snapshot;
