@@ -4,9 +4,10 @@
 // first job's start, so that its RT complex runs that job exactly as rtsim runs a frame from 0
 // (tlm/rt_complex.h). Times before the epoch are cycle 0.
 #pragma once
-#include <cmath>
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
+#include <cstdio>
 
 #include <systemc>
 
@@ -17,10 +18,24 @@ public:
     // The period in whole ticks of the kernel's time resolution: exact to 1 fs in rtsim (which
     // sets that resolution); a platform with a coarser one (1 ps, SystemC's default) gets the
     // period rounded to it (732.601 ps -> 733 ps at 1365 MHz).
+    // A period the resolution represents more than 1 ppm off (SystemC's default 1 ps: 0.055 % at
+    // 1365 MHz, so that 3,300 cycles of such a clock are 3,302 exact ones) is warned about at
+    // elaboration (report "rtunit/clock"): the cycles of a platform at that resolution drift from
+    // rtsim's without another word.
     explicit ClockDomain(double mhz)
         : tick_fs_(std::llround(sc_core::sc_get_time_resolution().to_seconds() * 1e15)),
           period_ticks_(std::max<int64_t>(1, std::llround(1e9 / mhz / double(tick_fs_)))),
-          period_(sc_core::sc_time::from_value(period_ticks_)) {}
+          period_(sc_core::sc_time::from_value(period_ticks_)) {
+        const double exact_fs = 1e9 / mhz, off = double(period_ticks_ * tick_fs_) / exact_fs - 1.0;
+        if (std::fabs(off) > 1e-6) {
+            char msg[320];
+            std::snprintf(msg, sizeof msg,
+                          "the %g MHz clock's period of %.3f ps is %.3f ps at SystemC's time resolution of %g ps (%+.4f %%: the "
+                          "cycles drift from rtsim's); call sc_core::sc_set_time_resolution(1, sc_core::SC_FS) before elaboration",
+                          mhz, exact_fs / 1e3, double(period_ticks_ * tick_fs_) / 1e3, double(tick_fs_) / 1e3, off * 100.0);
+            SC_REPORT_WARNING("rtunit/clock", msg);
+        }
+    }
     void set_epoch(const sc_core::sc_time& t) { epoch_ = t.value(); }
     sc_core::sc_time epoch() const { return sc_core::sc_time::from_value(epoch_); }
     const sc_core::sc_time& period() const { return period_; }
