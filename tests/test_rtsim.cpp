@@ -63,7 +63,8 @@ std::vector<std::string> lines(const std::string& s) {
 bool exists(const std::string& p) { return std::filesystem::exists(p); }
 
 // A run's statistics without what measures the host rather than the model: wall-clock time, the
-// simulation rate and the peak resident memory, which vary from run to run.
+// simulation rate and the peak resident memory, which vary from run to run; and the provenance,
+// whose command line differs between the runs compared.
 void erase_host_keys(nlohmann::json& j) {
     for (const char* k : {"time_s", "simulation_rate", "memory_mb", "provenance"}) j.erase(k);
 }
