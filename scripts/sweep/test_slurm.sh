@@ -106,7 +106,7 @@ same_frame() {
 import json, sys
 a, b = (json.load(open(p)) for p in sys.argv[1:3])
 for j in (a, b):
-    for k in ("time_s", "simulation_rate", "memory_mb"):
+    for k in ("time_s", "simulation_rate", "memory_mb", "provenance"):  # the host's, and the command line
         j.pop(k)
 sys.exit(0 if a == b and a["timing"]["sampling"]["cycles_ci95"] else 1)
 PY
