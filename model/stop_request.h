@@ -13,7 +13,7 @@ struct StopRequest {
     const std::atomic<int>* flag = nullptr;  // not owned; null: never stops
     bool requested() const { return flag && flag->load(std::memory_order_relaxed) != 0; }
     int signal() const { return flag ? flag->load(std::memory_order_relaxed) : 0; }
-    // A request for the statistics so far, the run going on (rtsim counts SIGUSR1 into it): true
+    // A request for the statistics so far, the run going on (rtsim sets it from SIGUSR1): true
     // once per request, read at the same clean points as a stop.
     std::atomic<int>* snapshot = nullptr;  // not owned; null: never asked
     bool snapshot_requested() const { return snapshot && snapshot->load(std::memory_order_relaxed) != 0 && snapshot->exchange(0) != 0; }

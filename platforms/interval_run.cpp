@@ -31,7 +31,7 @@ TimingResult run_interval(const HwConfig& cfg, const BvhImage& image, Workload& 
     uint64_t end = 0;
     TimingProgress progress(opt.progress);
     bool interrupted = false;
-    // The statistics of what has been simulated: the frame's up to the last ray retired, `end`
+    // The statistics of what has been simulated: the frame's up to the last ray retired, `upto`
     // (`partial`: rays are still in flight; no estimate is made). Reads the model, changes nothing.
     auto so_far = [&](uint64_t upto, bool partial) {
         TimingResult r;
