@@ -4,10 +4,10 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
-#include <exception>
 #include <functional>
 #include <iostream>
-#include <thread>
+
+#include "model/on_threads.h"
 
 namespace rtu {
 namespace {
@@ -45,37 +45,22 @@ std::optional<Agreement> verify_ray(const Scene& scene, const EmbreeReference& r
 
 namespace {
 
-// Runs body(i) for every i in [0, n) on `threads` threads (the calling one among them), in
-// blocks of 64 taken in turn; rethrows the first exception any of them threw. Each i writes only
-// its own slots, so the results do not depend on the thread count.
+// Runs body(i) for every i in [0, n) on `threads` threads (model/on_threads.h), in blocks of 64
+// taken in turn; a thread that throws makes the others stop at their next block. Each i writes
+// only its own slots, so the results do not depend on the thread count.
 void for_each_index(unsigned threads, size_t n, const std::function<void(size_t)>& body) {
     constexpr size_t kBlock = 64;
     std::atomic<size_t> next{0};
-    auto work = [&] {
-        for (size_t b; (b = next.fetch_add(kBlock)) < n;)
-            for (size_t i = b; i < std::min(n, b + kBlock); ++i) body(i);
-    };
-    const unsigned helpers = unsigned(std::min<size_t>(threads, (n + kBlock - 1) / kBlock)) - (n > 0);
-    std::vector<std::thread> pool;
-    std::vector<std::exception_ptr> failed(helpers + 1);
-    for (unsigned t = 0; t < helpers; ++t)
-        pool.emplace_back([&, t] {
-            try {
-                work();
-            } catch (...) {
-                failed[t + 1] = std::current_exception();
-                next = n;  // the others stop at their next block
-            }
-        });
-    try {
-        work();
-    } catch (...) {
-        failed[0] = std::current_exception();
-        next = n;
-    }
-    for (std::thread& th : pool) th.join();
-    for (const std::exception_ptr& e : failed)
-        if (e) std::rethrow_exception(e);
+    const unsigned used = unsigned(std::max<size_t>(1, std::min<size_t>(threads, (n + kBlock - 1) / kBlock)));
+    on_threads(used, [&](unsigned) {
+        try {
+            for (size_t b; (b = next.fetch_add(kBlock)) < n;)
+                for (size_t i = b; i < std::min(n, b + kBlock); ++i) body(i);
+        } catch (...) {
+            next = n;
+            throw;
+        }
+    });
 }
 
 }  // namespace

@@ -3,37 +3,17 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
-#include <exception>
 #include <iostream>
-#include <thread>
 
 #include "model/node_format.h"
+#include "model/on_threads.h"
 
 namespace rtu {
 namespace {
 
-// Runs body(thread, workload) on `threads` threads, each with its own workload, and rethrows the
-// first exception any of them threw.
+// Runs body(thread, workload) on `threads` threads, each with its own workload (model/on_threads.h).
 void on_threads(unsigned threads, PrepassWorkloads& workloads, const std::function<void(unsigned, Workload&)>& body) {
-    auto run = [&](unsigned t) { body(t, workloads.of_thread(t)); };
-    std::vector<std::thread> pool;
-    std::vector<std::exception_ptr> failed(threads);
-    for (unsigned t = 1; t < threads; ++t)
-        pool.emplace_back([&, t] {
-            try {
-                run(t);
-            } catch (...) {
-                failed[t] = std::current_exception();
-            }
-        });
-    try {
-        run(0);
-    } catch (...) {
-        failed[0] = std::current_exception();
-    }
-    for (std::thread& th : pool) th.join();
-    for (const std::exception_ptr& e : failed)
-        if (e) std::rethrow_exception(e);
+    rtu::on_threads(threads, [&](unsigned t) { body(t, workloads.of_thread(t)); });
 }
 
 // Traces shader warp `wi` functionally: per trace, the most nodes one of its rays visits (a
