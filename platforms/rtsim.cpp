@@ -51,11 +51,13 @@ extern "C" void on_stop_signal(int sig) {
 // statistics, and a run that then fails removes them with its other outputs.
 std::atomic<int> snapshot_signal{0};
 extern "C" void on_snapshot_signal(int) { snapshot_signal.store(1, std::memory_order_relaxed); }
-std::string snapshot_written;  // the --stats file a snapshot was written to (empty: none)
-void drop_snapshot() {
-    if (!snapshot_written.empty()) std::remove(snapshot_written.c_str());
-    snapshot_written.clear();
-}
+std::string snapshot_written;  // the --stats file a snapshot is in (empty: none, or the run's own outputs replaced it)
+// At rtsim's end, whatever way it ends: a snapshot the run's outputs did not replace is removed.
+struct DropSnapshot {
+    ~DropSnapshot() {
+        if (!snapshot_written.empty()) std::remove(snapshot_written.c_str());
+    }
+};
 
 void install_stop_handlers() {
     struct sigaction sa {};
@@ -183,6 +185,7 @@ int run(const Args& given) {
         const int sig = stop_signal.load();
         if (!a.stats.empty()) outputs.stage(a.stats, r.stats.dump(2) + "\n");
         outputs.commit();
+        snapshot_written.clear();  // the statistics so far replaced it
         std::cerr << "rtsim: interrupted by " << signal_name(sig) << " after " << r.stats["rays"] << " rays"
                   << (r.stats.contains("cycles") ? " and " + r.stats["cycles"].dump() + " simulated cycles" : std::string()) << "; "
                   << (a.stats.empty() ? std::string("no --stats file asked for")
@@ -193,7 +196,6 @@ int run(const Args& given) {
     }
     if (!r.stuck.empty()) {
         // The waveforms are what shows why the model stopped moving: kept; nothing else.
-        drop_snapshot();
         outputs.commit();
         std::cerr << "error: " << r.stuck << (vcd.empty() ? "" : " (waveforms in " + vcd + ")") << "\n";
         return 1;
@@ -208,6 +210,7 @@ int run(const Args& given) {
     }
     if (!a.stats.empty()) outputs.stage(a.stats, r.stats.dump(2) + "\n");
     outputs.commit();
+    snapshot_written.clear();  // the final statistics replaced it
     if (!a.quiet) print_summary(a, r);
     for (const std::string& f : r.invariant_failures) std::cerr << "error: invariant violated: " << f << "\n";
     if (!r.invariant_failures.empty()) return 1;
@@ -231,6 +234,7 @@ int sc_main(int argc, char** argv) {
     Args a;
     if (const std::optional<int> done = parse_command_line(argc, argv, a)) return *done;
     install_stop_handlers();
+    const DropSnapshot drop_snapshot;
     // A stop that ends the run before anything was simulated (or makes a child process fail)
     // leaves nothing to write: said as such, whatever the error it caused.
     const auto interrupted = [&a] {
@@ -241,22 +245,18 @@ int sc_main(int argc, char** argv) {
     try {
         return run(a);
     } catch (const Interrupted&) {
-        drop_snapshot();
         return interrupted();
     } catch (const InputError& e) {
-        drop_snapshot();
         if (stop_signal.load()) return interrupted();
         std::cerr << "rtsim: " << e.what() << "\n";
         return 2;
     } catch (const std::bad_alloc&) {
-        drop_snapshot();
         // The input asked for more than this machine holds; nothing was written (outputs are
         // written whole at the end).
         std::cerr << "rtsim: out of memory for a frame of " << a.width << "x" << a.height << " at " << a.spp
                   << " spp; try a smaller frame, fewer samples per pixel, or --sample\n";
         return 2;
     } catch (const std::exception& e) {
-        drop_snapshot();
         if (stop_signal.load()) return interrupted();
         std::cerr << "rtsim: internal error: " << e.what() << "\n";
         return 3;

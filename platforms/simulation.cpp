@@ -249,6 +249,16 @@ struct Ran {
     std::vector<IdentityKey> identity;  // one segment's, for the merge
 };
 
+// SIGUSR1: a run's statistics so far, `snap` (a copy of the run's record with what was simulated
+// so far), handed to RunSpec::write_snapshot with `what` says how far the run is.
+void write_snapshot(const RunSpec& spec, RunRecord snap, const std::string& what) {
+    snap.interrupted = snap.snapshot = true;
+    nlohmann::ordered_json j;
+    StatsOut out(j);
+    write_stats(out, snap);
+    spec.write_snapshot(j.dump(2) + "\n", what);
+}
+
 // A functional result's figures into the record; `verify`: with its checks so far.
 void record_functional(RunRecord& rec, const FunctionalResult& r, bool verify) {
     rec.nodes_visited = r.nodes_visited;
@@ -282,11 +292,7 @@ void functional_stage(const WorkloadStage& w, const BvhImage& image, const Embre
         fo.snapshot = [&w, &rec, reference](const FunctionalResult& so_far) {
             RunRecord snap = rec;
             record_functional(snap, so_far, reference != nullptr);
-            snap.interrupted = snap.snapshot = true;
-            nlohmann::ordered_json j;
-            StatsOut out(j);
-            write_stats(out, snap);
-            w.spec.write_snapshot(j.dump(2) + "\n", std::to_string(so_far.rays.size()) + " rays traced so far");
+            write_snapshot(w.spec, snap, std::to_string(so_far.rays.size()) + " rays traced so far");
         };
     const FunctionalResult r = run_functional(w.scene, image, *w.workload, fo, reference);
     out.rays = traced_from(r);
@@ -327,13 +333,9 @@ void timing_stage(const WorkloadStage& w, const BvhImage& image, Ran& ran, RunRe
     if (spec.write_snapshot)
         to.snapshot = [&spec, &rec](const TimingResult& so_far) {
             RunRecord snap = rec;
-            record_timing(snap, so_far, spec);
-            snap.snapshot = true;
-            nlohmann::ordered_json j;
-            StatsOut out(j);
-            write_stats(out, snap);
-            spec.write_snapshot(j.dump(2) + "\n", std::to_string(so_far.summary.rays) + " rays retired and " +
-                                                      std::to_string(so_far.cycles_simulated) + " cycles simulated so far");
+            record_timing(snap, so_far, spec);  // interrupted: so_far is partial
+            write_snapshot(spec, snap, std::to_string(so_far.summary.rays) + " rays retired and " +
+                                           std::to_string(so_far.cycles_simulated) + " cycles simulated so far");
         };
     TimingResult& t = ran.timing;
     const bool merge = spec.run.sample_segments > 1 && spec.run.sample_segment >= spec.run.sample_segments;
