@@ -213,18 +213,16 @@ namespace {
 // the cap. Measured (a triangle of vertices at +-E, rtsim --verify): at 1e15, 1e17 and 1e18 rays
 // near it hit as Embree's do; rays from far away miss it as the modelled hardware's float
 // Moller-Trumbore t overflows (verify class simulator_float_overflow, docs/verification.md).
-float max_coordinate(const Scene& scene) {
-    double n = double(scene.instances.size());
-    for (const Mesh& m : scene.meshes) n += double(m.primitives());
-    return float(std::min(1e18, std::sqrt(3.4028234663852886e38 / (36.0 * std::max(1.0, n)))));
+float max_coordinate(size_t primitives_and_instances) {
+    return float(std::min(1e18, std::sqrt(3.4028234663852886e38 / (36.0 * std::max<double>(1.0, double(primitives_and_instances))))));
 }
 
 void check_coordinates(const Scene& scene) {
-    const float limit_all = max_coordinate(scene);  // for every coordinate of the scene
-    char limit_text[32];
-    std::snprintf(limit_text, sizeof limit_text, "%.2g", double(limit_all));
     size_t primitives = 0;
     for (const Mesh& m : scene.meshes) primitives += m.primitives();
+    const float limit_all = max_coordinate(primitives + scene.instances.size());  // for every coordinate of the scene
+    char limit_text[32];
+    std::snprintf(limit_text, sizeof limit_text, "%.2g", double(limit_all));
     auto refuse = [&](const Mesh& m, size_t geom, const std::string& what, double v) {
         char value[32];
         std::snprintf(value, sizeof value, "%g", v);

@@ -110,17 +110,26 @@ bool starts_on_plane(const Scene& scene, const Ray& r, const Hit& h) {
     return off_plane <= kUlpTolerance * 0x1p-24L * scale;
 }
 
+// The triangle of hit `h` as the traversal's leaf, for the simulator's float t in object space:
+// only for meshes placed as they are, where object space is the world's (false otherwise).
+bool identity_placed_triangle(const Scene& scene, const Hit& h, TriangleLeaf* leaf) {
+    const Mesh& m = scene.meshes.at(h.geom);
+    if (m.procedural() || !is_identity(scene.instance_of(h.geom).object_to_world)) return false;
+    const glm::uvec3& tri = m.triangles.at(h.prim);
+    *leaf = TriangleLeaf{m.vertices[tri[0]], m.vertices[tri[1]], m.vertices[tri[2]], h.geom, h.prim};
+    return true;
+}
+
 // Embree's hit `h` is one the TTP authors' simulator cannot take: its float Moller-Trumbore t
 // (moller_trumbore_t) is not a number, and the same arithmetic in double has a product beyond
 // the float range (the numerator of t, or the cross product before it). Identity-placed meshes
 // only (the simulator's t is in object space).
 bool simulator_t_overflows(const Scene& scene, const Ray& r, const Hit& h) {
-    const Mesh& m = scene.meshes.at(h.geom);
-    if (!h.hit || m.procedural() || !is_identity(scene.instance_of(h.geom).object_to_world)) return false;
-    const glm::uvec3& tri = m.triangles.at(h.prim);
-    const glm::vec3 &v0 = m.vertices[tri[0]], &v1 = m.vertices[tri[1]], &v2 = m.vertices[tri[2]];
+    TriangleLeaf leaf;
+    if (!h.hit || !identity_placed_triangle(scene, h, &leaf)) return false;
+    const glm::vec3 &v0 = leaf.v0, &v1 = leaf.v1, &v2 = leaf.v2;
     float ft;
-    if (moller_trumbore_t(r.org, r.dir, TriangleLeaf{v0, v1, v2, h.geom, h.prim}, &ft)) return false;
+    if (moller_trumbore_t(r.org, r.dir, leaf, &ft)) return false;
     const double e1[3] = {double(v1.x) - v0.x, double(v1.y) - v0.y, double(v1.z) - v0.z};
     const double e2[3] = {double(v2.x) - v0.x, double(v2.y) - v0.y, double(v2.z) - v0.z};
     const double s[3] = {double(r.org.x) - v0.x, double(r.org.y) - v0.y, double(r.org.z) - v0.z};
@@ -208,11 +217,8 @@ std::optional<long double> exact_triangle_t(const Scene& scene, const Ray& ray, 
 // world's, so only those are compared.
 bool simulator_float_order(const Scene& scene, const Ray& ray, const Hit& ours, const Hit& other) {
     auto float_t = [&](const Hit& h, float* t) {
-        const Mesh& m = scene.meshes.at(h.geom);
-        if (m.procedural() || !is_identity(scene.instance_of(h.geom).object_to_world)) return false;
-        const glm::uvec3& tri = m.triangles.at(h.prim);
-        const TriangleLeaf leaf{m.vertices[tri[0]], m.vertices[tri[1]], m.vertices[tri[2]], h.geom, h.prim};
-        return moller_trumbore_t(ray.org, ray.dir, leaf, t);
+        TriangleLeaf leaf;
+        return identity_placed_triangle(scene, h, &leaf) && moller_trumbore_t(ray.org, ray.dir, leaf, t);
     };
     float fo, fr;
     if (!float_t(ours, &fo) || !float_t(other, &fr) || !(fo <= fr)) return false;
