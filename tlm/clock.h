@@ -18,16 +18,16 @@ public:
     // The period in whole ticks of the kernel's time resolution: exact to 1 fs in rtsim (which
     // sets that resolution); a platform with a coarser one (1 ps, SystemC's default) gets the
     // period rounded to it (732.601 ps -> 733 ps at 1365 MHz).
-    // A period the resolution represents more than 1 ppm off (SystemC's default 1 ps: 0.055 % at
-    // 1365 MHz, so that 3,300 cycles of such a clock are 3,302 exact ones) is warned about at
-    // elaboration (report "rtunit/clock"): the cycles of a platform at that resolution drift from
-    // rtsim's without another word.
+    // A period the resolution represents otherwise than 1 fs does, rtsim's resolution (SystemC's
+    // default 1 ps: 733 ps against 732.601 at 1365 MHz, 0.055 %, so that 3,300 cycles of such a
+    // clock are 3,302 exact ones), is warned about at elaboration (report "rtunit/clock"): the
+    // cycles of a platform at that resolution drift from rtsim's without another word.
     explicit ClockDomain(double mhz)
         : tick_fs_(std::llround(sc_core::sc_get_time_resolution().to_seconds() * 1e15)),
           period_ticks_(std::max<int64_t>(1, std::llround(1e9 / mhz / double(tick_fs_)))),
           period_(sc_core::sc_time::from_value(period_ticks_)) {
         const double exact_fs = 1e9 / mhz, off = double(period_ticks_ * tick_fs_) / exact_fs - 1.0;
-        if (std::fabs(off) > 1e-6) {
+        if (int64_t(period_ticks_ * tick_fs_) != std::max<int64_t>(1, std::llround(exact_fs))) {
             char msg[320];
             std::snprintf(msg, sizeof msg,
                           "the %g MHz clock's period of %.3f ps is %.3f ps at SystemC's time resolution of %g ps (%+.4f %%: the "
