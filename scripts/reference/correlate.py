@@ -86,12 +86,39 @@ def reference_rows(path):
 
 
 def rt_cache(r, prefix):
-    """The reference RT unit's reads at its cache (rtc_) or at L2 (rtl2_): accesses and misses
-    (a hit on a pending line counts as a hit, as rtunit's MSHR hits do)."""
+    """The reference RT unit's reads at its cache (rtc_) or at L2 (rtl2_): accesses and misses.
+    At L2 (allocated on a miss, `m` in -gpgpu_cache:dl2) a read of a sector still being fetched is
+    a HIT_RESERVED, counted here as a hit, as rtunit's MSHR hits are. L1 is a streaming cache (`s`
+    in -gpgpu_cache:dl1: allocated on fill, gpu-sim's gpu-cache.h l.572-585), so such a read finds
+    no line and counts as a MISS or SECTOR_MISS (gpu-cache.cc l.316-322) that merges into the
+    pending MSHR (l.1214-1223): rtunit's L1 miss rate counts its MSHR hits as misses to match."""
     hit, hr, miss, sec = (f(r, prefix + k) or 0.0 for k in ("read_hit", "read_hit_reserved", "read_miss", "read_sector_miss"))
     pf = f(r, prefix + "read_prefetch_hit") or 0.0
     acc = hit + hr + miss + sec + pf
     return acc, miss + sec
+
+
+def global_reads(r, level):
+    """All global reads at L1 or L2 (RT unit's and shaders'; TTP's prefetches too), retries left out."""
+    return sum(f(r, f"{level}_global_r_{k}") or 0.0 for k in ("hit", "hit_reserved", "miss", "sector_miss"))
+
+
+def shader_traffic(r):
+    """Per ray, the reference's L1 and L2 reads and the writes reaching L2, split into the RT unit's
+    and the shader code's (ray generation, closest-hit, miss, intersection: everything else). Only
+    meaningful without TTP, whose prefetches the global counters include and the RT ones do not."""
+    rays = f(r, "rt_n_total_rays") or 1.0
+    rt1, _ = rt_cache(r, "rtc_")
+    rt2, _ = rt_cache(r, "rtl2_")
+    rt1 -= f(r, "rtc_read_prefetch_hit") or 0.0
+    rt2 -= f(r, "rtl2_read_prefetch_hit") or 0.0
+    g1, g2 = global_reads(r, "L1D"), global_reads(r, "L2")
+    g1_miss = sum(f(r, f"L1D_global_r_{k}") or 0.0 for k in ("miss", "sector_miss"))
+    rt1_miss = (f(r, "rtc_read_miss") or 0.0) + (f(r, "rtc_read_sector_miss") or 0.0)
+    writes, rt_writes = f(r, "gpgpu_n_mem_write_global") or 0.0, f(r, "rt_writes") or 0.0
+    return {"rt_l1": rt1 / rays, "sh_l1": (g1 - rt1) / rays, "sh_l1_miss": (g1_miss - rt1_miss) / rays,
+            "rt_l2": rt2 / rays, "sh_l2": (g2 - rt2) / rays, "rt_w": rt_writes / rays, "sh_w": (writes - rt_writes) / rays,
+            "dram_r": (f(r, "total_dram_reads") or 0.0) / rays, "dram_w": (f(r, "total_dram_writes") or 0.0) / rays}
 
 
 def run_rtunit(key, args, runs, rtsim, scenes):
@@ -116,9 +143,10 @@ def ours(j):
     t = j["timing"]
     l1, l2 = t["l1"]["demand"], t["l2"]["demand"]
     return {"rays": j["rays"], "nodes": j["nodes_per_ray"], "max_nodes": j["max_nodes_per_ray"], "cycles": j["cycles"],
-            "l1_miss": (l1["sector_misses"] + l1["line_misses"]) / max(1, l1["accesses"]),
+            "l1_miss": (l1["sector_misses"] + l1["line_misses"] + l1["mshr_hits"]) / max(1, l1["accesses"]),  # rt_cache()
             "l2_miss": (l2["sector_misses"] + l2["line_misses"]) / max(1, l2["accesses"]),
             "prefetches": t["rt_unit"]["prefetch_queue"]["sent"], "dram_reads": t["dram"]["reads"],
+            "l1_reads": l1["accesses"], "l2_reads": l2["accesses"],
             "image_bytes": j["bvh"]["image_bytes"], "depth": j["bvh"]["depth"]}
 
 
@@ -365,7 +393,11 @@ def main():
     md.p()
     md.p("Miss rates of the RT unit's reads at L1 and at L2 (the reference's `RT_Total_core_cache_stats_breakdown` and "
          "`RT_L2_cache_stats_breakdown`: misses and sector misses over all reads; rtunit's node-chunk reads at L1 and the "
-         "L2 reads they cause), TTP's prefetches sent and the DRAM reads (the reference's include the shaders' loads).")
+         "L2 reads they cause), TTP's prefetches sent and the DRAM reads (the reference's include the shaders' loads). "
+         "At L1 a read that merges into a fetch already under way is a miss on both sides: the reference's L1 is a "
+         "streaming cache, allocated on fill, where such a read finds no line (`rt_cache()` in the script cites the "
+         "lines); at L2 it is a hit on both. With TTP the reference's L1 reads include the prefetches' own lookups, "
+         "rtunit's do not.")
     md.p()
     rows = []
     for k in keys:
@@ -375,6 +407,49 @@ def main():
                      f"{t['prefetches']:,.0f} / {o['prefetches']:,}" if t["prefetches"] else f"0 / {o['prefetches']:,}",
                      f"{t['dram_reads']:,.0f} / {o['dram_reads']:,}"])
     md.table(["scene", "frame", "config", "L1 miss rate (reference / rtunit)", "L2 miss rate", "prefetches", "DRAM reads"], rows)
+    md.p()
+
+    # --- the shaders' memory traffic, which rtunit does not model
+    md.p("## The shaders' memory traffic")
+    md.p()
+    md.p("The reference's shader code (ray generation, closest-hit, miss and intersection shaders on the SIMT cores) "
+         "reads and writes global memory through the same L1, L2 and DRAM as the RT unit; rtunit stands for that code "
+         "with a latency only (`workload.shade_latency`), so its caches and DRAM see the RT unit's node reads alone. "
+         "Per ray, from the reference's counters (runs without TTP, whose prefetches its global counters include): "
+         "reads at L1 and L2 split into the RT unit's (`RT_*` breakdowns) and the rest, the shaders' (global reads "
+         "less the RT unit's; retries left out); writes reaching L2 (`gpgpu_n_mem_write_global`), of which the RT "
+         "unit's hit records (`rt_writes`, 32 B each) and the shaders' stores; DRAM reads. rtunit: its L1 and L2 "
+         "demand reads and DRAM reads per ray; it writes nothing.")
+    md.p()
+    rows, sh_l1_share, sh_l2_share, dram_ratio = [], [], [], []
+    for k in keys:
+        if CONFIGS[k[4]][2] != "none":
+            continue
+        s_ = shader_traffic(ref[k])
+        o = got[k]
+        rays = max(1, o["rays"])
+        l2_all = s_["rt_l2"] + s_["sh_l2"] + s_["rt_w"] + s_["sh_w"]
+        share1 = s_["sh_l1"] / (s_["sh_l1"] + s_["rt_l1"])
+        share2 = (s_["sh_l2"] + s_["sh_w"] + s_["rt_w"]) / l2_all
+        sh_l1_share.append(share1)
+        sh_l2_share.append(share2)
+        dram_ratio.append(o["dram_reads"] / rays / s_["dram_r"] if s_["dram_r"] else None)
+        rows.append([k[0], f"{k[1]}x{k[2]}", k[4], f"{s_['rt_l1']:.1f} / {o['l1_reads'] / rays:.1f}", f"{s_['sh_l1']:.1f}",
+                     f"{s_['sh_l1_miss']:.1f}", f"{s_['rt_l2']:.1f} / {o['l2_reads'] / rays:.1f}", f"{s_['sh_l2']:.1f}",
+                     f"{s_['rt_w']:.2f} / {s_['sh_w']:.1f}", f"{s_['dram_r']:.1f} / {o['dram_reads'] / rays:.1f}",
+                     f"{share1:.0%}", f"{share2:.0%}"])
+    md.table(["scene", "frame", "config", "RT L1 reads per ray (reference / rtunit)", "shader L1 reads", "shader L1 misses",
+              "RT L2 reads (reference / rtunit)", "shader L2 reads", "L2 writes (RT / shader)", "DRAM reads (reference / rtunit)",
+              "shader share of L1 reads", "not the RT unit's reads: share of L2 requests"], rows)
+    if rows:
+        dr = [x for x in dram_ratio if x is not None]
+        md.p(f"On these {len(rows)} runs the shaders make {min(sh_l1_share):.0%} to {max(sh_l1_share):.0%} of the reads at "
+             f"L1, and requests other than the RT unit's reads (the shaders' reads, their stores and the RT unit's hit "
+             f"records) make {min(sh_l2_share):.0%} to {max(sh_l2_share):.0%} of the requests at L2. rtunit models none of "
+             f"them: its DRAM reads per ray are {min(dr):.2f}x to {max(dr):.2f}x the reference's "
+             f"(geometric mean {geomean(dr):.2f}x). What that traffic does to the RT unit (L1 lines it evicts, L2 and DRAM "
+             "bandwidth it takes, and through them the TTP speed-up) is not measured here: it would take the shaders' "
+             "loads and stores modelled as timed requests.")
     (data / "README.md").write_text(md.text())
     print(f"correlate: {len(keys)} runs -> {data / 'README.md'}")
 
