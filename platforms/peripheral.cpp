@@ -4,6 +4,7 @@
 #include <rtunit/peripheral.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <map>
@@ -25,6 +26,20 @@ namespace rtu {
 
 using namespace sc_core;
 
+namespace {
+// The number `v` of option `k`, within [lo, hi]; otherwise std::invalid_argument saying `allowed`.
+double number_in(const std::string& k, const std::string& v, double lo, double hi, const char* allowed) {
+    size_t used = 0;
+    double x = std::nan("");
+    try {
+        x = std::stod(v, &used);
+    } catch (const std::exception&) {
+    }
+    if (used != v.size() || !(x >= lo && x <= hi)) throw std::invalid_argument("peripheral option " + k + "='" + v + "': " + allowed);
+    return x;
+}
+}  // namespace
+
 void PeripheralConfig::set(const std::string& kv) {
     const auto eq = kv.find('=');
     if (eq == std::string::npos || eq == 0) throw std::invalid_argument("peripheral option '" + kv + "': expected key=value");
@@ -37,16 +52,9 @@ void PeripheralConfig::set(const std::string& kv) {
         if (v != "0" && v != "1" && v != "true" && v != "false") throw std::invalid_argument("peripheral option " + k + "='" + v + "': 0, 1, true or false");
         (k == "use_dmi" ? use_dmi : check_bvh) = v == "1" || v == "true";
     }
-    else if (k == "reg_latency_ns") {
-        size_t used = 0;
-        double ns = -1;
-        try {
-            ns = std::stod(v, &used);
-        } catch (const std::exception&) {
-        }
-        if (used != v.size() || !(ns >= 0 && ns < 1e9)) throw std::invalid_argument("peripheral option reg_latency_ns='" + v + "': a number of ns in [0, 1e9)");
-        reg_latency = sc_time(ns, SC_NS);
-    } else sets.push_back(kv);
+    else if (k == "reg_latency_ns") reg_latency = sc_time(number_in(k, v, 0, 1e9, "a number of ns in [0, 1e9)"), SC_NS);
+    else if (k == "core_clock_period_ps") core_clock_period = sc_time(number_in(k, v, 10, 1e6, "a number of ps in [10, 1e6]"), SC_PS);
+    else sets.push_back(kv);
 }
 
 namespace {
@@ -130,6 +138,20 @@ HwConfig resolve_config(const PeripheralConfig& pc, TraversalOrder order) {
     try {
         Config c = Config::load(pc.config);
         for (const std::string& s : pc.sets) c.set(s);
+        if (pc.core_clock_period != SC_ZERO_TIME) {
+            // The platform's period, as the clock's MHz: ClockDomain rounds 1e9 / MHz fs to the
+            // resolution's ticks, which gives the period's own ticks back (the quotient's relative
+            // rounding error, about 1e-16, is far below half a tick in 1e6 ps).
+            const double ps = pc.core_clock_period / sc_time(1, SC_PS);
+            for (const std::string& s : pc.sets)
+                if (s.rfind("gpu.core_clock_mhz=", 0) == 0)
+                    throw std::invalid_argument("peripheral core_clock_period and " + s + ": give the core clock once");
+            if (!(ps >= 10 && ps <= 1e6))
+                throw std::invalid_argument("peripheral core_clock_period " + pc.core_clock_period.to_string() + ": allowed is 10 ps to 1 us");
+            char mhz[64];
+            std::snprintf(mhz, sizeof mhz, "gpu.core_clock_mhz=%.17g", 1e6 / ps);
+            c.set(mhz);
+        }
         HwConfig hw = c.resolve();
         check_prefetcher(hw.prefetch, order);
         return hw;

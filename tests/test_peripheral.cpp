@@ -184,7 +184,7 @@ struct Inputs {
 
 // rtsim's statistics on the same rays and configuration (a ray file: %.9g prints a float
 // exactly; an invalid ray as a NaN origin).
-nlohmann::json rtsim_stats(const Inputs& in, const std::string& fidelity) {
+nlohmann::json rtsim_stats(const Inputs& in, const std::string& fidelity, const std::string& extra = "") {
     rtu::test::TempDir dir;
     std::string text;
     for (const rtu_ray& r : in.rays) {
@@ -196,7 +196,7 @@ nlohmann::json rtsim_stats(const Inputs& in, const std::string& fidelity) {
     }
     const std::string rays_file = rtu::test::write_text(dir.file("rays.txt"), text), stats = dir.file("stats.json");
     const std::string cmd = std::string(RTU_RTSIM) + " --scene cornell --rays " + rays_file + " --config mobile --fidelity " + fidelity +
-                            " --quiet --stats " + stats + " 2>/dev/null";
+                            " --quiet --stats " + stats + extra + " 2>/dev/null";
     EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
     return nlohmann::json::parse(rtu::test::read_text(stats));
 }
@@ -417,6 +417,43 @@ TEST_P(PeripheralJob, HitsEqualTheReferenceAndCyclesEqualRtsim) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Fidelities, PeripheralJob, ::testing::Values("functional", "interval", "lt", "at"));
+
+// The core clock from the platform (issue 49): a period of 1.25 ns (800 MHz) given as an sc_time
+// runs the job as rtsim does at gpu.core_clock_mhz=800, in cycles of exactly that period, and
+// CONFIG1 reports the clock. The preset's 1365 MHz takes other cycles (the DRAM's clock stays
+// 3500 MHz, so its latency is another number of core cycles): the period is not ignored.
+TEST(Peripheral, TheCoreClockPeriodComesFromThePlatform) {
+    FsResolution res;
+    PeripheralConfig cfg = config_for("lt");
+    cfg.core_clock_period = sc_time(1250, SC_PS);
+    Bench b(cfg);
+    const Inputs in;
+    in.load(b.ram, kBvhAt);
+    uint64_t job_cycles = 0, traversal_cycles = 0;
+    uint32_t config1 = 0;
+    sc_time t_start, t_irq;
+    b.cpu.script = [&] {
+        Cpu& c = b.cpu;
+        config1 = c.rd(RTU_CONFIG1);
+        c.wr(RTU_INT_ENABLE, RTU_INT_ALL);
+        program_job(c, in, kBvhAt);
+        c.wr(RTU_CTRL, RTU_CTRL_START);
+        t_start = sc_time_stamp();
+        EXPECT_TRUE(c.wait_irq());
+        t_irq = sc_time_stamp();
+        job_cycles = c.rd64(RTU_PERF_JOB_CYCLES);
+        traversal_cycles = c.rd64(RTU_PERF_TRAVERSAL_CYCLES);
+    };
+    sc_start();
+    ASSERT_TRUE(b.cpu.finished);
+    EXPECT_EQ(config1 >> 8, 800u);
+    const double period_s = 1.25e-9;
+    EXPECT_LE(std::fabs((t_irq - t_start).to_seconds() - double(job_cycles) * period_s), period_s) << (t_irq - t_start);
+    const uint64_t at_800 = rtsim_stats(in, "lt", " --set gpu.core_clock_mhz=800")["cycles"].get<uint64_t>();
+    const uint64_t at_1365 = rtsim_stats(in, "lt")["cycles"].get<uint64_t>();
+    EXPECT_EQ(traversal_cycles, at_800);
+    EXPECT_NE(at_800, at_1365);
+}
 
 namespace {
 
@@ -890,6 +927,11 @@ TEST(Peripheral, BadConfigurationIsRefusedByName) {
     EXPECT_NE(build({"memory=shared", "fidelity=interval"}).find("memory=shared needs fidelity lt or at"), std::string::npos);
     EXPECT_NE(build({"memory=shared", "fidelity=functional"}).find("memory=shared needs fidelity lt or at"), std::string::npos);
     EXPECT_NE(build({"memory=remote"}).find("private, shared"), std::string::npos);
+    // The core clock from the platform: a period in range, and given once.
+    EXPECT_THROW(c.set("core_clock_period_ps=5"), std::invalid_argument);
+    EXPECT_THROW(c.set("core_clock_period_ps=1ns"), std::invalid_argument);
+    EXPECT_NE(build({"core_clock_period_ps=1000", "gpu.core_clock_mhz=1000"}).find("give the core clock once"), std::string::npos);
+    EXPECT_EQ(build({"core_clock_period_ps=1000"}), "");
 }
 
 // An image whose root is its own only child: every ray would loop forever. The functional pass

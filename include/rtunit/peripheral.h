@@ -39,6 +39,11 @@ struct RTUNIT_API PeripheralConfig {
     // SoC's memory times them (lt and at only).
     std::string memory = "private";
     sc_core::sc_time reg_latency = sc_core::sc_time(10, sc_core::SC_NS);  // added to every register access
+    // The core clock's period (RT units, L1s, crossbar, L2), as the platform's clock tree gives it:
+    // kept in whole ticks of SystemC's time resolution, as is. Zero: the configuration's
+    // gpu.core_clock_mhz (which must not be set as well). From 10 ps to 1 us. The DRAM keeps the
+    // configuration's gpu.memory_clock_mhz.
+    sc_core::sc_time core_clock_period = sc_core::SC_ZERO_TIME;
     // Direct memory access on `mem` where the target grants it: ray and hit records copied, the BVH
     // image used in place. Host speed only: hits and traversal cycles are the same without.
     bool use_dmi = true;
@@ -47,7 +52,7 @@ struct RTUNIT_API PeripheralConfig {
     // is compared).
     bool check_bvh = false;
     // By name, for platforms that configure modules from strings (QBox, VCML, Lua):
-    // fidelity=, traversal=, memory=, config=, reg_latency_ns=, use_dmi=, check_bvh=; any other key=value is a configuration key
+    // fidelity=, traversal=, memory=, config=, reg_latency_ns=, core_clock_period_ps=, use_dmi=, check_bvh=; any other key=value is a configuration key
     // (l1.size_kb=64, prefetch.kind=ttp, ...). Checked when the peripheral is built.
     void set(const std::string& key_value);
 };
