@@ -85,6 +85,25 @@ def reference_rows(path):
     return rows
 
 
+# The reference's DRAM counts a read per column access of its 2-byte bus at burst length 8
+# (-gpgpu_dram_buswidth 2, -gpgpu_dram_burst_length 8 in both MOBILE configurations): 16 B, so a
+# 32 B sector, rtunit's unit, is 2 reads (total_dram_reads is exactly twice the L2's read misses
+# in every run of reference.csv; dram_sectors_check() says so in the report).
+REF_DRAM_READS_PER_SECTOR = 2
+
+
+def dram_sectors(r, key):
+    v = f(r, key)
+    return None if v is None else v / REF_DRAM_READS_PER_SECTOR
+
+
+def dram_sectors_check(rows):
+    """Runs whose DRAM reads are REF_DRAM_READS_PER_SECTOR times their L2 read misses, of all."""
+    ok = sum(f(r, "total_dram_reads") == REF_DRAM_READS_PER_SECTOR * ((f(r, "L2_global_r_miss") or 0) + (f(r, "L2_global_r_sector_miss") or 0))
+             for r in rows)
+    return ok, len(rows)
+
+
 def rt_cache(r, prefix):
     """The reference RT unit's reads at its cache (rtc_) or at L2 (rtl2_): accesses and misses.
     At L2 (allocated on a miss, `m` in -gpgpu_cache:dl2) a read of a sector still being fetched is
@@ -118,7 +137,7 @@ def shader_traffic(r):
     writes, rt_writes = f(r, "gpgpu_n_mem_write_global") or 0.0, f(r, "rt_writes") or 0.0
     return {"rt_l1": rt1 / rays, "sh_l1": (g1 - rt1) / rays, "sh_l1_miss": (g1_miss - rt1_miss) / rays,
             "rt_l2": rt2 / rays, "sh_l2": (g2 - rt2) / rays, "rt_w": rt_writes / rays, "sh_w": (writes - rt_writes) / rays,
-            "dram_r": (f(r, "total_dram_reads") or 0.0) / rays, "dram_w": (f(r, "total_dram_writes") or 0.0) / rays}
+            "dram_r": (dram_sectors(r, "total_dram_reads") or 0.0) / rays, "dram_w": (dram_sectors(r, "total_dram_writes") or 0.0) / rays}
 
 
 def run_rtunit(key, args, runs, rtsim, scenes):
@@ -155,7 +174,7 @@ def theirs(r):
     acc2, miss2 = rt_cache(r, "rtl2_")
     return {"rays": f(r, "rt_n_total_rays"), "nodes": f(r, "rt_avg_nodes_per_ray"), "max_nodes": f(r, "rt_max_nodes_per_ray"),
             "cycles": f(r, "gpu_sim_cycle"), "l1_miss": miss1 / acc1 if acc1 else None, "l2_miss": miss2 / acc2 if acc2 else None,
-            "prefetches": f(r, "rtc_num_prefetched"), "dram_reads": f(r, "total_dram_reads")}
+            "prefetches": f(r, "rtc_num_prefetched"), "dram_reads": dram_sectors(r, "total_dram_reads")}
 
 
 def rel(a, b):
@@ -397,7 +416,9 @@ def main():
          "At L1 a read that merges into a fetch already under way is a miss on both sides: the reference's L1 is a "
          "streaming cache, allocated on fill, where such a read finds no line (`rt_cache()` in the script cites the "
          "lines); at L2 it is a hit on both. With TTP the reference's L1 reads include the prefetches' own lookups, "
-         "rtunit's do not.")
+         "rtunit's do not. DRAM reads are 32 B sectors on both sides: the reference counts a read per 16 B column "
+         "access (a 2-byte bus, burst length 8), which the report halves; "
+         "{} of {} runs have exactly two such reads per L2 read miss.".format(*dram_sectors_check([ref[k] for k in keys])))
     md.p()
     rows = []
     for k in keys:
