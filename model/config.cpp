@@ -31,6 +31,7 @@ const Key kSchema[] = {
     {"rt.l1_hit_latency", "core cycles", Type::Int, 0, 1000, false, "extra cycles the RT unit waits on an L1 hit"},
     {"rt.next_node_register", "", Type::Bool, 0, 0, false, "stock Vulkan-sim's next-node register: the first hit child is read from it, not popped (false: every node read is a pop, as in the TTP authors' simulator)"},
     {"rt.leaf_descriptor_read", "", Type::Bool, 0, 0, false, "a primitive leaf is read in two dependent steps, its 8 B descriptor (one 32 B chunk) then the 64 B leaf, as in the TTP authors' simulator (false: both chunks at once)"},
+    {"rt.merge_in_flight", "", Type::Bool, 0, 0, false, "a thread's node read joins a read of the same 32 B chunk that its warp has queued or in flight, as in the TTP authors' simulator (false: only reads scheduled together merge)"},
     {"rt.warp_scheduler", "", Type::Text, 0, 0, false, "which warp with ready threads the RT unit schedules each cycle: round_robin, or oldest_first (the TTP authors' RT unit)"},
     {"rt.response_fifo", "entries", Type::Int, 0, 1 << 20, false, "response FIFO entries (0: unbounded, as in Vulkan-sim); a full FIFO holds the L1's responses back"},
     {"rt.latency.ray_box", "core cycles", Type::Int, 0, 1000, false, "ray-box tests of an internal node"},
@@ -296,6 +297,7 @@ HwConfig Config::resolve() const {
     h.warp_order = order == "oldest_first" ? WarpOrder::OldestFirst : WarpOrder::RoundRobin;
     h.next_node_register = values_.at("rt.next_node_register").get<bool>();
     h.leaf_descriptor_read = values_.at("rt.leaf_descriptor_read").get<bool>();
+    h.merge_in_flight = values_.at("rt.merge_in_flight").get<bool>();
     h.lat = {u32("rt.latency.ray_box"), u32("rt.latency.transform"),
              u32("rt.latency.leaf_descriptor"), u32("rt.latency.ray_triangle"), u32("rt.latency.triangle_hit"),
              u32("rt.latency.procedural"), u32("rt.latency.structure")};

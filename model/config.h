@@ -69,6 +69,7 @@ struct HwConfig {
     WarpOrder warp_order;       // which warp the RT unit's scheduler picks
     bool next_node_register;    // stock Vulkan-sim's register for the first hit child (default: every read a pop)
     bool leaf_descriptor_read;  // a primitive leaf read in two dependent steps (model/node_fetch.h)
+    bool merge_in_flight;       // a read joins its warp's queued or in-flight read of the same chunk
     RtLatency lat;
     uint32_t shade_latency;
     uint32_t launch_latency;

@@ -122,6 +122,7 @@ void IntervalGpu::start_trace(uint32_t sm, const std::vector<WarpRay>& rays, uin
     *free_slot = 1;
     tr.slot = uint32_t(free_slot - busy.begin());
     tr.live = 0;
+    tr.chunks.clear();
     tr.threads.resize(rays.size());
     for (uint32_t i = 0; i < rays.size(); ++i) {
         Thread& t = tr.threads[i];
@@ -277,19 +278,36 @@ void IntervalGpu::run_event(const Event& ev, std::vector<Finished>& finished) {
         ++rt_[sm].coalesced_fetches;
     } else {
         Fetch f{t.ready, false, false};
+        uint32_t sent_chunks = 0;
         for (uint32_t c = 0; c < chunks; ++c) {
+            const uint64_t addr = chunk_address(e.addr, c);
+            if (cfg_.merge_in_flight) {
+                // The warp has this chunk queued or in flight: its response serves this read too
+                // (as RtUnitCore::schedule_warp).
+                const auto it = tr.chunks.find(addr);
+                if (it != tr.chunks.end() && ev.at < it->second.at) {
+                    f.done = std::max(f.done, it->second.at);
+                    f.l1_miss |= it->second.l1_miss;
+                    f.dram |= it->second.dram;
+                    ++rt_[sm].merged_in_flight;
+                    continue;
+                }
+            }
             const uint64_t sent = issue.book(t.ready + 1);
             // The demand takes a waiting prefetch of its chunk out of the prefetch queue, as in AT.
-            rt_[sm].prefetch_queue.removed_by_demand += prefetch_queue_[sm].chunks.remove(chunk_address(e.addr, c));
-            const Served s = read(sm, chunk_address(e.addr, c), sent, ReqKind::Demand);
+            rt_[sm].prefetch_queue.removed_by_demand += prefetch_queue_[sm].chunks.remove(addr);
+            const Served s = read(sm, addr, sent, ReqKind::Demand);
             // Drained from the response FIFO one per cycle, at the earliest in the cycle after
             // the request left (an L1 hit's answer comes in that same cycle).
-            f.done = std::max(f.done, drain.book(std::max(s.at, sent + 1)));
+            const uint64_t drained = drain.book(std::max(s.at, sent + 1));
+            f.done = std::max(f.done, drained);
             f.l1_miss |= s.l1_miss;
             f.dram |= s.dram;
+            if (cfg_.merge_in_flight) tr.chunks[addr] = {drained, s.l1_miss, s.dram};
+            ++sent_chunks;
         }
-        rt_[sm].chunk_requests += chunks;
-        rt_[sm].responses += chunks;
+        rt_[sm].chunk_requests += sent_chunks;
+        rt_[sm].responses += sent_chunks;
         coalesced_.push_back(f);
     }
     const Fetch f = coalesced_[g];

@@ -131,6 +131,9 @@ private:
         uint64_t age = 0;   // order of entry into a warp buffer (the warp scheduler's oldest first)
         uint32_t slot = 0;  // its warp-buffer slot (the scheduler's round robin)
         std::vector<Thread> threads;
+        // rt.merge_in_flight: the trace's demand chunks by address, where each was served and the
+        // cycle its response drains (`at`; a read scheduled before then joins it).
+        absl::flat_hash_map<uint64_t, Served> chunks;
     };
     // A thread's next node fetch, scheduled at `at`; or, with thread == kPrefetch, SM `trace`'s
     // prefetch queue trying to send its oldest chunk in cycle `at`.

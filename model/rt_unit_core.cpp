@@ -219,6 +219,10 @@ void RtUnitCore::drain_response(uint64_t now) {
     p.id = 0;  // free again; `p` stays valid below (nothing is issued while responses drain)
     --inflight_count_;
     Warp& w = warps_[p.warp];
+    if (cfg_.merge_in_flight) {
+        const auto it = w.chunks_pending.find(p.addr);
+        if (it != w.chunks_pending.end() && it->second == resp.id) w.chunks_pending.erase(it);
+    }
     for (uint16_t ti : p.threads) {
         Thread& t = w.threads[ti];
         t.fetch_l1_miss |= resp.l1_miss;
@@ -315,19 +319,41 @@ void RtUnitCore::schedule_warp(uint64_t now) {
         const uint16_t* members = group_members_[g].data();
         const bool limit_study = coalescer_.key(g) & 1ull;
         const uint64_t node = coalescer_.key(g) & ~3ull;
+        // rt.merge_in_flight (the TTP authors' RT unit): a chunk the warp already has queued or in
+        // flight is not requested again; these threads join its waiting list and take its response
+        // (abstract_hardware_model.cc l.1041-1093 keeps one queued request per address and size
+        // for the warp; l.1151, 1177-1185 give a returning chunk to every thread of the warp whose
+        // next record starts at its address). A descriptor read and its leaf's first chunk share
+        // an address, as there. Limit-study answers never merge with real fetches.
+        const bool merge = cfg_.merge_in_flight && !limit_study;
+        uint32_t last_sent = ~0u;  // the group's last chunk actually requested (`more` ends there)
+        for (uint32_t c = 0; c < group_chunks_[g]; ++c)
+            if (!merge || !w.chunks_pending.contains(chunk_address(placed(node), c))) last_sent = c;
         for (uint32_t c = 0; c < group_chunks_[g]; ++c) {
+            const uint64_t addr = chunk_address(placed(node), c);
+            if (merge) {
+                const auto it = w.chunks_pending.find(addr);
+                if (it != w.chunks_pending.end()) {
+                    std::vector<uint16_t>& waiting = slot_of(it->second).threads;
+                    waiting.insert(waiting.end(), members, members + group_size_[g]);
+                    ++stats_.merged_in_flight;
+                    continue;
+                }
+            }
             ChunkRequest r;
             r.id = next_id_++;
-            r.addr = chunk_address(placed(node), c);
+            r.addr = addr;
             r.image_addr = chunk_address(node, c);
             r.warp = wi;
             r.thread = members[0];
             r.streak = w.threads[members[0]].fetch_class;
-            r.more = c + 1 < group_chunks_[g];
+            r.more = c < last_sent;
             Pending& slot = claim_slot(r.id);
             slot.id = r.id;
             slot.warp = wi;
+            slot.addr = addr;
             slot.threads.assign(members, members + group_size_[g]);
+            if (merge) w.chunks_pending.emplace(addr, r.id);
             ++inflight_count_;
             ++stats_.chunk_requests;
             if (limit_study) {

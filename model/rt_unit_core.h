@@ -17,6 +17,7 @@
 #include <queue>
 #include <vector>
 
+#include <absl/container/flat_hash_map.h>
 #include <absl/container/flat_hash_set.h>
 
 #include "bvh_image.h"
@@ -115,10 +116,14 @@ private:
         uint32_t live = 0;  // threads not Idle
         uint32_t ready = 0; // threads in WaitSchedule
         uint64_t age = 0;   // order of entering the warp buffer (oldest-first scheduling)
+        // rt.merge_in_flight: the warp's demand chunks queued or in flight (placed address -> request
+        // id), from their scheduling until their response drains.
+        absl::flat_hash_map<uint64_t, uint64_t> chunks_pending;
     };
     struct Pending {  // chunk in flight: which threads wait for it
         uint64_t id = 0;  // 0: slot free
         uint32_t warp = 0;
+        uint64_t addr = 0;  // the chunk's placed address
         std::vector<uint16_t> threads;  // capacity is kept when the slot is reused
     };
     struct MathDone {

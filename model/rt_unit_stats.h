@@ -69,7 +69,7 @@ struct PopStreakStats {
 };
 
 struct RtUnitStats {
-    uint64_t warps = 0, rays = 0, node_fetches = 0, chunk_requests = 0, coalesced_fetches = 0, responses = 0;
+    uint64_t warps = 0, rays = 0, node_fetches = 0, chunk_requests = 0, coalesced_fetches = 0, merged_in_flight = 0, responses = 0;
     uint64_t limit_study_hits = 0, max_response_fifo = 0, max_memory_access_queue = 0;
     uint64_t l1_misses_with_next_queued = 0;
     uint64_t header_fetches = 0, header_l1_misses = 0;
@@ -86,6 +86,7 @@ struct RtUnitStats {
         {"header_l1_misses", &RtUnitStats::header_l1_misses, "header reads", "of them, not served by L1"},
         {"chunk_requests", &RtUnitStats::chunk_requests, "requests", "32 B demand requests of node reads (sent to L1, or answered by a limit study)"},
         {"coalesced_fetches", &RtUnitStats::coalesced_fetches, "node reads", "node reads that shared another thread's read of the same node in one scheduling (intra-warp coalescing)"},
+        {"merged_in_flight", &RtUnitStats::merged_in_flight, "chunks", "32 B chunks of node reads not requested because the warp had the same chunk queued or in flight (rt.merge_in_flight)"},
         {"responses", &RtUnitStats::responses, "responses", "demand responses drained from the response FIFO"},
         {"limit_study_hits", &RtUnitStats::limit_study_hits, "requests", "32 B demand requests answered as L1 hits by a perfect-up/down limit study"},
         {"l1_misses_with_next_queued", &RtUnitStats::l1_misses_with_next_queued, "node reads",

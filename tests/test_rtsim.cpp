@@ -587,6 +587,28 @@ TEST(RtsimTiming, VcdHasTheDocumentedSignals) {
 // statistics as one without, in AT and LT, with and without a prefetcher. Before, the monitor
 // woke every trace window only when tracing, and its extra events reordered the kernel's
 // same-time processes: wknd 128x128 under paper with TTP took 69,744 cycles traced, 70,115 not.
+// rt.merge_in_flight in every timing fidelity (the RT unit's own case is hand-worked in
+// RtUnitCore.AReadJoinsTheWarpsReadOfTheSameChunkInFlight): on a path-traced wknd frame each
+// fidelity merges reads into its warps' chunks in flight, so it requests fewer chunks than
+// unmerged, with every ray's nodes and hits unchanged, and a response for every request.
+TEST(RtsimTiming, MergingReadsInFlightChangesNoHitInAnyFidelity) {
+    TempDir dir;
+    for (const std::string fidelity : {"at", "lt", "interval"}) {
+        const std::string args = "--scene wknd --width 48 --height 48 --config paper --fidelity " + fidelity;
+        const std::string off = dir.file(fidelity + "-off.json"), on = dir.file(fidelity + "-on.json");
+        ASSERT_EQ(rtsim(dir, args + " --stats " + off).status, 0) << fidelity;
+        ASSERT_EQ(rtsim(dir, args + " --set rt.merge_in_flight=true --stats " + on).status, 0) << fidelity;
+        const auto a = nlohmann::json::parse(read_text(off)), b = nlohmann::json::parse(read_text(on));
+        const auto &ra = a["timing"]["rt_unit"], &rb = b["timing"]["rt_unit"];
+        EXPECT_EQ(ra["merged_in_flight"].get<uint64_t>(), 0u) << fidelity;
+        EXPECT_GT(rb["merged_in_flight"].get<uint64_t>(), 100u) << fidelity;
+        EXPECT_LT(rb["chunk_requests"].get<uint64_t>(), ra["chunk_requests"].get<uint64_t>()) << fidelity;
+        EXPECT_EQ(rb["chunk_requests"], rb["responses"]) << fidelity;
+        for (const char* k : {"rays", "hits", "nodes_visited", "max_nodes_per_ray"}) EXPECT_EQ(a[k], b[k]) << fidelity << " " << k;
+        EXPECT_EQ(ra["node_fetches"], rb["node_fetches"]) << fidelity;
+    }
+}
+
 TEST(RtsimTiming, TracingChangesNoStatistic) {
     TempDir dir;
     const char* runs[] = {
@@ -1530,7 +1552,7 @@ TEST(RtsimConfig, EveryKeyOfEveryPresetIsRead) {
     const std::string ttp = "--prefetcher ttp", treelet = "--traversal treelet --prefetcher treelet";
     const std::vector<Case> cases = {
         {{"gpu.sms=2"}}, {{"gpu.core_clock_mhz=700"}}, {{"gpu.memory_clock_mhz=1000"}}, {{"rt.warp_size=8"}},
-        {{"rt.warp_buffer=1"}, "--set gpu.sms=2"}, {{"rt.l1_hit_latency=30"}}, {{"rt.response_fifo=1"}}, {{"rt.next_node_register=flip"}}, {{"rt.leaf_descriptor_read=flip"}}, {{"rt.warp_scheduler=round_robin|oldest_first"}, "--set gpu.sms=2"},
+        {{"rt.warp_buffer=1"}, "--set gpu.sms=2"}, {{"rt.l1_hit_latency=30"}}, {{"rt.response_fifo=1"}}, {{"rt.next_node_register=flip"}}, {{"rt.leaf_descriptor_read=flip"}}, {{"rt.merge_in_flight=flip"}}, {{"rt.warp_scheduler=round_robin|oldest_first"}, "--set gpu.sms=2"},
         {{"rt.latency.structure=40"}}, {{"rt.latency.ray_box=40"}}, {{"rt.latency.transform=40"}},
         {{"rt.latency.leaf_descriptor=40"}}, {{"rt.latency.ray_triangle=40"}}, {{"rt.latency.triangle_hit=40"}},
         {{"rt.latency.procedural=40"}, "--scene wknd"}, {{"workload.shade_latency=5000"}}, {{"workload.launch_latency=3000"}}, {{"workload.resident_warps=1"}, "--set gpu.sms=2"},

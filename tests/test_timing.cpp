@@ -460,6 +460,84 @@ TEST(RtUnitCore, ResponseHeldBackPastTheTrackingRing) {
     }
 }
 
+// rt.merge_in_flight, hand-worked. Two triangles: X, large, at z = 0; Y, small, at z = -1 with its
+// box over (0..1, 0..1). Ray A, through Y and ending before z = 0, reads the root then Y. Ray B,
+// through Y's box where Y's triangle is not, reads the root, X (its hit: the traversal takes X's
+// child first), then Y (entered nearer than the hit, so not culled), while A's read of Y is still
+// in flight (its responses are held back here). Merged, B's read of Y joins A's: Y's two chunks are requested
+// once, both threads take the one response, and each ray gets the functional traversal's hit;
+// without the merge B requests them again (the test's other half, so that it can fail).
+TEST(RtUnitCore, AReadJoinsTheWarpsReadOfTheSameChunkInFlight) {
+    Scene s;
+    s.name = "two-triangles";
+    s.materials.push_back(Material{});
+    Mesh m;
+    m.vertices = {{-10, -10, 0}, {20, -10, 0}, {-10, 20, 0}, {0, 0, -1}, {1, 0, -1}, {0, 1, -1}};
+    m.triangles = {{0, 1, 2}, {3, 4, 5}};
+    m.material = {0, 0};
+    s.meshes.push_back(m);
+    add_identity_instances(s);
+    s.flatten = true;
+    const BvhImage img = build_bvh_image(s);
+    Ray a, b;
+    a.org = {0.2f, 0.2f, -5};
+    a.tfar = 4.5f;  // short of X
+    b.org = {0.9f, 0.9f, -5};
+    a.dir = b.dir = {0, 0, 1};
+    std::vector<StackEntry> path_a, path_b;
+    const TraceResult fa = trace_ray(img, a, TraversalOrder::DFS, nullptr, &path_a);
+    const TraceResult fb = trace_ray(img, b, TraversalOrder::DFS, nullptr, &path_b);
+    ASSERT_EQ(path_a.size(), 3u);  // header, root, Y
+    ASSERT_EQ(path_b.size(), 4u);  // header, root, X, Y
+    const uint64_t x = path_a[2].addr;  // Y's leaf: the read both make
+    ASSERT_EQ(path_b[3].addr, x);
+    ASSERT_NE(path_b[2].addr, x);
+    ASSERT_TRUE(fa.hit.hit && fb.hit.hit);
+    ASSERT_EQ(fa.hit.prim, 1u);
+    ASSERT_EQ(fb.hit.prim, 0u);
+    for (const bool merge : {true, false}) {
+        Config c = Config::load("mobile");
+        c.set(std::string("rt.merge_in_flight=") + (merge ? "true" : "false"));
+        const HwConfig hw = c.resolve();
+        ASSERT_EQ(chunks_of(NodeType::Triangle), 2u);
+        RtUnitCore core(hw, img, TraversalOrder::DFS);
+        std::vector<WarpRay> warp(2);
+        warp[0].ray = a;
+        warp[1].ray = b;
+        warp[1].key = 1;
+        for (WarpRay& w : warp) w.scale = scale_direction(w.ray);
+        core.accept_warp(warp, 0);
+        std::multimap<uint64_t, uint64_t> answers;  // cycle -> chunk id
+        std::vector<uint64_t> held;
+        uint32_t x_requests = 0;
+        std::map<uint64_t, Hit> got;
+        for (uint64_t cyc = 0; cyc < 10000 && !core.idle(); ++cyc) {
+            if (cyc == 500)
+                for (uint64_t id : held) answers.insert({cyc, id});
+            for (auto it = answers.begin(); it != answers.end() && it->first <= cyc; it = answers.erase(it))
+                core.on_response(it->second, true, false, cyc);
+            if (core.has_request(cyc)) {
+                const ChunkRequest r = core.front_request(cyc);
+                core.pop_request(cyc);
+                const bool of_x = r.image_addr >= x && r.image_addr < x + 64;
+                x_requests += of_x;
+                if (of_x && held.size() < 2) held.push_back(r.id);  // A's read of X waits until cycle 500
+                else answers.insert({cyc + 5, r.id});
+            }
+            core.cycle(cyc);
+            for (const RetiredRay& r : core.take_retired()) got[r.key] = r.hit;
+        }
+        ASSERT_TRUE(core.idle()) << "merge " << merge;
+        EXPECT_EQ(x_requests, merge ? 2u : 4u) << "merge " << merge;
+        EXPECT_EQ(core.stats().merged_in_flight, merge ? 2u : 0u);
+        EXPECT_EQ(core.stats().chunk_requests, merge ? 2u + 2u + 2u + 2u : 2u + 2u + 2u + 4u);  // header, root, Y, X (twice unmerged)
+        ASSERT_EQ(got.size(), 2u);
+        EXPECT_EQ(got[0].prim, fa.hit.prim);
+        EXPECT_EQ(got[1].prim, fb.hit.prim);
+        EXPECT_TRUE(got[0].hit && got[1].hit);
+    }
+}
+
 // FifoPeq (tlm/fifo_peq.h) against tlm_utils::peq_with_get, the queue it replaces in the caches
 // and the crossbar: two FIFOs sharing an event and a sequence, each with its own fixed latency
 // (here hits after 30 ns, fills after 10 ns), must hand out the same payloads at the same times,
