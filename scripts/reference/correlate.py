@@ -446,7 +446,7 @@ def main():
          "unit's hit records (`rt_writes`, 32 B each) and the shaders' stores; DRAM reads. rtunit: its L1 and L2 "
          "demand reads and DRAM reads per ray; it writes nothing.")
     md.p()
-    rows, sh_l1_share, sh_l2_share, dram_ratio = [], [], [], []
+    rows, sh_l1_share, sh_l2_share, dram_ratio, rt_reads = [], [], [], [], []
     for k in keys:
         if CONFIGS[k[4]][2] != "none":
             continue
@@ -459,6 +459,7 @@ def main():
         sh_l1_share.append(share1)
         sh_l2_share.append(share2)
         dram_ratio.append(o["dram_reads"] / rays / s_["dram_r"] if s_["dram_r"] else None)
+        rt_reads.append(o["l1_reads"] / rays / s_["rt_l1"])
         rows.append([k[0], f"{k[1]}x{k[2]}", k[4], f"{s_['rt_l1']:.1f} / {o['l1_reads'] / rays:.1f}", f"{s_['sh_l1']:.1f}",
                      f"{s_['sh_l1_miss']:.1f}", f"{s_['rt_l2']:.1f} / {o['l2_reads'] / rays:.1f}", f"{s_['sh_l2']:.1f}",
                      f"{s_['rt_w']:.2f} / {s_['sh_w']:.1f}", f"{s_['dram_r']:.1f} / {o['dram_reads'] / rays:.1f}",
@@ -468,6 +469,10 @@ def main():
               "shader share of L1 reads", "not the RT unit's reads: share of L2 requests"], rows)
     if rows:
         dr = [x for x in dram_ratio if x is not None]
+        md.p(f"The RT unit's own L1 reads per ray: rtunit's are {min(rt_reads):.2f}x to {max(rt_reads):.2f}x the "
+             f"reference's (geometric mean {geomean(rt_reads):.3f}x; {sum(abs(x - 1) <= 0.10 for x in rt_reads)} of "
+             f"{len(rt_reads)} within 10 %).")
+        md.p()
         md.p(f"On these {len(rows)} runs the shaders make {min(sh_l1_share):.0%} to {max(sh_l1_share):.0%} of the reads at "
              f"L1, and requests other than the RT unit's reads (the shaders' reads, their stores and the RT unit's hit "
              f"records) make {min(sh_l2_share):.0%} to {max(sh_l2_share):.0%} of the requests at L2. rtunit models none of "
