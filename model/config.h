@@ -73,6 +73,7 @@ struct HwConfig {
     RtLatency lat;
     uint32_t shade_latency;
     uint32_t launch_latency;
+    double shader_reads;      // sectors per ray the shader code reads after a trace (workload.shader_reads)
     uint32_t resident_warps;  // shader warps per SM at once (0: all)
     CacheConfig l1;
     uint32_t l2_slices;

@@ -88,11 +88,12 @@ IntervalGpu::Served IntervalGpu::read(uint32_t sm, uint64_t addr, uint64_t cycle
         case CacheBookings::Lookup::Retry:
             // A reservation fail holds the RT unit's request port until the sector arrives (END_REQ
             // withheld, as in AT); the retry then hits.
-            issue_[sm].hold(cycle + 1, l.retry_at);
+            // (The shader reads have a port of their own.)
+            if (kind != ReqKind::Shader) issue_[sm].hold(cycle + 1, l.retry_at);
             return {l.ready, false, false};
         case CacheBookings::Lookup::Miss:
             // Every MSHR busy: the port waits with the miss for the first to free.
-            if (l.retry_at) issue_[sm].hold(cycle + 1, l.retry_at);
+            if (l.retry_at && kind != ReqKind::Shader) issue_[sm].hold(cycle + 1, l.retry_at);
             break;
     }
     const uint64_t xbar = cfg_.xbar_latency;
@@ -141,6 +142,21 @@ void IntervalGpu::start_trace(uint32_t sm, const std::vector<WarpRay>& rays, uin
 
 void IntervalGpu::finish(uint32_t id, std::vector<Finished>& finished) {
     Trace& tr = traces_[id];
+    if (shader_per_ray_ > 0) {
+        if (shader_.empty()) {
+            shader_.resize(cfg_.sms);
+            shader_free_.assign(cfg_.sms, 0);
+            for (uint32_t s = 0; s < cfg_.sms; ++s) shader_[s].start(s, shader_per_ray_);
+        }
+        ShaderLoads& loads = shader_[tr.sm];
+        loads.owe(tr.threads.size());
+        for (; loads.owed(); loads.issued()) {
+            const uint64_t at = std::max(tr.end, shader_free_[tr.sm]);
+            read(tr.sm, loads.next(), at, ReqKind::Shader);
+            shader_free_[tr.sm] = at + 1;
+            ++rt_[tr.sm].shader_reads;
+        }
+    }
     Finished f{tr.sm, tr.end, {}};
     for (const Thread& t : tr.threads) {
         rt_[tr.sm].thread_cycles[ThreadStatus::Idle] += tr.end - (t.rt.trav.nodes_visited() ? t.ready : tr.start);

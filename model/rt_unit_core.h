@@ -79,6 +79,9 @@ public:
     // Closes the thread-status accounting at `now` (call before reading stats).
     void account(uint64_t now);
     const RtUnitStats& stats() const { return stats_; }
+    // The SM's shader code read a sector after a trace (workload.shader_reads; the RT unit's
+    // module issues them, this counts them with the unit's statistics).
+    void count_shader_read() { ++stats_.shader_reads; }
     const Prefetcher& prefetcher() const { return *prefetcher_; }
     uint32_t warp_buffer_occupancy() const;
     uint32_t active_threads() const;

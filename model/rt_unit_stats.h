@@ -73,6 +73,7 @@ struct RtUnitStats {
     uint64_t limit_study_hits = 0, max_response_fifo = 0, max_memory_access_queue = 0;
     uint64_t l1_misses_with_next_queued = 0;
     uint64_t header_fetches = 0, header_l1_misses = 0;
+    uint64_t shader_reads = 0;
     ThreadCycles thread_cycles;
     PrefetchQueueCounts prefetch_queue;
     PopStreakStats pop_streak;
@@ -88,6 +89,7 @@ struct RtUnitStats {
         {"coalesced_fetches", &RtUnitStats::coalesced_fetches, "node reads", "node reads that shared another thread's read of the same node in one scheduling (intra-warp coalescing)"},
         {"merged_in_flight", &RtUnitStats::merged_in_flight, "chunks", "32 B chunks of node reads not requested because the warp had the same chunk queued or in flight (rt.merge_in_flight)"},
         {"responses", &RtUnitStats::responses, "responses", "demand responses drained from the response FIFO"},
+        {"shader_reads", &RtUnitStats::shader_reads, "sectors", "32 B sectors the SM's shader code read after this unit's traces (workload.shader_reads), through the L1's shader port"},
         {"limit_study_hits", &RtUnitStats::limit_study_hits, "requests", "32 B demand requests answered as L1 hits by a perfect-up/down limit study"},
         {"l1_misses_with_next_queued", &RtUnitStats::l1_misses_with_next_queued, "node reads",
          "pops whose node read missed L1 while the thread's stack (BFS: queue) still held a node after the pop: with BFS an accurate prefetch could follow (paper Figure 'bfs_trend')"},

@@ -16,8 +16,10 @@
 
 namespace rtu {
 
-enum class ReqKind : uint8_t { Demand = 0, Prefetch = 1 };
-constexpr int kReqKinds = 2;
+// Demand: the RT unit's node reads; Prefetch: a prefetcher's; Shader: the SM's shader code's loads
+// (workload.shader_reads), which nothing in the model waits for.
+enum class ReqKind : uint8_t { Demand = 0, Prefetch = 1, Shader = 2 };
+constexpr int kReqKinds = 3;
 
 // Which cache of the hierarchy: the L1 of an SM (the RT unit reads it) or an L2 slice (DRAM
 // below it).
@@ -61,11 +63,11 @@ struct PrefetchedSectorCounts {
 
 // One cache (an SM's L1 or an L2 slice).
 struct CacheCounts {
-    CacheAccessCounts demand, prefetch;
+    CacheAccessCounts demand, prefetch, shader;
     uint64_t fills = 0;
     PrefetchedSectorCounts prefetched;
-    CacheAccessCounts& of(ReqKind k) { return k == ReqKind::Demand ? demand : prefetch; }
-    const CacheAccessCounts& of(ReqKind k) const { return k == ReqKind::Demand ? demand : prefetch; }
+    CacheAccessCounts& of(ReqKind k) { return k == ReqKind::Demand ? demand : k == ReqKind::Prefetch ? prefetch : shader; }
+    const CacheAccessCounts& of(ReqKind k) const { return k == ReqKind::Demand ? demand : k == ReqKind::Prefetch ? prefetch : shader; }
     static constexpr Counter<CacheCounts> kCounters[] = {
         {"fills", &CacheCounts::fills, "sectors", "sectors filled from below (demand and prefetch)"},
     };
@@ -74,6 +76,7 @@ struct CacheCounts {
     static void parts(F&& f) {
         f("demand", &CacheCounts::demand, "demand lookups (node reads)");
         f("prefetch", &CacheCounts::prefetch, "prefetch lookups (the paper's response breakdown: hits, mshr_hits, sector and line misses with an MSHR free, reservation fails)");
+        f("shader", &CacheCounts::shader, "the shader code's loads (workload.shader_reads; none unless set)");
         f("prefetched", &CacheCounts::prefetched, "prefetched sectors and their use");
     }
 };

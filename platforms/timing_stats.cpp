@@ -23,6 +23,8 @@ void write_cache(StatsOut out, const std::vector<CacheCounts>& per, const char* 
                               "(sector and line misses + MSHR hits) / lookups that were not reservation fails");
     out.child("prefetch").value("miss_rate", miss_rate(t.prefetch), "ratio",
                                 "(sector and line misses + MSHR hits) / lookups that were not reservation fails");
+    out.child("shader").value("miss_rate", miss_rate(t.shader), "ratio",
+                              "(sector and line misses + MSHR hits) / lookups that were not reservation fails");
     // RT-read misses per kilo node fetch: the paper's MPKI with node fetches for instructions.
     out.value("rt_misses_per_kilo_node_fetch",
               ratio(1000.0 * double(t.demand.sector_misses + t.demand.line_misses + t.demand.mshr_hits), double(node_fetches)),
@@ -105,14 +107,15 @@ void write_hierarchy(StatsOut& out, const HwConfig& cfg, const HierarchyCounts& 
                 "queue_wait per request");
         d.instances("per_channel", h.dram, "the same counters per channel");
     }
-    // Energy from per-event energies: every L1 and L2 access (demand and prefetch, retries
-    // included), DRAM bursts and activations, and static power over the frame's time.
+    // Energy from per-event energies: every L1 and L2 access (demand, prefetch and the shader
+    // code's, retries included), DRAM bursts and activations, and static power over the frame's time.
     {
         const EnergyTable& e = cfg.energy;
         const CacheCounts l1 = total(h.l1), l2 = total(h.l2);
         // Of the simulated part; a sampled run's frame energy is total_j x the work scale.
         const double seconds = double(h.cycles_simulated) * h.core_period_fs * 1e-15;
-        const uint64_t l1_acc = l1.demand.accesses + l1.prefetch.accesses, l2_acc = l2.demand.accesses + l2.prefetch.accesses;
+        const uint64_t l1_acc = l1.demand.accesses + l1.prefetch.accesses + l1.shader.accesses;
+        const uint64_t l2_acc = l2.demand.accesses + l2.prefetch.accesses + l2.shader.accesses;
         const uint64_t activates = dram.row_misses + dram.row_conflicts;
         const double dyn_pj = double(l1_acc) * e.l1_access_pj + double(l2_acc) * e.l2_access_pj + double(dram.reads) * e.dram_read_pj +
                               double(dram.writes) * e.dram_write_pj + double(activates) * e.dram_activate_pj;

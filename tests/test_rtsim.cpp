@@ -591,6 +591,46 @@ TEST(RtsimTiming, VcdHasTheDocumentedSignals) {
 // RtUnitCore.AReadJoinsTheWarpsReadOfTheSameChunkInFlight): on a path-traced wknd frame each
 // fidelity merges reads into its warps' chunks in flight, so it requests fewer chunks than
 // unmerged, with every ray's nodes and hits unchanged, and a response for every request.
+// workload.shader_reads in every timing fidelity: the shader code's reads go through each SM's
+// L1, L2 and DRAM. Counted against the frame's rays (per ray, less under one sector per SM of
+// fraction); each a fresh sector, so every one misses L1 and L2, and the DRAM reads are the L2's
+// misses of all three kinds (a conservation law of the read-only memory system); the rays'
+// nodes and hits do not change, the frame takes longer. Given rays run no shader code: none.
+// A sampled run refuses (its estimate is not validated with them), exit 2, no statistics file.
+TEST(RtsimTiming, ShaderReadsGoThroughL1L2AndDram) {
+    TempDir dir;
+    auto misses = [](const nlohmann::json& c) { return c["sector_misses"].get<uint64_t>() + c["line_misses"].get<uint64_t>(); };
+    for (const std::string fidelity : {"at", "lt", "interval"}) {
+        const std::string args = "--scene wknd --width 48 --height 48 --config paper --fidelity " + fidelity;
+        const std::string off = dir.file(fidelity + "-off.json"), on = dir.file(fidelity + "-on.json");
+        ASSERT_EQ(rtsim(dir, args + " --stats " + off).status, 0) << fidelity;
+        ASSERT_EQ(rtsim(dir, args + " --set workload.shader_reads=2.5 --stats " + on).status, 0) << fidelity;
+        const auto a = nlohmann::json::parse(read_text(off)), b = nlohmann::json::parse(read_text(on));
+        const auto &t = b["timing"], &l1 = t["l1"]["shader"], &l2 = t["l2"]["shader"];
+        const uint64_t reads = t["rt_unit"]["shader_reads"].get<uint64_t>(), rays = b["rays"].get<uint64_t>();
+        EXPECT_EQ(a["timing"]["rt_unit"]["shader_reads"].get<uint64_t>(), 0u) << fidelity;
+        EXPECT_LE(reads, rays * 5 / 2) << fidelity;
+        EXPECT_GT(reads + 8, rays * 5 / 2) << fidelity;  // 8 SMs, each under one sector short
+        EXPECT_EQ(l1["accesses"].get<uint64_t>() - l1["reservation_fails"].get<uint64_t>(), reads) << fidelity;
+        EXPECT_EQ(misses(l1), reads) << fidelity;
+        EXPECT_EQ(misses(l2), reads) << fidelity;
+        uint64_t l2_misses = 0;
+        for (const char* k : {"demand", "prefetch", "shader"}) l2_misses += misses(t["l2"][k]);
+        EXPECT_EQ(t["dram"]["reads"].get<uint64_t>(), l2_misses) << fidelity;
+        EXPECT_GT(b["cycles"].get<uint64_t>(), a["cycles"].get<uint64_t>()) << fidelity;
+        for (const char* k : {"rays", "hits", "nodes_visited", "max_nodes_per_ray"}) EXPECT_EQ(a[k], b[k]) << fidelity << " " << k;
+    }
+    const std::string rays = write_text(dir.file("rays.txt"), "278 278 800 0 0 -1 0 inf\n278 278 800 0.1 0 -1 0 inf\n");
+    const std::string given = dir.file("given.json");
+    ASSERT_EQ(rtsim(dir, "--scene cornell --rays " + rays + " --fidelity at --set workload.shader_reads=4 --stats " + given).status, 0);
+    EXPECT_EQ(nlohmann::json::parse(read_text(given))["timing"]["rt_unit"]["shader_reads"].get<uint64_t>(), 0u);
+    const std::string sampled = dir.file("sampled.json");
+    const Result r = rtsim(dir, "--scene wknd --width 64 --height 64 --fidelity interval --sample 0.25 --set workload.shader_reads=2 --stats " + sampled);
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.err.find("workload.shader_reads 2"), std::string::npos) << r.err;
+    EXPECT_FALSE(std::filesystem::exists(sampled));
+}
+
 TEST(RtsimTiming, MergingReadsInFlightChangesNoHitInAnyFidelity) {
     TempDir dir;
     for (const std::string fidelity : {"at", "lt", "interval"}) {
@@ -1555,7 +1595,7 @@ TEST(RtsimConfig, EveryKeyOfEveryPresetIsRead) {
         {{"rt.warp_buffer=1"}, "--set gpu.sms=2"}, {{"rt.l1_hit_latency=30"}}, {{"rt.response_fifo=1"}}, {{"rt.next_node_register=flip"}}, {{"rt.leaf_descriptor_read=flip"}}, {{"rt.merge_in_flight=flip"}}, {{"rt.warp_scheduler=round_robin|oldest_first"}, "--set gpu.sms=2"},
         {{"rt.latency.structure=40"}}, {{"rt.latency.ray_box=40"}}, {{"rt.latency.transform=40"}},
         {{"rt.latency.leaf_descriptor=40"}}, {{"rt.latency.ray_triangle=40"}}, {{"rt.latency.triangle_hit=40"}},
-        {{"rt.latency.procedural=40"}, "--scene wknd"}, {{"workload.shade_latency=5000"}}, {{"workload.launch_latency=3000"}}, {{"workload.resident_warps=1"}, "--set gpu.sms=2"},
+        {{"rt.latency.procedural=40"}, "--scene wknd"}, {{"workload.shade_latency=5000"}}, {{"workload.launch_latency=3000"}}, {{"workload.shader_reads=3"}}, {{"workload.resident_warps=1"}, "--set gpu.sms=2"},
         {{"l1.size_kb=2"}}, {{"l1.assoc=4"}}, {{"l1.replacement=fifo"}, "--set l1.size_kb=2"}, {{"l2.replacement=fifo"}, "--set l2.slice_kb=4 --set l2.assoc=4 --set l2.set_index=linear"}, {{"l1.line=64", "l2.line=64", "l2.set_index=linear"}}, {{"l1.sector=64", "l2.sector=64"}},
         {{"l1.mshrs=2", "l1.mshr_merge=2"}}, {{"l1.mshr_merge=1"}},
         {{"l2.slices=1", "dram.address_map=line"}}, {{"l2.slice_kb=4", "l2.set_index=linear"}}, {{"l2.assoc=1"}, "--set l2.slice_kb=4 --set l2.set_index=linear"}, {{"l2.mshrs=2", "l2.mshr_merge=2"}}, {{"l2.mshr_merge=1"}},

@@ -10,7 +10,7 @@ Cache::Cache(sc_module_name name, CacheRole role, const CacheConfig& cfg, uint32
       // LT: the L1 takes its RT unit's requests, one per cycle, in order; an L2 slice books its lookups.
       lt_(cfg, hit_latency, role == CacheRole::L2), tags_(lt_.tags()), pool_(pool),
       clock_(clock), fidelity_(fidelity), respond_(events, [this] { send_responses(); }), miss_event_(events, [this] { send_misses(); }),
-      hit_peq_(respond_, resp_seq_), fill_peq_(respond_, resp_seq_) {
+      hit_peq_(respond_, resp_seq_), fill_peq_(respond_, resp_seq_), no_data_(cfg.sector) {
     if (fidelity == Fidelity::AT) {
         in.register_nb_transport_fw(this, &Cache::nb_transport_fw);
         out.register_nb_transport_bw(this, &Cache::nb_transport_bw);
@@ -35,21 +35,53 @@ bool Cache::lookup(tlm::tlm_generic_payload& t) {
             waiting_[token] = &t;
             return true;
         case CacheOutcome::SectorMiss:
-        case CacheOutcome::LineMiss: {
+        case CacheOutcome::LineMiss:
             waiting_[token] = &t;
-            const uint64_t sector = tags_.sector_of(t.get_address());
-            tlm::tlm_generic_payload* down = pool_.acquire(sector, cfg_.sector, t.get_data_ptr() - (t.get_address() - sector));
-            RtExtension& de = ext(*down);
-            de = e;
-            de.requester = role_ == CacheRole::L1 ? Requester::L1 : Requester::L2;
-            de.l1_miss = de.dram = false;
-            de.id = sector;
-            // The tag lookup takes the hit latency before the miss leaves.
-            const uint64_t leave = clock_.cycle_at_or_after(sc_time_stamp()) + hit_latency_;
-            miss_queue_.push_back({leave, down});
-            if (miss_queue_.size() == 1) miss_event_.notify(clock_.time_of(leave) - sc_time_stamp());
+            send_miss(t.get_address(), e, t.get_data_ptr() - (t.get_address() - tags_.sector_of(t.get_address())));
             return true;
-        }
+    }
+    return false;
+}
+
+void Cache::send_miss(uint64_t addr, const RtExtension& e, unsigned char* data) {
+    const uint64_t sector = tags_.sector_of(addr);
+    tlm::tlm_generic_payload* down = pool_.acquire(sector, cfg_.sector, data);
+    RtExtension& de = ext(*down);
+    de = e;
+    de.requester = role_ == CacheRole::L1 ? Requester::L1 : Requester::L2;
+    de.l1_miss = de.dram = false;
+    de.id = sector;
+    // The tag lookup takes the hit latency before the miss leaves.
+    const uint64_t leave = clock_.cycle_at_or_after(sc_time_stamp()) + hit_latency_;
+    miss_queue_.push_back({leave, down});
+    if (miss_queue_.size() == 1) miss_event_.notify(clock_.time_of(leave) - sc_time_stamp());
+}
+
+bool Cache::shader_read(uint64_t addr, uint64_t cycle) {
+    RtExtension e;
+    e.kind = ReqKind::Shader;
+    if (fidelity_ != Fidelity::AT) {
+        tlm::tlm_generic_payload* t = pool_.acquire(tags_.sector_of(addr), cfg_.sector, no_data_.data());
+        ext(*t) = e;
+        sc_time d = clock_.time_of(cycle) - sc_time_stamp();
+        b_transport(*t, d);
+        t->release();
+        return true;
+    }
+    const uint64_t token = next_token_++;
+    switch (tags_.read(addr, token, ReqKind::Shader)) {
+        case CacheOutcome::ReservationFail:
+            return false;
+        case CacheOutcome::Hit:
+            return true;
+        case CacheOutcome::MshrHit:
+            waiting_[token] = nullptr;  // nobody to answer
+            return true;
+        case CacheOutcome::SectorMiss:
+        case CacheOutcome::LineMiss:
+            waiting_[token] = nullptr;
+            send_miss(addr, e, no_data_.data());
+            return true;
     }
     return false;
 }
@@ -144,6 +176,7 @@ tlm::tlm_sync_enum Cache::nb_transport_bw(tlm::tlm_generic_payload& t, tlm::tlm_
     for (uint64_t token : tags_.fill(t.get_address())) {
         tlm::tlm_generic_payload* up = waiting_.at(token);
         waiting_.erase(token);
+        if (!up) continue;  // a shader read's: nobody waits
         RtExtension& e = ext(*up);
         if (role_ == CacheRole::L1) e.l1_miss = true;
         e.dram = e.dram || from_dram;

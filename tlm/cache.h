@@ -7,6 +7,7 @@
 #pragma once
 #include <deque>
 #include <functional>
+#include <vector>
 #include <absl/container/flat_hash_map.h>
 
 #include <systemc>
@@ -39,12 +40,18 @@ public:
     // Every line invalid, statistics kept (a new job's image; RtComplex::start_job).
     void invalidate() { lt_.invalidate(); }
     size_t mshrs_in_use() const { return fidelity_ == Fidelity::AT ? tags_.mshrs_in_use() : lt_.mshrs_in_use(); }
+    // An L1's second port, the SM's shader code's loads (workload.shader_reads): a read of the
+    // sector at `addr` that nobody waits for, filling the L1 (and below) as a demand read would.
+    // AT: now; false on a reservation fail (the caller retries in a later cycle). LT: at core
+    // cycle `cycle`, timed by the bookings. Not a TLM socket: the shader core is not a module.
+    bool shader_read(uint64_t addr, uint64_t cycle);
 
 private:
     // AT
     tlm::tlm_sync_enum nb_transport_fw(tlm::tlm_generic_payload& t, tlm::tlm_phase& ph, sc_core::sc_time& d);
     tlm::tlm_sync_enum nb_transport_bw(tlm::tlm_generic_payload& t, tlm::tlm_phase& ph, sc_core::sc_time& d);
     bool lookup(tlm::tlm_generic_payload& t);  // false: reservation fail
+    void send_miss(uint64_t addr, const RtExtension& e, unsigned char* data);  // the sector holding addr, downstream
     void respond_later(tlm::tlm_generic_payload& t, bool hit);
     void send_responses();  // on respond_: one response per cycle
     void send_misses();     // on miss_event_: one miss per cycle downstream
@@ -74,6 +81,7 @@ private:
     uint64_t last_resp_cycle_ = ~0ull, last_miss_cycle_ = ~0ull;
     std::deque<std::pair<uint64_t, tlm::tlm_generic_payload*>> miss_queue_;  // (cycle it may leave, request)
     bool down_waiting_end_req_ = false;
+    std::vector<unsigned char> no_data_;  // the shader reads' payload data (timing only)
 };
 
 }  // namespace rtu

@@ -74,6 +74,9 @@ public:
     // Functional warming (sampled runs): the sector at `addr` into SM `sm`'s L1, and into its L2
     // slice when the L1 did not hold it (tags and LRU only).
     void warm(uint32_t sm, uint64_t addr);
+    // The shader code's loads after each trace (workload.shader_reads; RtUnit::set_shader_reads),
+    // each SM's into its own L1. A frame of given rays runs no shader code: its platform leaves them out.
+    void set_shader_reads(double per_ray);
 
 private:
     void lt_schedule();  // LT

@@ -25,6 +25,23 @@ RtUnit::RtUnit(sc_module_name name, uint32_t sm, const HwConfig& cfg, const BvhI
     }  // LT: the RT complex steps it (lt_run)
 }
 
+void RtUnit::set_shader_reads(double per_ray, std::function<bool(uint64_t, uint64_t)> read) {
+    shader_.start(sm_, per_ray);
+    shader_read_ = std::move(read);
+}
+
+void RtUnit::retire(const std::vector<RetiredRay>& rays, uint64_t c) {
+    if (rays.empty()) return;
+    source_.retire(sm_, rays, c);
+    shader_.owe(rays.size());
+}
+
+void RtUnit::shader_cycle(uint64_t c) {
+    if (shader_.owed() == 0 || !shader_read_(shader_.next(), c)) return;
+    shader_.issued();
+    core_.count_shader_read();
+}
+
 void RtUnit::wake_at(uint64_t cycle) {
     const sc_time t = clock_.time_of(cycle);
     wake_.notify(t > sc_time_stamp() ? t - sc_time_stamp() : SC_ZERO_TIME);
@@ -80,12 +97,13 @@ void RtUnit::tick() {
         }
         core_.cycle(c);
         admit_held_response(c);
-        auto retired = core_.take_retired();
-        if (!retired.empty()) source_.retire(sm_, retired, c);
+        retire(core_.take_retired(), c);
+        shader_cycle(c);
         if (on_cycle) on_cycle(c);
     }
     uint64_t next = core_.next_event(c);
     if (!waiting_end_req_ && core_.has_request(c + 1)) next = c + 1;
+    if (shader_.owed()) next = std::min(next, c + 1);
     if (core_.has_free_slot()) {
         const uint64_t r = source_.earliest_ready(sm_);
         if (r != ~0ull) next = std::min(next, std::max(c + 1, r));
@@ -155,11 +173,12 @@ void RtUnit::lt_run(uint64_t end) {
             core_.pop_request(c);
         }
         core_.cycle(c);
-        auto retired = core_.take_retired();
-        if (!retired.empty()) source_.retire(sm_, retired, c);
+        retire(core_.take_retired(), c);
+        shader_cycle(c);
         if (on_cycle) on_cycle(c);
 
         uint64_t next = core_.next_event(c);
+        if (shader_.owed()) next = std::min(next, c + 1);
         if (core_.has_request(c + 1)) next = std::max(c + 1, st.port_free);
         if (!st.responses.empty()) next = std::min(next, std::max(c + 1, st.responses.top().at));
         if (core_.has_free_slot()) {

@@ -16,6 +16,7 @@
 #include "clock.h"
 #include "model/fidelity.h"
 #include "model/rt_unit_core.h"
+#include "model/shader_loads.h"
 #include "model/trace_source.h"
 #include "ordered_events.h"
 #include "payload.h"
@@ -43,6 +44,10 @@ public:
     void wake(bool new_epoch);
     // Called after every cycle the unit works (waveform sampling); may be empty.
     std::function<void(uint64_t cycle)> on_cycle;
+    // The shader code's loads after each trace (workload.shader_reads): `per_ray` sectors per ray
+    // of a retired trace, of data no cache holds, handed one per cycle from the trace's end to
+    // `read` (the SM's L1, Cache::shader_read), which may refuse one (retried the next cycle).
+    void set_shader_reads(double per_ray, std::function<bool(uint64_t addr, uint64_t cycle)> read);
 
 private:
     void tick();     // AT
@@ -51,6 +56,11 @@ private:
     tlm::tlm_sync_enum nb_transport_bw(tlm::tlm_generic_payload& t, tlm::tlm_phase& ph, sc_core::sc_time& d);
     tlm::tlm_generic_payload* make_payload(const ChunkRequest& r);
     void wake_at(uint64_t cycle);
+    void retire(const std::vector<RetiredRay>& rays, uint64_t c);  // to the trace source; shader reads owed
+    void shader_cycle(uint64_t c);  // one shader read, if any is owed
+
+    ShaderLoads shader_;
+    std::function<bool(uint64_t, uint64_t)> shader_read_;
 
     uint32_t sm_;
     RtUnitCore core_;
