@@ -47,7 +47,7 @@ CONFIGS = {
 CONFIG_ARG = {"updated": str(HERE / "configs" / "updated-mobile.json"), "paper": "paper"}
 # What the authors' RT unit does that the `paper` preset does not switch on yet (docs/paper-preset.md
 # says why); updated-mobile.json has it.
-CONFIG_SETS = {"updated": [], "paper": ["--set", "rt.merge_in_flight=true"]}
+CONFIG_SETS = {"updated": [], "paper": ["--set", "rt.merge_in_flight=true", "--set", "workload.shader_reads=5.5"]}
 # The TTP speed-up: (baseline, with TTP) pairs of reference configs.
 PAIRS = [("dfs", "dfs-ttp", "DFS, updated-config"), ("base", "ttp", "BFS, updated-config"),
          ("paper-dfs", "paper-dfs-ttp", "DFS, paper (tested-cfgs)"), ("paper-base", "paper-ttp", "BFS, paper (tested-cfgs)")]
@@ -444,7 +444,8 @@ def main():
          "reads at L1 and L2 split into the RT unit's (`RT_*` breakdowns) and the rest, the shaders' (global reads "
          "less the RT unit's; retries left out); writes reaching L2 (`gpgpu_n_mem_write_global`), of which the RT "
          "unit's hit records (`rt_writes`, 32 B each) and the shaders' stores; DRAM reads. rtunit: its L1 and L2 "
-         "demand reads and DRAM reads per ray; it writes nothing.")
+         "demand reads and DRAM reads per ray; it writes nothing. The reads it models for the shaders "
+         "(`workload.shader_reads`, `model/shader_loads.h`) are in its DRAM reads here, not in its L1 and L2 demand reads.")
     md.p()
     rows, sh_l1_share, sh_l2_share, dram_ratio, rt_reads = [], [], [], [], []
     for k in keys:
@@ -469,17 +470,24 @@ def main():
               "shader share of L1 reads", "not the RT unit's reads: share of L2 requests"], rows)
     if rows:
         dr = [x for x in dram_ratio if x is not None]
+        med = sorted(shader_traffic(ref[k])["sh_l2"] for k in keys if k[4] == "dfs" and k[1] == 64)
+        used = json.loads((HERE / "configs" / "updated-mobile.json").read_text())["workload"]["shader_reads"]
+        if med:
+            m = med[len(med) // 2] if len(med) % 2 else (med[len(med) // 2 - 1] + med[len(med) // 2]) / 2
+            md.p(f"The shaders' L2 reads per ray on the {len(med)} 64x64 DFS runs: {med[0]:.1f} to {med[-1]:.1f}, median {m:.2f}; "
+                 f"rtunit models them as `workload.shader_reads` = {used} sectors of fresh data per ray after each trace "
+                 f"({'the median, to 0.1' if abs(m - used) < 0.05 else 'NOT the median: update the configurations'}).")
+            md.p()
         md.p(f"The RT unit's own L1 reads per ray: rtunit's are {min(rt_reads):.2f}x to {max(rt_reads):.2f}x the "
              f"reference's (geometric mean {geomean(rt_reads):.3f}x; {sum(abs(x - 1) <= 0.10 for x in rt_reads)} of "
              f"{len(rt_reads)} within 10 %).")
         md.p()
         md.p(f"On these {len(rows)} runs the shaders make {min(sh_l1_share):.0%} to {max(sh_l1_share):.0%} of the reads at "
              f"L1, and requests other than the RT unit's reads (the shaders' reads, their stores and the RT unit's hit "
-             f"records) make {min(sh_l2_share):.0%} to {max(sh_l2_share):.0%} of the requests at L2. rtunit models none of "
-             f"them: its DRAM reads per ray are {min(dr):.2f}x to {max(dr):.2f}x the reference's "
-             f"(geometric mean {geomean(dr):.2f}x). What that traffic does to the RT unit (L1 lines it evicts, L2 and DRAM "
-             "bandwidth it takes, and through them the TTP speed-up) is not measured here: it would take the shaders' "
-             "loads and stores modelled as timed requests.")
+             f"records) make {min(sh_l2_share):.0%} to {max(sh_l2_share):.0%} of the requests at L2. rtunit models the "
+             f"shaders' reads that reach L2 (`workload.shader_reads`, above) and none of their stores nor the RT unit's "
+             f"hit records: its DRAM reads per ray are {min(dr):.2f}x to {max(dr):.2f}x the reference's "
+             f"(geometric mean {geomean(dr):.2f}x).")
     (data / "README.md").write_text(md.text())
     print(f"correlate: {len(keys)} runs -> {data / 'README.md'}")
 
