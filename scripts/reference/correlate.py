@@ -439,7 +439,8 @@ def main():
     md.p()
     md.p("The reference's shader code (ray generation, closest-hit, miss and intersection shaders on the SIMT cores) "
          "reads and writes global memory through the same L1, L2 and DRAM as the RT unit; rtunit stands for that code "
-         "with a latency only (`workload.shade_latency`), so its caches and DRAM see the RT unit's node reads alone. "
+         "with a latency (`workload.shade_latency`) and, in the configurations of this report, with its reads that reach "
+         "L2 (`workload.shader_reads`: fresh sectors per ray after each trace). "
          "Per ray, from the reference's counters (runs without TTP, whose prefetches its global counters include): "
          "reads at L1 and L2 split into the RT unit's (`RT_*` breakdowns) and the rest, the shaders' (global reads "
          "less the RT unit's; retries left out); writes reaching L2 (`gpgpu_n_mem_write_global`), of which the RT "
