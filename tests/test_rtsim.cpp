@@ -591,6 +591,18 @@ TEST(RtsimTiming, VcdHasTheDocumentedSignals) {
 // RtUnitCore.AReadJoinsTheWarpsReadOfTheSameChunkInFlight): on a path-traced wknd frame each
 // fidelity merges reads into its warps' chunks in flight, so it requests fewer chunks than
 // unmerged, with every ray's nodes and hits unchanged, and a response for every request.
+namespace {
+// A small path-traced wknd frame under `paper` in `fidelity`, without and with `--set change`:
+// both runs' statistics.
+std::pair<nlohmann::json, nlohmann::json> wknd_without_and_with(TempDir& dir, const std::string& fidelity, const std::string& change) {
+    const std::string args = "--scene wknd --width 48 --height 48 --config paper --fidelity " + fidelity;
+    const std::string off = dir.file(fidelity + "-off.json"), on = dir.file(fidelity + "-on.json");
+    EXPECT_EQ(rtsim(dir, args + " --stats " + off).status, 0) << fidelity;
+    EXPECT_EQ(rtsim(dir, args + " --set " + change + " --stats " + on).status, 0) << fidelity << " " << change;
+    return {nlohmann::json::parse(read_text(off)), nlohmann::json::parse(read_text(on))};
+}
+}  // namespace
+
 // workload.shader_reads in every timing fidelity: the shader code's reads go through each SM's
 // L1, L2 and DRAM. Counted against the frame's rays (per ray, less under one sector per SM of
 // fraction); each a fresh sector, so every one misses L1 and L2, and the DRAM reads are the L2's
@@ -601,11 +613,7 @@ TEST(RtsimTiming, ShaderReadsGoThroughL1L2AndDram) {
     TempDir dir;
     auto misses = [](const nlohmann::json& c) { return c["sector_misses"].get<uint64_t>() + c["line_misses"].get<uint64_t>(); };
     for (const std::string fidelity : {"at", "lt", "interval"}) {
-        const std::string args = "--scene wknd --width 48 --height 48 --config paper --fidelity " + fidelity;
-        const std::string off = dir.file(fidelity + "-off.json"), on = dir.file(fidelity + "-on.json");
-        ASSERT_EQ(rtsim(dir, args + " --stats " + off).status, 0) << fidelity;
-        ASSERT_EQ(rtsim(dir, args + " --set workload.shader_reads=2.5 --stats " + on).status, 0) << fidelity;
-        const auto a = nlohmann::json::parse(read_text(off)), b = nlohmann::json::parse(read_text(on));
+        const auto [a, b] = wknd_without_and_with(dir, fidelity, "workload.shader_reads=2.5");
         const auto &t = b["timing"], &l1 = t["l1"]["shader"], &l2 = t["l2"]["shader"];
         const uint64_t reads = t["rt_unit"]["shader_reads"].get<uint64_t>(), rays = b["rays"].get<uint64_t>();
         EXPECT_EQ(a["timing"]["rt_unit"]["shader_reads"].get<uint64_t>(), 0u) << fidelity;
@@ -634,11 +642,7 @@ TEST(RtsimTiming, ShaderReadsGoThroughL1L2AndDram) {
 TEST(RtsimTiming, MergingReadsInFlightChangesNoHitInAnyFidelity) {
     TempDir dir;
     for (const std::string fidelity : {"at", "lt", "interval"}) {
-        const std::string args = "--scene wknd --width 48 --height 48 --config paper --fidelity " + fidelity;
-        const std::string off = dir.file(fidelity + "-off.json"), on = dir.file(fidelity + "-on.json");
-        ASSERT_EQ(rtsim(dir, args + " --stats " + off).status, 0) << fidelity;
-        ASSERT_EQ(rtsim(dir, args + " --set rt.merge_in_flight=true --stats " + on).status, 0) << fidelity;
-        const auto a = nlohmann::json::parse(read_text(off)), b = nlohmann::json::parse(read_text(on));
+        const auto [a, b] = wknd_without_and_with(dir, fidelity, "rt.merge_in_flight=true");
         const auto &ra = a["timing"]["rt_unit"], &rb = b["timing"]["rt_unit"];
         EXPECT_EQ(ra["merged_in_flight"].get<uint64_t>(), 0u) << fidelity;
         EXPECT_GT(rb["merged_in_flight"].get<uint64_t>(), 100u) << fidelity;
