@@ -321,9 +321,9 @@ void RtUnitCore::schedule_warp(uint64_t now) {
         const uint64_t node = coalescer_.key(g) & ~3ull;
         // rt.merge_in_flight (the TTP authors' RT unit): a chunk the warp already has queued or in
         // flight is not requested again; these threads join its waiting list and take its response
-        // (abstract_hardware_model.cc l.1041-1093 keeps one queued request per address and size
-        // for the warp; l.1151, 1177-1185 give a returning chunk to every thread of the warp whose
-        // next record starts at its address). A descriptor read and its leaf's first chunk share
+        // (abstract_hardware_model.cc l.1051-1062 keeps one queued request per address and size
+        // for the warp, until its first chunk leaves, l.1113; l.1148-1186 give a returning chunk
+        // to every thread of the warp whose next record starts at its address). A descriptor read and its leaf's first chunk share
         // an address, as there. Limit-study answers never merge with real fetches.
         const bool merge = cfg_.merge_in_flight && !limit_study;
         uint32_t last_sent = ~0u;  // the group's last chunk actually requested (`more` ends there)

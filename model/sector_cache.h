@@ -69,7 +69,7 @@ struct CacheCounts {
     CacheAccessCounts& of(ReqKind k) { return k == ReqKind::Demand ? demand : k == ReqKind::Prefetch ? prefetch : shader; }
     const CacheAccessCounts& of(ReqKind k) const { return k == ReqKind::Demand ? demand : k == ReqKind::Prefetch ? prefetch : shader; }
     static constexpr Counter<CacheCounts> kCounters[] = {
-        {"fills", &CacheCounts::fills, "sectors", "sectors filled from below (demand and prefetch)"},
+        {"fills", &CacheCounts::fills, "sectors", "sectors filled from below (demand, prefetch and shader reads)"},
     };
     static constexpr bool kParts = true;
     template <class F>

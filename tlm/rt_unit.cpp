@@ -178,8 +178,8 @@ void RtUnit::lt_run(uint64_t end) {
         if (on_cycle) on_cycle(c);
 
         uint64_t next = core_.next_event(c);
-        if (shader_.owed()) next = std::min(next, c + 1);
         if (core_.has_request(c + 1)) next = std::max(c + 1, st.port_free);
+        if (shader_.owed()) next = std::min(next, c + 1);  // the shader port has its own cycles
         if (!st.responses.empty()) next = std::min(next, std::max(c + 1, st.responses.top().at));
         if (core_.has_free_slot()) {
             const uint64_t r = source_.earliest_ready(sm_);
