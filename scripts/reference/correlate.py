@@ -167,7 +167,9 @@ def ours(j):
     return {"rays": j["rays"], "nodes": j["nodes_per_ray"], "max_nodes": j["max_nodes_per_ray"], "cycles": j["cycles"],
             "l1_miss": (l1["sector_misses"] + l1["line_misses"] + l1["mshr_hits"]) / max(1, l1["accesses"]),  # rt_cache()
             "l2_miss": (l2["sector_misses"] + l2["line_misses"]) / max(1, l2["accesses"]),
-            "prefetches": t["rt_unit"]["prefetch_queue"]["sent"], "dram_reads": t["dram"]["reads"],
+            # Sectors a prefetch brought into L1: what the reference counts (theirs()).
+            "prefetches": t["l1"]["prefetched"]["fills"], "prefetches_sent": t["rt_unit"]["prefetch_queue"]["sent"],
+            "dram_reads": t["dram"]["reads"],
             "l1_reads": l1["accesses"], "l2_reads": l2["accesses"],
             "image_bytes": j["bvh"]["image_bytes"], "depth": j["bvh"]["depth"]}
 
@@ -177,6 +179,8 @@ def theirs(r):
     acc2, miss2 = rt_cache(r, "rtl2_")
     return {"rays": f(r, "rt_n_total_rays"), "nodes": f(r, "rt_avg_nodes_per_ray"), "max_nodes": f(r, "rt_max_nodes_per_ray"),
             "cycles": f(r, "gpu_sim_cycle"), "l1_miss": miss1 / acc1 if acc1 else None, "l2_miss": miss2 / acc2 if acc2 else None,
+            # m_num_prefetched: one per fill of a prefetch's sector into the RT unit's L1 (gpu-cache.cc
+            # l.1153-1155, baseline_cache::fill; the RT_Total_core block is the L1's), not per sent
             "prefetches": f(r, "rtc_num_prefetched"), "dram_reads": dram_sectors(r, "total_dram_reads")}
 
 
@@ -227,12 +231,14 @@ def main():
     # rtunit.csv: both sides of every run
     keys = sorted(ref)
     metrics = ["rays", "nodes", "max_nodes", "cycles", "l1_miss", "l2_miss", "prefetches", "dram_reads"]
+    extra = ["prefetches_sent"]  # rtunit's only
     with open(data / "rtunit.csv", "w", newline="") as fh:
         w = csv.writer(fh)
-        w.writerow(["scene", "width", "height", "spp", "config"] + [f"{m}_{s}" for m in metrics for s in ("reference", "rtunit")])
+        w.writerow(["scene", "width", "height", "spp", "config"] + [f"{m}_{s}" for m in metrics for s in ("reference", "rtunit")] +
+                   [f"{m}_rtunit" for m in extra])
         for k in keys:
             t, o = theirs(ref[k]), got[k]
-            w.writerow(list(k) + [v for m in metrics for v in (t[m], o[m])])
+            w.writerow(list(k) + [v for m in metrics for v in (t[m], o[m])] + [o[m] for m in extra])
 
     md = Markdown()
     md.p("# rtunit against the TTP authors' simulator")
@@ -416,7 +422,9 @@ def main():
     md.p()
     md.p("Miss rates of the RT unit's reads at L1 and at L2 (the reference's `RT_Total_core_cache_stats_breakdown` and "
          "`RT_L2_cache_stats_breakdown`: misses and sector misses over all reads; rtunit's node-chunk reads at L1 and the "
-         "L2 reads they cause), TTP's prefetches sent and the DRAM reads (the reference's include the shaders' loads). "
+         "L2 reads they cause), TTP's prefetch fills at L1 (sectors a prefetch brought into L1, the reference's "
+         "`m_num_prefetched`; rtunit sends more, most of which find their sector in L1 already: `prefetches_sent` in "
+         "`rtunit.csv`) and the DRAM reads (the reference's include the shaders' loads). "
          "At L1 a read that merges into a fetch already under way is a miss on both sides: the reference's L1 is a "
          "streaming cache, allocated on fill, where such a read finds no line (`rt_cache()` in the script cites the "
          "lines); at L2 it is a hit on both. With TTP the reference's L1 reads include the prefetches' own lookups, "
@@ -431,7 +439,12 @@ def main():
                      f"{t['l2_miss']:.3f} / {o['l2_miss']:.3f}" if t["l2_miss"] is not None else "—",
                      f"{t['prefetches']:,.0f} / {o['prefetches']:,}" if t["prefetches"] else f"0 / {o['prefetches']:,}",
                      f"{t['dram_reads']:,.0f} / {o['dram_reads']:,}"])
-    md.table(["scene", "frame", "config", "L1 miss rate (reference / rtunit)", "L2 miss rate", "prefetches", "DRAM reads"], rows)
+    md.table(["scene", "frame", "config", "L1 miss rate (reference / rtunit)", "L2 miss rate", "prefetch fills at L1", "DRAM reads"], rows)
+    fills = [got[k]["prefetches"] / theirs(ref[k])["prefetches"] for k in keys if theirs(ref[k])["prefetches"]]
+    if fills:
+        md.p()
+        md.p(f"Prefetch fills at L1 on the {len(fills)} runs with TTP: rtunit's are {min(fills):.2f}x to {max(fills):.2f}x "
+             f"the reference's (geometric mean {geomean(fills):.2f}x; {sum(abs(x - 1) <= 0.10 for x in fills)} within 10 %).")
     md.p()
 
     # --- the shaders' memory traffic, which rtunit does not model
