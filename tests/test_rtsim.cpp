@@ -608,7 +608,8 @@ std::pair<nlohmann::json, nlohmann::json> wknd_without_and_with(TempDir& dir, co
 // fraction); each a fresh sector, so every one misses L1 and L2, and the DRAM reads are the L2's
 // misses of all three kinds (a conservation law of the read-only memory system); the rays'
 // nodes and hits do not change, the frame takes longer. Given rays run no shader code: none.
-// A sampled run refuses (its estimate is not validated with them), exit 2, no statistics file.
+// A sampled run refuses (its estimate is not validated with them), exit 2, no statistics file;
+// so does --check-error, which samples.
 TEST(RtsimTiming, ShaderReadsGoThroughL1L2AndDram) {
     TempDir dir;
     auto misses = [](const nlohmann::json& c) { return c["sector_misses"].get<uint64_t>() + c["line_misses"].get<uint64_t>(); };
@@ -636,6 +637,11 @@ TEST(RtsimTiming, ShaderReadsGoThroughL1L2AndDram) {
     const Result r = rtsim(dir, "--scene wknd --width 64 --height 64 --fidelity interval --sample 0.25 --set workload.shader_reads=2 --stats " + sampled);
     EXPECT_EQ(r.status, 2);
     EXPECT_NE(r.err.find("workload.shader_reads 2"), std::string::npos) << r.err;
+    EXPECT_FALSE(std::filesystem::exists(sampled));
+    // --check-error samples too: refused before anything runs (it was an internal error, exit 3).
+    const Result c = rtsim(dir, "--scene wknd --width 64 --height 64 --fidelity interval --check-error 2 --set workload.shader_reads=2 --stats " + sampled);
+    EXPECT_EQ(c.status, 2) << c.err;
+    EXPECT_NE(c.err.find("--check-error"), std::string::npos) << c.err;
     EXPECT_FALSE(std::filesystem::exists(sampled));
 }
 
