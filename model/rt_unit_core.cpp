@@ -62,6 +62,18 @@ uint32_t RtUnitCore::ready_warps() const {
     return n;
 }
 
+RtUnitCore::ThreadView RtUnitCore::thread_view(uint32_t w, uint32_t t) const {
+    ThreadView v;
+    if (w >= warps_.size() || !warps_[w].used || t >= warps_[w].threads.size()) return v;
+    const Thread& th = warps_[w].threads[t];
+    v.status = th.status;
+    v.node = th.rt.trav.done() ? 0 : th.rt.trav.peek().addr;
+    v.l1_miss = th.fetch_l1_miss;
+    v.dram = th.fetch_dram;
+    v.warp = warps_[w].age;
+    return v;
+}
+
 int RtUnitCore::ttp_state(uint32_t w, uint32_t t) const {
     if (w >= warps_.size() || !warps_[w].used || t >= warps_[w].threads.size()) return -1;
     const PrefetchThreadState& p = warps_[w].threads[t].rt.prefetch;

@@ -97,6 +97,16 @@ public:
     uint32_t ready_warps() const;
     size_t prefetch_queue_depth() const { return maq_.prefetches().size(); }
     int ttp_state(uint32_t w, uint32_t t) const;
+    // For the timeline (reading it changes nothing): thread t of slot w's status (Idle for an
+    // empty slot), the node it reads or last read, where its read was served (valid once the read
+    // is whole), and the slot's warp (its order of entering the warp buffer, 0: empty).
+    struct ThreadView {
+        ThreadStatus status = ThreadStatus::Idle;
+        uint64_t node = 0;
+        bool l1_miss = false, dram = false;
+        uint64_t warp = 0;
+    };
+    ThreadView thread_view(uint32_t w, uint32_t t) const;
     // Whether thread t of slot w has the node at `addr` in its stack (tests).
     bool stack_contains(uint32_t w, uint32_t t, uint64_t addr) const;
     // Called for every prefetch chunk a policy generates, at the moment it generates it (tests).

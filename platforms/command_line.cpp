@@ -66,7 +66,7 @@ void check_distinct_outputs(const Args& a) {
     const std::string plan = a.sample_plan.empty() || fs::is_directory(a.sample_plan) ? std::string() : a.sample_plan;
     std::vector<std::pair<fs::path, std::string>> seen;
     for (const auto& [option, path] : {std::pair<const char*, std::string>{"--stats", a.stats}, {"--image", a.image}, {"--hits", a.hits},
-                                       {"--vcd", vcd}, {"--dump-bvh", a.dump_bvh}, {"--dump-rays", a.dump_rays},
+                                       {"--vcd", vcd}, {"--timeline", a.timeline}, {"--dump-bvh", a.dump_bvh}, {"--dump-rays", a.dump_rays},
                                        {"--dump-hits", a.dump_hits}, {"--sample-plan", plan}}) {
         if (path.empty()) continue;
         if (is_special_file(path)) continue;  // /dev/null twice is fine
@@ -112,14 +112,16 @@ RunSpec spec_of(const Args& a, const std::atomic<int>* stop) {
     if (a.rays.empty()) parse_workload(a.workload);  // throws InputError
     if (!a.rays.empty() && !a.image.empty()) throw InputError("--image needs a scene workload, not --rays");
     if (!a.stray.empty()) throw InputError("unexpected argument '" + a.stray.front() + "' (every option starts with --; see rtsim --help)");
-    if (!timing && (!a.vcd.empty() || !a.trace_warp.empty() || !a.sets.empty() || a.quantum || !a.prefetcher.empty() || a.sample != 1.0))
-        throw InputError("--vcd, --trace-warp, --set, --quantum, --prefetcher and --sample need --fidelity at, lt or interval");
-    if (interval && (!a.vcd.empty() || !a.trace_warp.empty() || a.quantum))
-        throw InputError("--vcd, --trace-warp and --quantum need --fidelity at or lt (the interval fidelity has no "
-                         "SystemC signals or quantum)");
+    if (!timing && (!a.vcd.empty() || !a.timeline.empty() || !a.trace_warp.empty() || !a.sets.empty() || a.quantum || !a.prefetcher.empty() ||
+                    a.sample != 1.0))
+        throw InputError("--vcd, --timeline, --trace-warp, --set, --quantum, --prefetcher and --sample need --fidelity at, lt or interval");
+    if (interval && (!a.vcd.empty() || !a.timeline.empty() || !a.trace_warp.empty() || a.quantum))
+        throw InputError("--vcd, --timeline, --trace-warp and --quantum need --fidelity at or lt (the interval fidelity has no "
+                         "SystemC signals, cycle-by-cycle RT unit or quantum)");
     if (a.quantum && spec.run.fidelity != Fidelity::LT) throw InputError("--quantum is the loosely timed model's: it needs --fidelity lt");
     if (a.quantum && *a.quantum == 0) throw InputError("--quantum 0: the LT quantum must be at least 1 core cycle");
-    if (!a.trace_warp.empty() && a.vcd.empty()) throw InputError("--trace-warp traces into the waveforms: it needs --vcd FILE");
+    if (!a.trace_warp.empty() && a.vcd.empty() && a.timeline.empty())
+        throw InputError("--trace-warp picks the warp-buffer slot traced: it needs --vcd FILE or --timeline FILE");
     if (a.sample_seed && a.sample == 1.0) throw InputError("--sample-seed needs --sample RATE below 1");
     if (a.sample_unchecked && a.sample == 1.0) throw InputError("--sample-unchecked needs --sample RATE below 1");
     if (!a.sample_plan.empty() && a.sample == 1.0) throw InputError("--sample-plan keeps a sampled run's pre-pass: it needs --sample RATE below 1");
@@ -134,8 +136,8 @@ RunSpec spec_of(const Args& a, const std::atomic<int>* stop) {
     if (a.segment && *a.segment >= uint64_t(a.sample_segments))
         throw InputError("--segment " + std::to_string(*a.segment) + ": the segments are numbered 0.." + std::to_string(a.sample_segments - 1));
     if (a.segment && !a.merge_segments.empty()) throw InputError("--segment simulates one segment, --merge-segments merges them: give one of the two");
-    if (a.sample_segments > 1 && (!a.hits.empty() || !a.image.empty() || !a.vcd.empty() || a.check_error || a.verify))
-        throw InputError("--hits, --image, --vcd, --check-error and --verify need one continuous run: not with --sample-segments "
+    if (a.sample_segments > 1 && (!a.hits.empty() || !a.image.empty() || !a.vcd.empty() || !a.timeline.empty() || a.check_error || a.verify))
+        throw InputError("--hits, --image, --vcd, --timeline, --check-error and --verify need one continuous run: not with --sample-segments "
                          "(each segment simulates some of the rays)");
     if (!a.merge_segments.empty() && a.merge_segments.size() != size_t(a.sample_segments))
         throw InputError("--merge-segments: " + std::to_string(a.merge_segments.size()) + " files for --sample-segments " +
@@ -144,7 +146,7 @@ RunSpec spec_of(const Args& a, const std::atomic<int>* stop) {
         throw InputError("--threads " + std::to_string(a.threads) + ": allowed are 1 to 4096 threads");
     // Outputs are checked before anything runs: a bad path should not wait for the simulation.
     for (const auto& [option, path] : {std::pair<const char*, std::string>{"--stats", a.stats}, {"--image", a.image},
-                                       {"--hits", a.hits}, {"--vcd", a.vcd}, {"--dump-bvh", a.dump_bvh},
+                                       {"--hits", a.hits}, {"--vcd", a.vcd}, {"--timeline", a.timeline}, {"--dump-bvh", a.dump_bvh},
                                        {"--dump-rays", a.dump_rays}, {"--dump-hits", a.dump_hits}})
         if (!path.empty()) check_writable_folder(option, path);
     // A plan's file, or given a folder a file in it (plan_file; the frame's name is not known yet).
@@ -188,6 +190,12 @@ RunSpec spec_of(const Args& a, const std::atomic<int>* stop) {
     run.threads = unsigned(a.threads);
     run.vcd = vcd_base(a.vcd);
     if (!a.trace_warp.empty()) std::tie(run.trace_sm, run.trace_warp) = parse_trace_warp(a.trace_warp, spec.hw);
+    run.timeline = !a.timeline.empty();
+    if (run.timeline && run.trace_sm >= 0) run.timeline_sm = uint32_t(run.trace_sm), run.timeline_slot = uint32_t(run.trace_warp);
+    // With --trace-warp the VCD's per-thread signals follow the slot too; the timeline alone
+    // does not add them.
+    if (a.vcd.empty()) run.trace_sm = run.trace_warp = -1;
+    spec.timeline = a.timeline;
     run.keep_rays = !a.hits.empty() || a.verify;  // else memory for the rays in flight only
     run.progress = !a.quiet;
     run.stop.flag = stop;
@@ -220,7 +228,7 @@ std::optional<int> parse_command_line(int argc, char** argv, Args& a) {
         "             [--sample RATE [--sample-seed S] [--sample-unchecked]\n"
         "              [--sample-plan FILE] [--sample-segments K [--segment I | --merge-segments FILE...]]] [--check-error N]\n"
         "             [--threads N]\n"
-        "             [--stats FILE.json] [--image FILE.png] [--vcd FILE] [--trace-warp SM:WARP] [--verify] [--quiet]\n"
+        "             [--stats FILE.json] [--image FILE.png] [--vcd FILE] [--timeline FILE.json] [--trace-warp SM:WARP] [--verify] [--quiet]\n"
         "             [--dump-bvh FILE] [--dump-rays FILE] [--dump-hits FILE]\n"
         "       rtsim --stats-schema | --help | --version\n"
         "exit status: 0 ok, 1 a check failed (--verify mismatches), 2 bad input, 3 internal error,\n"
@@ -275,7 +283,8 @@ std::optional<int> parse_command_line(int argc, char** argv, Args& a) {
          "lt, interval: simulate N randomly drawn clusters (and the first wave) of the frame in this fidelity and in AT, "
          "and report the measured difference beside the error estimate")
         ("vcd", po::value(&a.vcd), "write waveforms to this VCD file (at, lt)")
-        ("trace-warp", po::value(&a.trace_warp), "with --vcd: trace each thread's stack depth of warp-buffer slot WARP of SM")
+        ("trace-warp", po::value(&a.trace_warp), "with --vcd: trace each thread's stack depth of warp-buffer slot WARP of SM; with --timeline: the slot it records (default 0:0)")
+        ("timeline", po::value(&a.timeline), "write one warp-buffer slot's threads as Chrome trace events, JSON for Perfetto or chrome://tracing (at, lt)")
         ("stats", po::value(&a.stats), "write statistics JSON")
         ("image", po::value(&a.image), "write the rendered frame as PNG")
         ("verify", po::bool_switch(&a.verify), "compare every ray with Embree (robust mode); exit 1 on mismatches")

@@ -18,7 +18,7 @@ unsigned usable_cores();
 
 struct Args {
     std::string scene = "wknd", assets, workload = "pt", rays, hits, traversal = "dfs", fidelity = "functional";
-    std::string stats, image, config = "mobile", vcd, trace_warp, prefetcher;
+    std::string stats, image, config = "mobile", vcd, trace_warp, prefetcher, timeline;
     std::string dump_bvh, dump_rays, dump_hits;
     std::vector<std::string> sets;
     int width = 128, height = 128, spp = 2, bounces = 16;

@@ -7,6 +7,7 @@
 #include <systemc>
 
 #include "model/treelet.h"
+#include "timeline.h"
 #include "timing_stats.h"
 #include "tlm/rt_complex.h"
 #include "workloads/workload_driver.h"
@@ -100,6 +101,7 @@ struct GpuPlatform::Impl {
     // event at the same time as the model's reordered the kernel's same-time processes and changed
     // the results; the RT complex now orders its own, tlm/ordered_events.h.)
     std::function<void(uint64_t)> sample_windows;
+    std::unique_ptr<Timeline> timeline;  // --timeline
     uint64_t last_sample = 0, next_sample = 0;
 
     Impl(const HwConfig& c, const BvhImage& img, Workload& w, const TimingOptions& o)
@@ -271,6 +273,18 @@ GpuPlatform::GpuPlatform(const HwConfig& cfg, const BvhImage& image, Workload& w
             Impl& i = *impl_;
             i.opt.snapshot(i.so_far(std::max(i.driver.last_progress(), c), true, false));
         };
+    // --timeline: the chosen slot's threads after each cycle of its RT unit, and the prefetches
+    // its TTP picks for them; reading changes nothing.
+    if (opt.timeline) {
+        RtUnit* unit = m.gpu.rt_units().at(opt.timeline_sm).get();
+        m.timeline = std::make_unique<Timeline>(opt.timeline_sm, opt.timeline_slot, cfg.warp_size);
+        Timeline* tl = m.timeline.get();
+        unit->on_cycle = [unit, tl, traced = std::move(unit->on_cycle)](uint64_t cycle) {
+            if (traced) traced(cycle);
+            tl->sample(unit->core(), cycle);
+        };
+        unit->core().on_prefetch_generated = [unit, tl](const ChunkRequest& r) { tl->prefetch(r.warp, r.thread, r.addr, unit->current_cycle()); };
+    }
     m.monitor->describe_stuck = [this]() {
         std::string s;
         for (const auto& u : impl_->gpu.rt_units()) {
@@ -324,6 +338,7 @@ TimingResult GpuPlatform::run() {
     // The frame ends when its last ray retires (the monitor may wake once more after that).
     TimingResult r = m.so_far(m.monitor->interrupted ? std::max(m.driver.last_progress(), m.monitor->stopped_at) : m.driver.last_progress(),
                               m.monitor->interrupted, true);
+    if (m.timeline) r.timeline = m.timeline->json(r.cycles_simulated);
     r.stuck = m.monitor->stuck;
     r.stuck_report = m.monitor->report;
     if (!r.stuck && !r.interrupted && !m.driver.finished()) {

@@ -478,6 +478,7 @@ RunResult run_simulation(const RunSpec& spec, std::ostream* log) {
     } else {
         timing_stage(w, image, ran, rec);
         out.rays = std::move(ran.timing.rays);
+        if (!spec.timeline.empty()) out.files.emplace_back(spec.timeline, std::move(ran.timing.timeline));
         if (reference) verify_stage(scene, *reference, out.rays, ran);
     }
     rec.run_s = seconds_since(t0);

@@ -56,6 +56,7 @@ struct RunSpec {
     // The SoC peripheral's inputs (docs/peripheral.md): the BVH image's bytes, the workload's
     // first rays as 48-byte ray records, and their golden 48-byte hit records (RunResult::files).
     std::string dump_bvh, dump_rays, dump_hits;
+    std::string timeline;  // --timeline: the file TimingResult::timeline goes to (RunResult::files)
     // --check-error N (LT, interval): N clusters drawn besides the first wave simulated in the
     // run's fidelity and in AT; run_check simulates a sample of the frame at `rate` (1: the
     // whole frame) in both (rtsim runs child processes) and returns the two cycle counts.

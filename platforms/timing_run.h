@@ -28,6 +28,10 @@ struct TimingOptions {
     bool progress = false;
     std::string vcd;                  // VCD file (without the .vcd suffix SystemC adds)
     int trace_sm = -1, trace_warp = -1;  // one warp-buffer slot whose threads' stack depths are traced
+    // --timeline (AT, LT): the threads of warp-buffer slot `timeline_slot` of SM `timeline_sm` as
+    // Chrome trace events (platforms/timeline.h), in TimingResult::timeline.
+    bool timeline = false;
+    uint32_t timeline_sm = 0, timeline_slot = 0;
     bool check_protocol = false;      // AT: a base-protocol checker on every socket
     double sample_rate = 1.0;         // < 1: sampled simulation of this share of the frame's warps
     uint64_t sample_seed = 1;
@@ -66,6 +70,7 @@ struct TimingResult {
     std::vector<std::string> protocol_violations;  // with check_protocol
     uint64_t protocol_transactions = 0;
     HierarchyCounts counts;         // per instance (platforms/timing_stats.h writes them)
+    std::string timeline;           // with TimingOptions::timeline: the Chrome trace JSON
     bool sampled = false;
     SampleEstimate estimate;        // sampled runs
     std::vector<WarpRecord> segment_records;  // one segment of a split sample: its warps' records for the merge

@@ -659,6 +659,52 @@ TEST(RtsimTiming, MergingReadsInFlightChangesNoHitInAnyFidelity) {
     }
 }
 
+// --timeline (issue 49): one warp-buffer slot's threads as Chrome trace events. Recording changes
+// no statistic (AT and LT); the file is one JSON object whose events are the slot's 32 threads'
+// spans, each thread's in time order without overlap, named by status (and a fetch by where it
+// was served), with TTP's prefetches as instants; the interval fidelity refuses it.
+TEST(RtsimTiming, TimelineChangesNoStatistic) {
+    TempDir dir;
+    for (const std::string fidelity : {"at", "lt"}) {
+        const std::string args = "--scene wknd --width 64 --height 64 --config paper --prefetcher ttp --fidelity " + fidelity;
+        const std::string a = dir.file(fidelity + "-plain.json"), b = dir.file(fidelity + "-timed.json"), t = dir.file(fidelity + "-timeline.json");
+        ASSERT_EQ(rtsim(dir, args + " --stats " + a).status, 0) << fidelity;
+        const Result r = rtsim(dir, args + " --stats " + b + " --timeline " + t + " --trace-warp 1:2");
+        ASSERT_EQ(r.status, 0) << fidelity << r.err;
+        auto ja = nlohmann::json::parse(read_text(a)), jb = nlohmann::json::parse(read_text(b));
+        erase_host_keys(ja);
+        erase_host_keys(jb);
+        EXPECT_EQ(ja, jb) << fidelity;
+        const auto tl = nlohmann::json::parse(read_text(t));
+        std::map<int, uint64_t> thread_end;
+        std::map<std::string, int> names;
+        for (const auto& e : tl["traceEvents"]) {
+            if (e["ph"] == "M") continue;
+            EXPECT_EQ(e["pid"], 1) << fidelity;
+            const int tid = e["tid"].get<int>();
+            EXPECT_TRUE(tid >= 0 && tid < 32) << tid;
+            ++names[e["name"].get<std::string>()];
+            if (e["ph"] != "X") continue;
+            const uint64_t ts = e["ts"].get<uint64_t>(), dur = e["dur"].get<uint64_t>();
+            EXPECT_GT(dur, 0u);
+            EXPECT_GE(ts, thread_end[tid]) << fidelity << " thread " << tid << ": spans overlap";
+            thread_end[tid] = ts + dur;
+        }
+        EXPECT_EQ(thread_end.size(), 32u) << fidelity;
+        for (const auto& [name, n] : names)
+            EXPECT_TRUE(name == "schedule" || name == "test" || name == "prefetch" || name.rfind("fetch: ", 0) == 0) << name;
+        EXPECT_GT(names["test"], 100) << fidelity;
+        EXPECT_GT(names["fetch: L1 hit"] + names["fetch: L1 miss"] + names["fetch: DRAM"], 100) << fidelity;
+        EXPECT_GT(names["prefetch"], 0) << fidelity;
+        uint64_t last = 0;
+        for (const auto& [tid, end] : thread_end) last = std::max(last, end);
+        EXPECT_LE(last, jb["cycles"].get<uint64_t>()) << fidelity;
+    }
+    const Result r = rtsim(dir, "--scene wknd --width 32 --height 32 --fidelity interval --timeline " + dir.file("i.json"));
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.err.find("--timeline"), std::string::npos) << r.err;
+}
+
 TEST(RtsimTiming, TracingChangesNoStatistic) {
     TempDir dir;
     const char* runs[] = {

@@ -44,6 +44,8 @@ public:
     void wake(bool new_epoch);
     // Called after every cycle the unit works (waveform sampling); may be empty.
     std::function<void(uint64_t cycle)> on_cycle;
+    // The cycle the unit is working in (or last worked in).
+    uint64_t current_cycle() const { return last_cycle_ == ~0ull ? 0 : last_cycle_; }
     // The shader code's loads after each trace (workload.shader_reads): `per_ray` sectors per ray
     // of a retired trace, of data no cache holds, handed one per cycle from the trace's end to
     // `read` (the SM's L1, Cache::shader_read), which may refuse one (retried the next cycle).
