@@ -464,9 +464,10 @@ TEST(RtUnitCore, ResponseHeldBackPastTheTrackingRing) {
 // box over (0..1, 0..1). Ray A, through Y and ending before z = 0, reads the root then Y. Ray B,
 // through Y's box where Y's triangle is not, reads the root, X (its hit: the traversal takes X's
 // child first), then Y (entered nearer than the hit, so not culled), while A's read of Y is still
-// in flight (its responses are held back here). Merged, B's read of Y joins A's: Y's two chunks are requested
-// once, both threads take the one response, and each ray gets the functional traversal's hit;
-// without the merge B requests them again (the test's other half, so that it can fail).
+// in flight (its responses are held back here). Merged, B's read of Y joins A's: Y's two chunks
+// are requested once, both threads take the one response, and each ray gets the functional
+// traversal's hit; without the merge B requests them again (the test's other half, so that it
+// can fail).
 TEST(RtUnitCore, AReadJoinsTheWarpsReadOfTheSameChunkInFlight) {
     Scene s;
     s.name = "two-triangles";
@@ -489,9 +490,9 @@ TEST(RtUnitCore, AReadJoinsTheWarpsReadOfTheSameChunkInFlight) {
     const TraceResult fb = trace_ray(img, b, TraversalOrder::DFS, nullptr, &path_b);
     ASSERT_EQ(path_a.size(), 3u);  // header, root, Y
     ASSERT_EQ(path_b.size(), 4u);  // header, root, X, Y
-    const uint64_t x = path_a[2].addr;  // Y's leaf: the read both make
-    ASSERT_EQ(path_b[3].addr, x);
-    ASSERT_NE(path_b[2].addr, x);
+    const uint64_t y = path_a[2].addr;  // Y's leaf: the read both make
+    ASSERT_EQ(path_b[3].addr, y);
+    ASSERT_NE(path_b[2].addr, y);
     ASSERT_TRUE(fa.hit.hit && fb.hit.hit);
     ASSERT_EQ(fa.hit.prim, 1u);
     ASSERT_EQ(fb.hit.prim, 0u);
@@ -509,7 +510,7 @@ TEST(RtUnitCore, AReadJoinsTheWarpsReadOfTheSameChunkInFlight) {
         core.accept_warp(warp, 0);
         std::multimap<uint64_t, uint64_t> answers;  // cycle -> chunk id
         std::vector<uint64_t> held;
-        uint32_t x_requests = 0;
+        uint32_t y_requests = 0;
         std::map<uint64_t, Hit> got;
         for (uint64_t cyc = 0; cyc < 10000 && !core.idle(); ++cyc) {
             if (cyc == 500)
@@ -519,18 +520,18 @@ TEST(RtUnitCore, AReadJoinsTheWarpsReadOfTheSameChunkInFlight) {
             if (core.has_request(cyc)) {
                 const ChunkRequest r = core.front_request(cyc);
                 core.pop_request(cyc);
-                const bool of_x = r.image_addr >= x && r.image_addr < x + 64;
-                x_requests += of_x;
-                if (of_x && held.size() < 2) held.push_back(r.id);  // A's read of X waits until cycle 500
+                const bool of_y = r.image_addr >= y && r.image_addr < y + 64;
+                y_requests += of_y;
+                if (of_y && held.size() < 2) held.push_back(r.id);  // A's read of Y waits until cycle 500
                 else answers.insert({cyc + 5, r.id});
             }
             core.cycle(cyc);
             for (const RetiredRay& r : core.take_retired()) got[r.key] = r.hit;
         }
         ASSERT_TRUE(core.idle()) << "merge " << merge;
-        EXPECT_EQ(x_requests, merge ? 2u : 4u) << "merge " << merge;
+        EXPECT_EQ(y_requests, merge ? 2u : 4u) << "merge " << merge;
         EXPECT_EQ(core.stats().merged_in_flight, merge ? 2u : 0u);
-        EXPECT_EQ(core.stats().chunk_requests, merge ? 2u + 2u + 2u + 2u : 2u + 2u + 2u + 4u);  // header, root, Y, X (twice unmerged)
+        EXPECT_EQ(core.stats().chunk_requests, merge ? 2u + 2u + 2u + 2u : 2u + 2u + 2u + 4u);  // header, root, X, Y (Y twice unmerged)
         ASSERT_EQ(got.size(), 2u);
         EXPECT_EQ(got[0].prim, fa.hit.prim);
         EXPECT_EQ(got[1].prim, fb.hit.prim);
