@@ -43,7 +43,7 @@ const Key kSchema[] = {
     {"rt.latency.structure", "core cycles", Type::Int, 0, 1000, false, "a BVH header's record: the TLAS's at a ray's start, a BLAS's after an instance leaf (Vulkan-sim's STRUCTURE)"},
     {"workload.resident_warps", "shader warps", Type::Int, 0, 1 << 20, false, "shader warps an SM holds at once (CTAs of one warp); a finished warp's place goes to the next warp of the frame (0: every warp at once)"},
     {"workload.shade_latency", "core cycles", Type::Int, 0, 1e7, false, "cycles of shader code a shader warp runs before each of its traces (ray generation before the first; hit, miss and ray generation code before the others)"},
-    {"workload.shader_reads", "sectors per ray", Type::Real, 0, 1e4, false, "32 B sectors of data no cache holds that the shader code reads after each trace, per ray of the trace: issued from the trace's end, one per cycle, through the SM's L1 (a port of their own), L2 and DRAM, waited for by nobody (0: none)"},
+    {"workload.shader_reads", "sectors per ray", Type::Real, 0, 1e4, false, "32 B sectors of data no cache holds that the shader code reads after each trace, per ray of the trace: issued from the trace's end, one per cycle, through the SM's L1 (a port of their own), L2 and DRAM, waited for by nobody (0: none; given rays, rtsim --rays and the peripheral's jobs, run no shader code and read none)"},
     {"workload.launch_latency", "core cycles", Type::Int, 0, 1e7, false, "cycles from the frame's kernel launch to its first shader warp's start"},
     {"l1.size_kb", "KiB", Type::Int, 1, 1 << 20, true, "L1 data cache per SM"},
     {"l1.assoc", "ways", Type::Int, 0, 1 << 16, false, "ways (0: fully associative)"},
