@@ -21,69 +21,50 @@ Cache::Cache(sc_module_name name, CacheRole role, const CacheConfig& cfg, uint32
 
 // ---- AT ---------------------------------------------------------------------------------------
 
-bool Cache::lookup(tlm::tlm_generic_payload& t) {
-    RtExtension& e = ext(t);
+// A read of the sector at `addr` for `up`; null: a shader read (shader_read), which nobody waits
+// for and whose miss carries no data of the image.
+bool Cache::lookup(uint64_t addr, const RtExtension& e, tlm::tlm_generic_payload* up) {
     const uint64_t token = next_token_++;
-    const CacheOutcome o = tags_.read(t.get_address(), token, e.kind);
-    switch (o) {
+    switch (tags_.read(addr, token, e.kind)) {
         case CacheOutcome::ReservationFail:
             return false;
         case CacheOutcome::Hit:
-            respond_later(t, true);
+            if (up) respond_later(*up, true);
             return true;
         case CacheOutcome::MshrHit:
-            waiting_[token] = &t;
+            waiting_[token] = up;
             return true;
         case CacheOutcome::SectorMiss:
-        case CacheOutcome::LineMiss:
-            waiting_[token] = &t;
-            send_miss(t.get_address(), e, t.get_data_ptr() - (t.get_address() - tags_.sector_of(t.get_address())));
+        case CacheOutcome::LineMiss: {
+            waiting_[token] = up;
+            const uint64_t sector = tags_.sector_of(addr);
+            tlm::tlm_generic_payload* down =
+                pool_.acquire(sector, cfg_.sector, up ? up->get_data_ptr() - (addr - sector) : no_data_.data());
+            RtExtension& de = ext(*down);
+            de = e;
+            de.requester = role_ == CacheRole::L1 ? Requester::L1 : Requester::L2;
+            de.l1_miss = de.dram = false;
+            de.id = sector;
+            // The tag lookup takes the hit latency before the miss leaves.
+            const uint64_t leave = clock_.cycle_at_or_after(sc_time_stamp()) + hit_latency_;
+            miss_queue_.push_back({leave, down});
+            if (miss_queue_.size() == 1) miss_event_.notify(clock_.time_of(leave) - sc_time_stamp());
             return true;
+        }
     }
     return false;
-}
-
-void Cache::send_miss(uint64_t addr, const RtExtension& e, unsigned char* data) {
-    const uint64_t sector = tags_.sector_of(addr);
-    tlm::tlm_generic_payload* down = pool_.acquire(sector, cfg_.sector, data);
-    RtExtension& de = ext(*down);
-    de = e;
-    de.requester = role_ == CacheRole::L1 ? Requester::L1 : Requester::L2;
-    de.l1_miss = de.dram = false;
-    de.id = sector;
-    // The tag lookup takes the hit latency before the miss leaves.
-    const uint64_t leave = clock_.cycle_at_or_after(sc_time_stamp()) + hit_latency_;
-    miss_queue_.push_back({leave, down});
-    if (miss_queue_.size() == 1) miss_event_.notify(clock_.time_of(leave) - sc_time_stamp());
 }
 
 bool Cache::shader_read(uint64_t addr, uint64_t cycle) {
     RtExtension e;
     e.kind = ReqKind::Shader;
-    if (fidelity_ != Fidelity::AT) {
-        tlm::tlm_generic_payload* t = pool_.acquire(tags_.sector_of(addr), cfg_.sector, no_data_.data());
-        ext(*t) = e;
-        sc_time d = clock_.time_of(cycle) - sc_time_stamp();
-        b_transport(*t, d);
-        t->release();
-        return true;
-    }
-    const uint64_t token = next_token_++;
-    switch (tags_.read(addr, token, ReqKind::Shader)) {
-        case CacheOutcome::ReservationFail:
-            return false;
-        case CacheOutcome::Hit:
-            return true;
-        case CacheOutcome::MshrHit:
-            waiting_[token] = nullptr;  // nobody to answer
-            return true;
-        case CacheOutcome::SectorMiss:
-        case CacheOutcome::LineMiss:
-            waiting_[token] = nullptr;
-            send_miss(addr, e, no_data_.data());
-            return true;
-    }
-    return false;
+    if (fidelity_ == Fidelity::AT) return lookup(addr, e, nullptr);
+    tlm::tlm_generic_payload* t = pool_.acquire(tags_.sector_of(addr), cfg_.sector, no_data_.data());
+    ext(*t) = e;
+    sc_time d = clock_.time_of(cycle) - sc_time_stamp();
+    b_transport(*t, d);
+    t->release();
+    return true;
 }
 
 void Cache::respond_later(tlm::tlm_generic_payload& t, bool hit) {
@@ -94,7 +75,7 @@ void Cache::respond_later(tlm::tlm_generic_payload& t, bool hit) {
 tlm::tlm_sync_enum Cache::nb_transport_fw(tlm::tlm_generic_payload& t, tlm::tlm_phase& ph, sc_time& d) {
     if (ph == tlm::BEGIN_REQ) {
         t.acquire();
-        if (lookup(t)) {
+        if (lookup(t.get_address(), ext(t), &t)) {
             ph = tlm::END_REQ;
             return tlm::TLM_UPDATED;
         }
@@ -184,7 +165,7 @@ tlm::tlm_sync_enum Cache::nb_transport_bw(tlm::tlm_generic_payload& t, tlm::tlm_
     }
     t.release();
     // An MSHR freed: retry the request held by a reservation fail.
-    if (blocked_ && lookup(*blocked_)) {
+    if (blocked_ && lookup(blocked_->get_address(), ext(*blocked_), blocked_)) {
         tlm::tlm_generic_payload* b = blocked_;
         blocked_ = nullptr;
         send_end_request(in.operator->(), *b);

@@ -50,8 +50,7 @@ private:
     // AT
     tlm::tlm_sync_enum nb_transport_fw(tlm::tlm_generic_payload& t, tlm::tlm_phase& ph, sc_core::sc_time& d);
     tlm::tlm_sync_enum nb_transport_bw(tlm::tlm_generic_payload& t, tlm::tlm_phase& ph, sc_core::sc_time& d);
-    bool lookup(tlm::tlm_generic_payload& t);  // false: reservation fail
-    void send_miss(uint64_t addr, const RtExtension& e, unsigned char* data);  // the sector holding addr, downstream
+    bool lookup(uint64_t addr, const RtExtension& e, tlm::tlm_generic_payload* up);  // false: reservation fail
     void respond_later(tlm::tlm_generic_payload& t, bool hit);
     void send_responses();  // on respond_: one response per cycle
     void send_misses();     // on miss_event_: one miss per cycle downstream
