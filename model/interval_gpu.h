@@ -69,7 +69,7 @@ public:
     // The shader code's loads after each trace (workload.shader_reads), as the AT and LT RT
     // units issue them (tlm/rt_unit.h): per_ray sectors per ray of a finished trace, of data no
     // cache holds, through the SM's L1 from the trace's end, one per cycle per SM.
-    void set_shader_reads(double per_ray) { shader_per_ray_ = per_ray; }
+    void set_shader_reads(double per_ray);
     // The cycle of the earliest scheduled node fetch (~0: none).
     uint64_t next_event() const;
     // Runs that fetch: its chunks, the node's tests, and the thread's next fetch. A trace whose
@@ -169,8 +169,8 @@ private:
     std::vector<std::vector<uint8_t>> slot_busy_;  // per SM and warp-buffer slot: holds a trace
     uint64_t next_age_ = 0;
     std::vector<Event> batch_;            // the events of one cycle, in the order they run
-    // The shader reads (set_shader_reads): per SM, what is owed and the cycle its shader port is free.
-    double shader_per_ray_ = 0;
+    // The shader reads (set_shader_reads): per SM, what is owed and the cycle its shader port is
+    // free; empty: none.
     std::vector<ShaderLoads> shader_;
     std::vector<uint64_t> shader_free_;
 };
