@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <stdexcept>
 
+#include <absl/container/inlined_vector.h>
+
 #include "treelet.h"
 
 namespace rtu {
@@ -338,19 +340,24 @@ void RtUnitCore::schedule_warp(uint64_t now) {
         // to every thread of the warp whose next record starts at its address). A descriptor read and its leaf's first chunk share
         // an address, as there. Limit-study answers never merge with real fetches.
         const bool merge = cfg_.merge_in_flight && !limit_study;
-        uint32_t last_sent = ~0u;  // the group's last chunk actually requested (`more` ends there)
-        for (uint32_t c = 0; c < group_chunks_[g]; ++c)
-            if (!merge || !w.chunks_pending.contains(chunk_address(placed(node), c))) last_sent = c;
+        const uint64_t at = placed(node);
+        // Per chunk, the request it joins (0: none, it is sent); `more` ends at the last one sent.
+        absl::InlinedVector<uint64_t, 4> joins(group_chunks_[g], 0);
+        uint32_t last_sent = ~0u;
         for (uint32_t c = 0; c < group_chunks_[g]; ++c) {
-            const uint64_t addr = chunk_address(placed(node), c);
             if (merge) {
-                const auto it = w.chunks_pending.find(addr);
-                if (it != w.chunks_pending.end()) {
-                    std::vector<uint16_t>& waiting = slot_of(it->second).threads;
-                    waiting.insert(waiting.end(), members, members + group_size_[g]);
-                    ++stats_.merged_in_flight;
-                    continue;
-                }
+                const auto it = w.chunks_pending.find(chunk_address(at, c));
+                if (it != w.chunks_pending.end()) joins[c] = it->second;
+            }
+            if (!joins[c]) last_sent = c;
+        }
+        for (uint32_t c = 0; c < group_chunks_[g]; ++c) {
+            const uint64_t addr = chunk_address(at, c);
+            if (joins[c]) {
+                std::vector<uint16_t>& waiting = slot_of(joins[c]).threads;
+                waiting.insert(waiting.end(), members, members + group_size_[g]);
+                ++stats_.merged_in_flight;
+                continue;
             }
             ChunkRequest r;
             r.id = next_id_++;
