@@ -16,14 +16,14 @@ const char* span_name(const RtUnitCore::ThreadView& v) {
 }
 }  // namespace
 
-void Timeline::close(uint32_t thread, const Open& o, uint64_t end) {
+void Timeline::append_span(std::string& out, uint32_t thread, const Open& o, uint64_t end) const {
     if (o.view.status == ThreadStatus::Idle || end <= o.since) return;
     char e[320];
     std::snprintf(e, sizeof e,
                   "%s{\"name\":\"%s\",\"cat\":\"thread\",\"ph\":\"X\",\"ts\":%" PRIu64 ",\"dur\":%" PRIu64
                   ",\"pid\":%u,\"tid\":%u,\"args\":{\"warp\":%" PRIu64 ",\"node\":%" PRIu64 "}}",
-                  events_.empty() ? "" : ",\n", span_name(o.view), o.since, end - o.since, sm_, thread, o.view.warp, o.view.node);
-    events_ += e;
+                  out.empty() ? "" : ",\n", span_name(o.view), o.since, end - o.since, sm_, thread, o.view.warp, o.view.node);
+    out += e;
 }
 
 void Timeline::sample(const RtUnitCore& core, uint64_t cycle) {
@@ -42,7 +42,7 @@ void Timeline::sample(const RtUnitCore& core, uint64_t cycle) {
             o.view.l1_miss = v.l1_miss;
             o.view.dram = v.dram;
         }
-        close(t, o, cycle);
+        append_span(events_, t, o, cycle);
         o = {v, cycle};
     }
 }
@@ -57,13 +57,13 @@ void Timeline::prefetch(uint32_t slot, uint32_t thread, uint64_t addr, uint64_t 
 }
 
 std::string Timeline::json(uint64_t end) const {
-    Timeline copy = *this;
-    for (uint32_t t = 0; t < copy.open_.size(); ++t) copy.close(t, copy.open_[t], end);
     char meta[200];
     std::snprintf(meta, sizeof meta, "{\"name\":\"process_name\",\"ph\":\"M\",\"pid\":%u,\"args\":{\"name\":\"RT unit %u, warp-buffer slot %u\"}}", sm_,
                   sm_, slot_);
-    return std::string("{\"displayTimeUnit\":\"ns\",\"otherData\":{\"time_unit\":\"1 us on the time axis = 1 core cycle\"},\n\"traceEvents\":[") +
-           meta + (copy.events_.empty() ? "" : ",\n") + copy.events_ + "]}\n";
+    std::string events = meta;  // then the closed spans and instants, then the spans still open
+    if (!events_.empty()) events.append(",\n").append(events_);
+    for (uint32_t t = 0; t < open_.size(); ++t) append_span(events, t, open_[t], end);
+    return "{\"displayTimeUnit\":\"ns\",\"otherData\":{\"time_unit\":\"1 us on the time axis = 1 core cycle\"},\n\"traceEvents\":[" + events + "]}\n";
 }
 
 }  // namespace rtu

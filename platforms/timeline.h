@@ -30,7 +30,8 @@ private:
         RtUnitCore::ThreadView view;
         uint64_t since = 0;
     };
-    void close(uint32_t thread, const Open& o, uint64_t end);
+    // Appends the span of `o` up to `end` (if it has one) to `out`, a comma-separated event list.
+    void append_span(std::string& out, uint32_t thread, const Open& o, uint64_t end) const;
 
     uint32_t sm_, slot_;
     std::vector<Open> open_;
