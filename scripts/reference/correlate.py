@@ -35,6 +35,8 @@ ROOT = HERE.parent.parent
 sys.path.insert(0, str(ROOT / "scripts" / "sweep"))
 from report_util import Markdown, geomean  # noqa: E402
 
+import paper_keys  # noqa: E402  (this folder)
+
 SCENE_ASSETS = {"wknd": None, "ship": "ship", "bunny": "bunny", "ref": "dragon", "bath": "bath", "sprng": "sprng",
                 "party": "party"}
 # reference config -> (rtunit configuration, traversal, prefetcher)
@@ -43,11 +45,18 @@ CONFIGS = {
     "base": ("updated", "bfs", "none"), "ttp": ("updated", "bfs", "ttp"),
     "paper-dfs": ("paper", "dfs", "none"), "paper-dfs-ttp": ("paper", "dfs", "ttp"),
     "paper-base": ("paper", "bfs", "none"), "paper-ttp": ("paper", "bfs", "ttp"),
+    # The paper's limit studies (section 6), on the reference built with limit-study.patch.
+    "dfs-perfect-up": ("updated", "dfs", "perfect-up"), "dfs-perfect-down": ("updated", "dfs", "perfect-down"),
+    "paper-dfs-perfect-up": ("paper", "dfs", "perfect-up"), "paper-dfs-perfect-down": ("paper", "dfs", "perfect-down"),
 }
+# Limit-study config -> its DFS baseline. Their runs are not frames of the matrix: they have a
+# section of their own and stay out of the cycles, miss rates and correlation of the others.
+LIMIT_BASE = {"dfs-perfect-up": "dfs", "dfs-perfect-down": "dfs",
+              "paper-dfs-perfect-up": "paper-dfs", "paper-dfs-perfect-down": "paper-dfs"}
 CONFIG_ARG = {"updated": str(HERE / "configs" / "updated-mobile.json"), "paper": "paper"}
 # What the authors' RT unit does that the `paper` preset does not switch on yet (docs/paper-preset.md
-# says why); updated-mobile.json has it.
-CONFIG_SETS = {"updated": [], "paper": ["--set", "rt.merge_in_flight=true", "--set", "workload.shader_reads=5.5"]}
+# says why; paper_keys.py); updated-mobile.json has it.
+CONFIG_SETS = {"updated": [], "paper": paper_keys.set_arguments()}
 # The TTP speed-up: (baseline, with TTP) pairs of reference configs.
 PAIRS = [("dfs", "dfs-ttp", "DFS, updated-config"), ("base", "ttp", "BFS, updated-config"),
          ("paper-dfs", "paper-dfs-ttp", "DFS, paper (tested-cfgs)"), ("paper-base", "paper-ttp", "BFS, paper (tested-cfgs)")]
@@ -171,7 +180,8 @@ def ours(j):
             "prefetches": t["l1"]["prefetched"]["fills"], "prefetches_sent": t["rt_unit"]["prefetch_queue"]["sent"],
             "dram_reads": t["dram"]["reads"],
             "l1_reads": l1["accesses"], "l2_reads": l2["accesses"],
-            "image_bytes": j["bvh"]["image_bytes"], "depth": j["bvh"]["depth"]}
+            "image_bytes": j["bvh"]["image_bytes"], "depth": j["bvh"]["depth"],
+            "limit_hits": t["rt_unit"]["limit_study_hits"]}
 
 
 def theirs(r):
@@ -181,7 +191,9 @@ def theirs(r):
             "cycles": f(r, "gpu_sim_cycle"), "l1_miss": miss1 / acc1 if acc1 else None, "l2_miss": miss2 / acc2 if acc2 else None,
             # m_num_prefetched: one per fill of a prefetch's sector into the RT unit's L1 (gpu-cache.cc
             # l.1153-1155, baseline_cache::fill; the RT_Total_core block is the L1's), not per sent
-            "prefetches": f(r, "rtc_num_prefetched"), "dram_reads": dram_sectors(r, "total_dram_reads")}
+            "prefetches": f(r, "rtc_num_prefetched"), "dram_reads": dram_sectors(r, "total_dram_reads"),
+            # limit-study.patch: 32 B reads answered as L1 hits without reaching the cache
+            "limit_hits": f(r, "rt_limit_study_hits")}
 
 
 def rel(a, b):
@@ -201,6 +213,56 @@ def pearson(xs, ys):
     sxx = sum((x - mx) ** 2 for x in xs)
     syy = sum((y - my) ** 2 for y in ys)
     return sxy / math.sqrt(sxx * syy) if sxx > 0 and syy > 0 else None
+
+
+def limit_section(md, ref, got, limit_keys):
+    """The paper's limit studies on both sides: perfect upward and downward traversal against the
+    DFS baseline of the same frame and configuration."""
+    frames = sorted({k[:4] + (LIMIT_BASE[k[4]],) for k in limit_keys})
+    frames = [b for b in frames if b in ref and all(b[:4] + (c,) in ref for c in LIMIT_BASE if LIMIT_BASE[c] == b[4])]
+    if not frames:
+        return
+    md.p("## The limit studies")
+    md.p()
+    md.p("The paper's section 6: \"for perfect upward traversal, 2nd and later pops after a push always hit in the L1 "
+         "cache, and for perfect downward traversal, 1st pops after a push always hit\" (geometric means 1.79x and 1.35x "
+         "over its 16 scenes at 128x128). The authors' fork has no limit study; the reference runs here were made with "
+         "`scripts/reference/limit-study.patch`, which marks each BVH record with the pop streak of the pop that read it "
+         "(the fork's own `stack_trend`, `vulkan_ray_tracing.cc` l.529-568) and answers the marked 32 B reads as L1 hits "
+         "where the RT unit would look them up. Speed-up = DFS baseline cycles / limit-study cycles, same frame and "
+         "configuration; \"hits per ray\": 32 B reads per ray answered so.")
+    md.p()
+    rows, agree, n, errs = [], 0, 0, []
+    for b in frames:
+        up, down = b[:4] + (b[4] + "-perfect-up",), b[:4] + (b[4] + "-perfect-down",)
+        tb, ob = theirs(ref[b])["cycles"], got[b]["cycles"]
+        t_up, t_down = tb / theirs(ref[up])["cycles"], tb / theirs(ref[down])["cycles"]
+        o_up, o_down = ob / got[up]["cycles"], ob / got[down]["cycles"]
+        n += 1
+        same = (t_up > t_down) == (o_up > o_down)
+        agree += same
+        errs += [rel(o_up, t_up), rel(o_down, t_down)]
+        ray_t, ray_o = theirs(ref[b])["rays"], got[b]["rays"]
+        hits = [f"{(theirs(ref[c])['limit_hits'] or 0) / ray_t:.1f} / {got[c]['limit_hits'] / ray_o:.1f}" for c in (up, down)]
+        rows.append([b[0], f"{b[1]}x{b[2]}", b[4], f"{t_up:.3f} / {o_up:.3f}", pct(rel(o_up, t_up)), hits[0],
+                     f"{t_down:.3f} / {o_down:.3f}", pct(rel(o_down, t_down)), hits[1],
+                     ("up" if t_up > t_down else "down") + " / " + ("up" if o_up > o_down else "down")])
+    md.table(["scene", "frame", "baseline", "perfect-up (reference / rtunit)", "error", "hits per ray", "perfect-down",
+              "error", "hits per ray", "larger (reference / rtunit)"], rows)
+    by = {}
+    for b in frames:
+        by.setdefault(b[4], []).append(b)
+    for base, bs in sorted(by.items()):
+        g = {}
+        for side, val in (("reference", lambda k: theirs(ref[k])["cycles"]), ("rtunit", lambda k: got[k]["cycles"])):
+            g[side] = tuple(geomean([val(b) / val(b[:4] + (b[4] + m,)) for b in bs]) for m in ("-perfect-up", "-perfect-down"))
+        md.p(f"- `{base}`, {len(bs)} frame{'s' if len(bs) > 1 else ''}: geometric means perfect-up / perfect-down {g['reference'][0]:.3f}x / "
+             f"{g['reference'][1]:.3f}x on the reference, {g['rtunit'][0]:.3f}x / {g['rtunit'][1]:.3f}x on rtunit.")
+    worst = max(abs(e) for e in errs)
+    md.p()
+    md.p(f"The larger of the two limits is the same on both sides on {agree} of {n} frames; rtunit's limit-study "
+         f"speed-ups are within {100 * worst:.1f} % of the reference's (the worst of {len(errs)}).")
+    md.p()
 
 
 def main():
@@ -230,13 +292,15 @@ def main():
     print(file=sys.stderr)
     # rtunit.csv: both sides of every run
     keys = sorted(ref)
+    limit_keys = [k for k in keys if k[4] in LIMIT_BASE]
+    keys = [k for k in keys if k[4] not in LIMIT_BASE]
     metrics = ["rays", "nodes", "max_nodes", "cycles", "l1_miss", "l2_miss", "prefetches", "dram_reads"]
     extra = ["prefetches_sent"]  # rtunit's only
     with open(data / "rtunit.csv", "w", newline="") as fh:
         w = csv.writer(fh)
         w.writerow(["scene", "width", "height", "spp", "config"] + [f"{m}_{s}" for m in metrics for s in ("reference", "rtunit")] +
                    [f"{m}_rtunit" for m in extra])
-        for k in keys:
+        for k in sorted(keys + limit_keys):
             t, o = theirs(ref[k]), got[k]
             w.writerow(list(k) + [v for m in metrics for v in (t[m], o[m])] + [o[m] for m in extra])
 
@@ -246,7 +310,8 @@ def main():
     versions = {ref[k]["vulkan_sim"][:8] + "/" + ref[k]["mesa"][:8] + "/" + ref[k]["rtiv"][:8] for k in keys}
     md.p(f"Reference: the authors' Vulkan-sim fork, Mesa and LumiBench (commits {', '.join(sorted(versions))}: "
          "vulkan-sim/mesa/RayTracingInVulkan), run by `scripts/reference/run_reference.py` on the matrix of "
-         f"`scripts/reference/matrices/`: {len(keys)} runs in `reference.csv`. rtunit: AT, the same scene, frame, traversal "
+         f"`scripts/reference/matrices/`: {len(keys) + len(limit_keys)} runs in `reference.csv` ({len(limit_keys)} of them "
+         "limit studies, in a section of their own). rtunit: AT, the same scene, frame, traversal "
          f"and prefetcher, rtsim {binary} (sha256 prefix of the binary); `rtunit.csv` holds both sides. Made by "
          "`/usr/bin/python3 scripts/reference/correlate.py` (rtunit's runs are cached under `runs/`).")
     md.p()
@@ -509,6 +574,7 @@ def main():
              f"shaders' reads that reach L2 (`workload.shader_reads`, above) and none of their stores nor the RT unit's "
              f"hit records: its DRAM reads per ray are {min(dr):.2f}x to {max(dr):.2f}x the reference's "
              f"(geometric mean {geomean(dr):.2f}x).")
+    limit_section(md, ref, got, limit_keys)
     (data / "README.md").write_text(md.text())
     print(f"correlate: {len(keys)} runs -> {data / 'README.md'}")
 

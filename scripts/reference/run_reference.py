@@ -22,6 +22,11 @@ Matrix items are SCENE:WxH:SPP:CONFIG, for example ship:32x32:1:ttp.
           ttp      -BFS_based_traversal 1 -stack_trend_prefetch 1   (the fork's config as shipped)
   These four are the fork's configs/updated-config/MOBILE-gpgpusim.config (64 KB L1, 16 RT warps,
   intersection latencies 2,4,4,2,4,4,4, BookSim interconnect) with the two switches set.
+  dfs-perfect-up, dfs-perfect-down (and paper-dfs-perfect-up, paper-dfs-perfect-down): DFS
+          without TTP, with the paper's limit studies (section 6: 2nd and later pops after a push,
+          or 1st pops, answered as L1 hits). The fork has no limit study: these need the
+          installation built with limit-study.patch (in this folder), and the run fails
+          ("no-limit-study") where the simulator does not print that it applied one.
   paper-dfs, paper-dfs-ttp, paper-base, paper-ttp: the same switches on
   configs/tested-cfgs/MOBILE/gpgpusim.config (32 KB L1, 4 RT warps, latencies 4,8,8,4,8,8,8, the
   built-in crossbar: the paper's Table 2, and rtunit's `paper` preset), where the two switches
@@ -42,7 +47,9 @@ so several runs can go at once (--jobs). Results:
     OUTDIR/reference.csv             one row per attempt (appended; items already there with exit
                                      code 0 and status "ok" are skipped, so an interrupted matrix
                                      resumes). status: ok | crashed-at-exit (statistics complete,
-                                     then the process died) | no-stats | failed | timeout. Items
+                                     then the process died) | no-stats | failed | timeout |
+                                     no-limit-study (a limit-study CONFIG on an installation
+                                     without limit-study.patch). Items
                                      that are not ok are tried again (--retries); use the ok rows.
     OUTDIR/logs/<tag>.log.gz         the run's full stdout + stderr
     OUTDIR/images/<tag>.ppm          the frame the simulator wrote
@@ -105,7 +112,19 @@ CONFIG_SETS = {
 # CONFIG -> (configuration set, BFS_based_traversal, stack_trend_prefetch)
 CONFIGS = {"dfs": ("updated", 0, 0), "dfs-ttp": ("updated", 0, 1), "base": ("updated", 1, 0), "ttp": ("updated", 1, 1),
            "paper-dfs": ("tested", 0, 0), "paper-dfs-ttp": ("tested", 0, 1), "paper-base": ("tested", 1, 0),
-           "paper-ttp": ("tested", 1, 1)}
+           "paper-ttp": ("tested", 1, 1),
+           "dfs-perfect-up": ("updated", 0, 0), "dfs-perfect-down": ("updated", 0, 0),
+           "paper-dfs-perfect-up": ("tested", 0, 0), "paper-dfs-perfect-down": ("tested", 0, 0)}
+
+
+def limit_study(config):
+    """The limit study a CONFIG asks for (RTSIM_LIMIT_STUDY of limit-study.patch), or ''."""
+    for mode in ("perfect-up", "perfect-down"):
+        if config.endswith("-" + mode):
+            return mode
+    return ""
+
+
 RTIV_BUILD = "RayTracingInVulkan/build/linux"
 
 # ----------------------------------------------------------------------------------------------
@@ -278,7 +297,7 @@ TOP_STATS = [
     "rt_n_total_rays", "rt_n_closesthit_rays", "rt_n_anyhit_rays", "rt_num_hits", "rt_num_any_hits",
     "rt_avg_nodes_per_ray", "rt_max_nodes_per_ray", "rt_tot_nodes_per_ray", "rt_max_tree_depth",
     "rt_avg_warp_latency", "rt_avg_thread_latency", "rt_avg_efficiency", "rt_avg_warp_occupancy",
-    "rt_avg_op_intensity", "rt_avg_performance", "rt_writes", "rt_max_mem_store_q",
+    "rt_avg_op_intensity", "rt_avg_performance", "rt_writes", "rt_limit_study_hits", "rt_max_mem_store_q",
     "rt_avg_mem_store_cycles", "rt_total_cycles", "rt_total_cycles_sum",
     "gpgpu_n_rt_insn", "gpgpu_n_rt_access_insn",
     # L1D (the RT unit uses L1 as its RT cache: -gpgpu_rt_use_l1 1)
@@ -466,7 +485,7 @@ class Item:
         return (self.scene, str(self.width), str(self.height), str(self.spp), self.config)
 
 
-ID_COLUMNS = ["scene", "lumibench_id", "width", "height", "spp", "config", "bfs", "ttp",
+ID_COLUMNS = ["scene", "lumibench_id", "width", "height", "spp", "config", "bfs", "ttp", "limit_study",
               "status", "exit_code", "wall_s", "peak_rss_mb", "started_utc", "finished_utc",
               "vulkan_sim", "mesa", "rtiv", "assets_sha", "scene_dir_order_sha",
               "app_models_loaded", "log", "error"]
@@ -518,8 +537,17 @@ class Csv:
     def append(self, row):
         with self.lock, open(self.path + ".lock", "w") as lk:
             fcntl.flock(lk, fcntl.LOCK_EX)
-            _, header = self._rows()
+            rows, header = self._rows()
             new = header is None
+            if header and header != CSV_COLUMNS and set(header) < set(CSV_COLUMNS):
+                # columns added since the file was written: rewrite it whole with them (empty in
+                # the older rows), to a temporary name first
+                with open(self.path + ".tmp", "w", newline="", encoding="utf-8") as f:
+                    w = csv.DictWriter(f, fieldnames=CSV_COLUMNS)
+                    w.writeheader()
+                    w.writerows(rows)
+                os.replace(self.path + ".tmp", self.path)
+                header = CSV_COLUMNS
             if header and header != CSV_COLUMNS:
                 log(f"warning: {self.path} has another column set; writing its columns only")
             with open(self.path, "a", newline="", encoding="utf-8") as f:
@@ -688,7 +716,8 @@ class Runner:
         _, bfs, ttp = CONFIGS[item.config]
         row = {"scene": item.scene, "lumibench_id": SCENES[item.scene]["id"],
                "width": item.width, "height": item.height, "spp": item.spp,
-               "config": item.config, "bfs": bfs, "ttp": ttp, **self.versions}
+               "config": item.config, "bfs": bfs, "ttp": ttp, "limit_study": limit_study(item.config),
+               **self.versions}
         bindir, mroot, fingerprint, order = self.prepare(item, run)
         row["assets_sha"] = sha256_listing(fingerprint) if fingerprint else "procedural"
         row["scene_dir_order_sha"] = (hashlib.sha256("\n".join(order).encode()).hexdigest()[:16]
@@ -699,16 +728,18 @@ class Runner:
         # then set the private MESA_ROOT (lavapipe writes the shaders' PTX to
         # $MESA_ROOT/gpgpusimShaders/) and start the application from bin/.
         script = ('source "$1/env-vsim.sh" >/dev/null 2>&1; export MESA_ROOT="$2/"; '
-                  'cd "$3" || exit 98; shift 3; exec ./RayTracer "$@"')
+                  'if [ -n "$4" ]; then export RTSIM_LIMIT_STUDY="$4"; else unset RTSIM_LIMIT_STUDY; fi; '
+                  'cd "$3" || exit 98; shift 4; exec ./RayTracer "$@"')
         cmd = ["nice", "-n", str(self.nice), "bash", "-c", script, "run_reference",
-               self.root, mroot, bindir] + app_args
+               self.root, mroot, bindir, row["limit_study"]] + app_args
         logpath = os.path.join(run, "run.log")
         row["started_utc"] = utc_now()
         log(f"start {item.text} ({' '.join(app_args)})")
         t0 = time.monotonic()
         with open(logpath, "wb") as logf:
             logf.write(f"# run_reference.py {item.text}: {' '.join(app_args)} "
-                       f"(BFS_based_traversal={bfs} stack_trend_prefetch={ttp})\n".encode())
+                       f"(BFS_based_traversal={bfs} stack_trend_prefetch={ttp}"
+                       f"{' RTSIM_LIMIT_STUDY=' + row['limit_study'] if row['limit_study'] else ''})\n".encode())
             logf.flush()
             p = subprocess.Popen(cmd, stdout=logf, stderr=subprocess.STDOUT,
                                  stdin=subprocess.DEVNULL, start_new_session=True)
@@ -740,7 +771,11 @@ class Runner:
         row.update(stats)
         row["app_models_loaded"] = len(re.findall(r"^- loading '[^']*\.obj'", text, re.M))
         finished = "Max simulated kernels of" in text
-        if p.returncode == 0 and "gpu_sim_cycle" in stats and finished:
+        applied = not row["limit_study"] or f"RTSIM_LIMIT_STUDY = {row['limit_study']}" in text
+        if not applied:
+            # the installation was built without limit-study.patch: the run is a plain DFS run
+            row["status"] = "no-limit-study"
+        elif p.returncode == 0 and "gpu_sim_cycle" in stats and finished:
             row["status"] = "ok"
         elif timed_out:
             row["status"] = "timeout"
@@ -752,7 +787,9 @@ class Runner:
             row["status"] = "no-stats"
         else:
             row["status"] = "failed"
-        if row["status"] != "ok":
+        if row["status"] == "no-limit-study":
+            row["error"] = "the simulator did not apply the limit study: build it with scripts/reference/limit-study.patch"
+        elif row["status"] != "ok":
             row["error"] = first_error(text)
             if p.returncode < 0:
                 row["error"] = f"signal {-p.returncode}: {row['error']}"
