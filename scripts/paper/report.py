@@ -4,6 +4,7 @@
 Every figure of ours stands next to the paper's, and every comparison (direction, rank order,
 share of the paper's gain) is computed from the data: the paper's figures are the constants in
 PAPER below, each with the place in the paper it comes from."""
+import csv
 import datetime
 import json
 import math
@@ -18,6 +19,9 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "sweep"))
 from report_util import Markdown, direction, geomean, load, mean, number, order, pct, share_words, times  # noqa: E402
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "reference"))
+from paper_keys import PAPER_KEYS  # noqa: E402
 
 SCENES = ["wknd", "cornell", "ship", "bunny", "ref", "bath", "sprng", "party"]
 PAPER_SCENES = [s for s in SCENES if s != "cornell"]  # geometric means that compare with the paper's
@@ -128,6 +132,44 @@ def gm_of(R, exp, base, scenes=None):
 def known(*xs):
     """True when every figure exists (not None, not NaN)."""
     return all(x is not None and x == x for x in xs)
+
+
+CORRELATION = pathlib.Path(__file__).resolve().parents[2] / "reports" / "correlation" / "rtunit.csv"
+
+
+def reference_limits(path=CORRELATION):
+    """The limit studies run on the authors' simulator (reports/correlation, limit-study.patch):
+    (scene, frame, baseline config, reference up, reference down, rtunit up, rtunit down) for each
+    frame with a DFS baseline and both limits on both sides; [] without the file."""
+    if not path.exists():
+        return []
+    cyc = {}
+    with open(path, newline="") as fh:
+        for r in csv.DictReader(fh):
+            cyc[(r["scene"], f"{r['width']}x{r['height']}", r["config"])] = (float(r["cycles_reference"]), float(r["cycles_rtunit"]))
+    out = []
+    for (scene, frame, config), (tb, ob) in sorted(cyc.items()):
+        up, down = cyc.get((scene, frame, config + "-perfect-up")), cyc.get((scene, frame, config + "-perfect-down"))
+        if up and down:
+            out.append((scene, frame, config, tb / up[0], tb / down[0], ob / up[1], ob / down[1]))
+    return out
+
+
+def reference_limit_words(limits):
+    """What the authors' simulator says about the order of the two limits, computed."""
+    if not limits:
+        return "the authors' simulator has no limit study to compare with (reports/correlation has none)"
+    down = [x[0] for x in limits if x[4] > x[3]]
+    differ = [x[0] for x in limits if (x[3] > x[4]) != (x[5] > x[6])]
+    frames = sorted({x[1] for x in limits})
+    words = (f"measured on the authors' simulator (built with scripts/reference/limit-study.patch, {', '.join(frames)}, "
+             f"reports/correlation): perfect-down beats perfect-up there on {len(down)} of {len(limits)} scenes"
+             + (f" ({', '.join(down)})" if down else ""))
+    if differ:
+        return words + f"; rtunit ranks the two otherwise on {len(differ)} ({', '.join(differ)})"
+    return words + (f", and rtunit ranks the two as the reference does on all {len(limits)}"
+                    + ("; so on these scenes the order follows the scenes given to both simulators, not rtunit's model"
+                       if down else ""))
 
 
 def check(targets, what, ours, figures, ok, detail=""):
@@ -279,8 +321,9 @@ def main():
                           {"perfect-up": PAPER["perfect_up"], "perfect-down": PAPER["perfect_down"], "TTP": PAPER["ttp"]},
                           plot="perfect")
     gu, gd = g_lim.get("perfect-up"), g_lim.get("perfect-down")
+    limits = reference_limits()
     check(targets, "perfect-up > perfect-down > 1 and perfect-up >= 1.6", f"up {times(gu, 3)}, down {times(gd, 3)}", [gu, gd],
-          lambda: gu > gd > 1 and gu >= 1.6)
+          lambda: gu > gd > 1 and gu >= 1.6, reference_limit_words(limits) if limits else "")
 
     # 5. Larger L1.
     R.p("## Larger L1 caches (paper Figure 'largedcache')")
@@ -606,20 +649,42 @@ def main():
         "(its largest differences are on chsnt, robot, park and frst).")
     R.p()
 
-    # 21. What the authors' simulator details weigh: paper preset against mobile.
-    R.p("## The `paper` preset against `mobile` (Table 2 alone)")
+    # 21. What the authors' simulator details weigh: paper preset against mobile, and against the
+    # preset with what the authors' RT unit and application do that it leaves off.
+    R.p("## The `paper` preset against `mobile` (Table 2 alone) and against the authors' merging and shader reads")
+    R.p()
+    R.p("The `authors` column is the `paper` preset with `" + "`, `".join(PAPER_KEYS) + "` "
+        "(`scripts/reference/paper_keys.py`): a node read joins its warp's read of the same chunk in flight, and the "
+        "shaders' reads that reach L2 after each trace, both measured against the authors' simulator in "
+        "`reports/correlation`, where the `paper` preset runs with them. The preset leaves them off until the error grid "
+        "and the sampling grids are rerun with them (docs/paper-preset.md).")
     R.p()
     rows = []
-    for label, (exp, base), paper_fig in (("TTP", ("ttp", "base"), PAPER["ttp"]),
-                                          ("perfect-up", ("perfect_up", "base"), PAPER["perfect_up"]),
-                                          ("perfect-down", ("perfect_down", "base"), PAPER["perfect_down"]),
-                                          ("Park", ("park", "base"), PAPER["park"]),
-                                          ("BFS+TTP N=4 over BFS", ("bfs_ttp_n4", "bfs_base"), PAPER["bfs_n4"]),
-                                          (f"Treelet at {size}", ("treelet", "base"), PAPER["treelet_128"])):
-        a, b = gm_of(R, exp, base), gm_of(R, f"mobile_{exp}", f"mobile_{base}")
-        rows.append([label, times(a), times(b), times(paper_fig),
-                     "paper" if a and b and abs(a - paper_fig) < abs(b - paper_fig) else "mobile" if a and b else "-"])
-    R.table(["speed-up (geomean)", "`paper` preset", "`mobile` preset", "the paper", "nearer the paper"], rows)
+    variants = (("paper", ""), ("authors", "authors_"), ("mobile", "mobile_"))
+    for label, exp, base, only, paper_fig in (("TTP", "ttp", "base", None, PAPER["ttp"]),
+                                              ("perfect-up", "perfect_up", "base", None, PAPER["perfect_up"]),
+                                              ("perfect-down", "perfect_down", "base", None, PAPER["perfect_down"]),
+                                              ("Park", "park", "base", None, PAPER["park"]),
+                                              ("BFS+TTP N=4 over BFS", "bfs_ttp_n4", "bfs_base", None, PAPER["bfs_n4"]),
+                                              (f"Treelet at {size}", "treelet", "base", None, PAPER["treelet_128"]),
+                                              (f"Treelet at {size} on ship", "treelet", "base", ["ship"], PAPER["treelet_128"])):
+        got = {}
+        for v, pre in variants:
+            sc = R.scenes_with(f"{pre}{exp}", f"{pre}{base}")
+            got[v] = gm_of(R, f"{pre}{exp}", f"{pre}{base}", [x for x in sc if x in only] if only else None)
+        have = {v: g for v, g in got.items() if known(g)}
+        rows.append([label] + [times(got[v]) for v, _ in variants] + [times(paper_fig),
+                     min(have, key=lambda v: abs(have[v] - paper_fig)) if len(have) > 1 else "-"])
+    R.table(["speed-up (geomean)", "`paper` preset", "`authors`", "`mobile` preset", "the paper", "nearer the paper"], rows)
+    up_a, down_a = gm_of(R, "authors_perfect_up", "authors_base"), gm_of(R, "authors_perfect_down", "authors_base")
+    park_a, ttp_a = gm_of(R, "authors_park", "authors_base"), gm_of(R, "authors_ttp", "authors_base")
+    if known(up_a, down_a, park_a, ttp_a):
+        order_words = "the paper's order" if up_a > down_a else "the reverse of the paper's order"
+        R.p()
+        R.p(f"With the authors' merging and shader reads, perfect-up is {times(up_a, 3)} against perfect-down's "
+            f"{times(down_a, 3)} ({order_words}), and Park takes {pct((park_a - 1) / (ttp_a - 1), 0)} of TTP's gain "
+            f"(paper: {pct((PAPER['park'] - 1) / (PAPER['ttp'] - 1), 0)}).")
+    R.p()
 
     # 22. The gap.
     R.p("## The remaining gap and its causes")
@@ -651,7 +716,8 @@ def main():
     gap("perfect-down limit", gd, PAPER["perfect_down"], lambda x: times(x, 2),
         "measured: perfect-down beats perfect-up on " + (", ".join(f"{x} ({pct(1 - later_share[x], 0)})" for x in down_wins) or "no scene") +
         ", the share of the pops' DRAM misses that are first pops in brackets: where first pops carry most misses, making them "
-        "hit is worth more. Suspected link: shorter paths than the paper's (" + (", ".join(small) if small else "none") + ")")
+        "hit is worth more; " + reference_limit_words(limits) + ". Suspected: shorter paths than the paper's ("
+        + (", ".join(small) if small else "none") + "), as the assets given to both simulators make them")
     gap("DRAM bandwidth rise with TTP", m_bw, PAPER["dram_bw_overhead"], pct,
         f"measured: our traffic changes by {times(g_tr, 3)}, so our bandwidth rises with the speed-up; the paper's rises less "
         "than its speed-up with traffic unchanged too, so its figure must include traffic TTP does not change, such as the "
