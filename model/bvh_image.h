@@ -16,6 +16,7 @@ struct BvhStats {
     uint32_t tlas_depth = 0;  // internal levels of the TLAS (0 for a single-level BVH)
     uint64_t image_bytes = 0;
     uint32_t blas_count = 0;
+    uint64_t repeats_left_out = 0;  // faces left out as copies of another beyond the builder's kCopiesKept
 };
 
 class BvhImage {

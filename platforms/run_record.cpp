@@ -86,6 +86,8 @@ void write_stats(StatsOut& out, const RunRecord& r) {
         b.value("blas", r.bvh.blas_count, "BVHs", "bottom-level BVHs");
         b.value("depth", r.bvh.depth, "nodes", "nodes on the longest root-to-leaf path, leaves included (the paper's Table 2)");
         b.value("tlas_depth", r.bvh.tlas_depth, "nodes", "internal levels of the TLAS (0: single-level)");
+        b.value("repeats_left_out", r.bvh.repeats_left_out, "faces",
+                "faces left out of the BVH as copies of another face beyond its first 8 (workloads/bvh_builder.cpp)");
     }
     {
         StatsOut t = out.child("time_s", "wall-clock time of this run's phases");

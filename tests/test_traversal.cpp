@@ -453,9 +453,13 @@ TEST(BvhBuilder, CoordinatesBeyondTheBuildersRangeAreInputErrors) {
     }
     EXPECT_EQ(build_bvh_image(triangle_at(1e15f)).stats.triangle_leaves, 1u);
     EXPECT_EQ(build_bvh_image(triangle_at(1e18f)).stats.triangle_leaves, 1u);  // one triangle: up to the cap
-    // 10,000 triangles (and one instance): sqrt(3.4e38 / (36 x 10,001)) = 3.1e16.
+    // 10,000 triangles (and one instance): sqrt(3.4e38 / (36 x 10,001)) = 3.1e16. Each its own
+    // third corner: copies of one face beyond the first 8 would be left out of the BVH.
     Scene many = triangle_at(1.0f);
-    for (int i = 1; i < 10000; ++i) many.meshes[0].triangles.push_back({0, 1, 2}), many.meshes[0].material.push_back(0);
+    for (int i = 1; i < 10000; ++i) {
+        many.meshes[0].vertices.push_back({0.0f, 1.0f + float(i), 0.0f});
+        many.meshes[0].triangles.push_back({0, 1, uint32_t(2 + i)}), many.meshes[0].material.push_back(0);
+    }
     many.meshes[0].vertices[1].x = 3e16f;
     EXPECT_EQ(build_bvh_image(many).stats.triangle_leaves, 10000u);
     many.meshes[0].vertices[1].x = 1e17f;
@@ -471,6 +475,47 @@ TEST(BvhBuilder, CoordinatesBeyondTheBuildersRangeAreInputErrors) {
 // Instances: a transform that places a mesh beyond the builder's range, one that is not finite,
 // and singular ones are bad input naming the instance, not an abort in Embree or an internal
 // error (issue 16); a transform within range builds.
+// Issue 50: a ray that hits a face tests every copy of it (each copy's box holds the face's
+// plane), so 115,195 copies of one triangle took 54 s at 64x64. Copies beyond the first 8 are left
+// out of the BVH; fewer copies (real assets have up to 3) and faces that differ by one bit stay.
+TEST(BvhBuilder, CopiesOfAFaceBeyondTheFirstEightAreLeftOut) {
+    Scene s;
+    Mesh m;
+    m.name = "copies.obj";
+    m.vertices = {{-1.0f, -1.0f, 0.0f}, {1.0f, -1.0f, 0.0f}, {0.0f, 1.0f, 0.0f},   // the face copied 10,000 times
+                  {-1.0f, -1.0f, 2.0f}, {1.0f, -1.0f, 2.0f}, {0.0f, 1.0f, 2.0f},   // a face copied 3 times
+                  {0.0f, std::nextafter(1.0f, 2.0f), 0.0f}};                        // one bit off the first's apex
+    for (uint32_t i = 0; i < 10000; ++i)  // every third copy with its corners in another order
+        m.triangles.push_back(i % 3 == 2 ? glm::uvec3{1, 2, 0} : glm::uvec3{0, 1, 2});
+    for (int i = 0; i < 3; ++i) m.triangles.push_back({3, 4, 5});
+    for (int i = 0; i < 20; ++i) m.triangles.push_back({0, 1, 6});  // 20 copies of a face one bit apart: 8 kept
+    m.material.assign(m.triangles.size(), 0);
+    s.meshes.push_back(m);
+    s.materials.push_back(Material{});
+    s.instances.push_back({0, identity_affine()});
+    const BvhImage img = build_bvh_image(s);
+    EXPECT_EQ(img.stats.triangle_leaves, 8u + 3u + 8u);
+    EXPECT_EQ(img.stats.repeats_left_out, (10000u - 8u) + (20u - 8u));
+    // A ray down the z axis hits the face at z = 2 first (its 3 copies all kept), and one from
+    // below hits the copied face: an earlier copy, after a bounded walk.
+    Ray down;
+    down.org = {0.0f, 0.0f, 5.0f};
+    down.dir = {0.0f, 0.0f, -1.0f};
+    TraceResult r = trace_ray(img, down, TraversalOrder::DFS);
+    ASSERT_TRUE(r.hit.hit);
+    EXPECT_FLOAT_EQ(r.hit.t, 3.0f);
+    EXPECT_GE(r.hit.prim, 10000u);
+    EXPECT_LT(r.hit.prim, 10003u);
+    Ray up;
+    up.org = {0.0f, 0.0f, -5.0f};
+    up.dir = {0.0f, 0.0f, 1.0f};
+    r = trace_ray(img, up, TraversalOrder::DFS);
+    ASSERT_TRUE(r.hit.hit);
+    EXPECT_FLOAT_EQ(r.hit.t, 5.0f);
+    EXPECT_TRUE(r.hit.prim < 8u || (r.hit.prim >= 10003u && r.hit.prim < 10011u)) << r.hit.prim;  // kept copies only
+    EXPECT_LE(r.nodes_visited, 40u);  // 19 leaves and their internal nodes (10,000 copies: over 10,000)
+}
+
 TEST(BvhBuilder, InstanceTransformsBeyondTheBuildersRangeAreInputErrors) {
     auto placed = [](const Affine& t) {
         Scene s;
