@@ -10,14 +10,19 @@
 // hit record bit for bit against the functional reference (and against golden hits when given),
 // checks an error path, and prints "N passed, M failed" (exit status 1 if any failed).
 //
-// usage: rtu-soc-vp [--fidelity functional|interval|lt|at] [--memory private|shared] [--data PREFIX]
+// usage: rtu-soc-vp [--fidelity functional|interval|lt|at] [--memory private|shared] [--data PREFIX] [--quantum NS]
+//                   [--ram-syncs]
 //   --memory shared  the unit's L2 misses are reads on this platform's RAM (lt and at only)
+//   --quantum NS     the platform's global quantum (TLM-2.0; default 0, none)
+//   --ram-syncs      the RAM waits an initiator's time offset out inside b_transport once it
+//                    reaches the global quantum, as a quantum keeper would
 //   --data PREFIX  PREFIX.rtubvh, PREFIX.rays and PREFIX.hits, as rtsim --dump-bvh, --dump-rays and
 //                  --dump-hits write them (default: cornell's, 16x16 camera rays, made at build
 //                  time or installed with the package). The platform adds an any-hit copy of
 //                  every fifth ray and an invalid ray, which only the functional reference covers.
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <iostream>
@@ -102,17 +107,32 @@ size_t differing(const uint8_t* got, const std::vector<rtu_hit>& want) {
 
 int sc_main(int argc, char** argv) {
     std::string fidelity = "lt", memory = "private", data = RTU_SOC_VP_DATA;
+    double quantum_ns = 0.0;
+    bool ram_syncs = false;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
-        if ((a == "--fidelity" || a == "--memory" || a == "--data") && i + 1 < argc)
+        if ((a == "--fidelity" || a == "--memory" || a == "--data") && i + 1 < argc) {
             (a == "--fidelity" ? fidelity : a == "--memory" ? memory : data) = argv[++i];
-        else {
-            std::cerr << "usage: rtu-soc-vp [--fidelity functional|interval|lt|at] [--memory private|shared] [--data PREFIX]\n";
+        } else if (a == "--ram-syncs") {
+            ram_syncs = true;
+        } else if (a == "--quantum" && i + 1 < argc) {
+            char* end = nullptr;
+            quantum_ns = std::strtod(argv[++i], &end);
+            if (!end || *end || !(quantum_ns >= 0.0 && quantum_ns <= 1e9)) {
+                std::cerr << "error: --quantum " << argv[i] << ": a number of nanoseconds from 0 to 1e9 is allowed\n";
+                return 2;
+            }
+        } else {
+            std::cerr << "usage: rtu-soc-vp [--fidelity functional|interval|lt|at] [--memory private|shared] [--data PREFIX] [--quantum NS] "
+                         "[--ram-syncs]\n";
             return 2;
         }
     }
     // The RT complex's clocks are exact to 1 fs at this resolution (docs/peripheral.md).
     sc_set_time_resolution(1, SC_FS);
+    // The platform's global quantum (--quantum; 0: SystemC's default, none): an LT initiator syncs
+    // at least that often.
+    tlm::tlm_global_quantum::instance().set(sc_time(quantum_ns, SC_NS));
     Data d;
     try {
         d = Data{read_bytes(data + ".rtubvh"), read_records<rtu_ray>(data + ".rays"), read_records<rtu_hit>(data + ".hits")};
@@ -142,6 +162,7 @@ int sc_main(int argc, char** argv) {
     vp::Cpu cpu("cpu");
     vp::Router bus("bus");
     vp::Ram ram("ram", kRam, kRamBytes);
+    ram.sync_at_quantum = ram_syncs;
     sc_signal<bool> irq("rtu_irq");
     cpu.bus.bind(bus.in);
     rtu.mem.bind(bus.in);
@@ -190,6 +211,7 @@ int sc_main(int argc, char** argv) {
         wait(SC_ZERO_TIME);
         check(!irq.read(), "the line is low after write-1-to-clear");
         const uint64_t cycles = cpu.rd64(RTU_PERF_JOB_CYCLES);
+        std::cout << "register-mode job: " << cycles << " cycles, " << cpu.rd64(RTU_PERF_TRAVERSAL_CYCLES) << " traversal cycles\n";
         const double period = 1e-6 / 1365.0;  // the presets' core clock, 1365 MHz
         check(std::fabs((t_irq - t0).to_seconds() - double(cycles) * period) <= period, "the interrupt comes after PERF_JOB_CYCLES core cycles");
         // 5. Every hit record, bit for bit.
@@ -218,6 +240,7 @@ int sc_main(int argc, char** argv) {
         cpu.wr64(RTU_DESC_ADDR_LO, kDesc);
         cpu.wr(RTU_CTRL, RTU_CTRL_MODE_CHAIN | RTU_CTRL_START);
         check(cpu.wait_irq(), "descriptor chain raises the interrupt");
+        std::cout << "descriptor chain's last job: " << cpu.rd64(RTU_PERF_JOB_CYCLES) << " cycles\n";
         const uint32_t cst = cpu.rd(RTU_INT_STATUS);
         check(cst == (RTU_INT_JOB_DONE | RTU_INT_CHAIN_DONE), "INT_STATUS is JOB_DONE | CHAIN_DONE");
         cpu.wr(RTU_INT_STATUS, cst);

@@ -44,6 +44,10 @@ public:
     uint64_t writes = 0, bytes_read = 0, transactions = 0, dmi_grants = 0, violations = 0;
     sc_core::sc_time last_write_done;  // when the latest write's annotated delay ends
     std::function<void(const tlm::tlm_generic_payload&)> observe;  // if set, sees every blocking transport (a test's view)
+    // A target that synchronises as a quantum keeper would: when the initiator's annotated time
+    // reaches the global quantum, it waits it out inside b_transport (TLM-2.0 allows that) and
+    // answers with the rest of the latency.
+    bool sync_at_quantum = false;
 
     Ram(sc_core::sc_module_name n, uint64_t base, uint64_t size, sc_core::sc_time latency = sc_core::sc_time(50, sc_core::SC_NS),
         double bytes_per_ns = 16.0)
@@ -76,6 +80,10 @@ private:
         if (!inside(a, n) || faulty(a, n) || t.get_byte_enable_ptr()) return t.set_response_status(tlm::TLM_ADDRESS_ERROR_RESPONSE);
         if (t.is_read()) std::memcpy(t.get_data_ptr(), at(a), n);
         else std::memcpy(at(a), t.get_data_ptr(), n);
+        if (sync_at_quantum && d >= tlm::tlm_global_quantum::instance().get() && d > sc_core::SC_ZERO_TIME) {
+            wait(d);
+            d = sc_core::SC_ZERO_TIME;
+        }
         d += latency_ + sc_core::sc_time(double(n) / bytes_per_ns_, sc_core::SC_NS);
         if (t.is_write()) {
             ++writes;

@@ -50,9 +50,10 @@ private:
     void b_transport(int id, tlm::tlm_generic_payload& t, sc_core::sc_time& d);
     void read_requests();  // SC_THREAD (AT)
     void respond();        // on the response queue's event (AT)
-    // The line of `t` read through the reader, from `now` + `d`; `d` becomes the time from now
-    // to the memory-clock edge of its answer.
-    void read(tlm::tlm_generic_payload& t, sc_core::sc_time& d);
+    // The line of `t`, issued at the absolute time `issued`, read through the reader (asked with
+    // no time offset: the memory's latency from now); returns the time from now to the
+    // memory-clock edge of its answer, at or after `issued` (or now, if later) + that latency.
+    sc_core::sc_time read(tlm::tlm_generic_payload& t, const sc_core::sc_time& issued);
 
     LineReader& reader_;
     const ClockDomain& clock_;
