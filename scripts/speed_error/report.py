@@ -10,6 +10,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import matplotlib.ticker  # noqa: E402
+from matplotlib.lines import Line2D  # noqa: E402
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent.parent / "sweep"))
@@ -88,23 +89,37 @@ def main():
         pts.append((fid, gm, me))
         p(f"| {LABEL[fid]} | {gm:.2f}x | {me:.2f} % | {mx:.2f} % | {mt:.2f} % |")
     p("")
-    fig, ax = plt.subplots(figsize=(6.5, 4))
-    # One colour per family (AT, LT, interval), one marker per sampling rate.
-    for i, (fid, gm, me) in enumerate(pts):
-        family = "tab:blue" if fid.startswith("at") else "tab:orange" if fid.startswith("lt") else "tab:green"
-        marker = {"s50": "s", "s25": "^", "s10": "v"}.get(fid[-3:], "o")
-        ax.scatter(gm, me, s=30, color=family, marker=marker)
-        ax.annotate(LABEL[fid], (gm, me), fontsize=7, xytext=(4, 3 if i % 2 else -9), textcoords="offset points")
+    fig, ax = plt.subplots(figsize=(7.5, 4))
+    # One colour per fidelity, one marker per sampling rate; legends beside the axes, no labels
+    # on the points (the LT quanta and some sampled rates land on top of each other).
+    colours = {"at": "tab:blue", "lt": "tab:orange", "interval": "tab:green"}
+    markers = {"": "o", "s50": "s", "s25": "^", "s10": "v"}
+    for fid, gm, me in pts:
+        family = "at" if fid.startswith("at") else "lt" if fid.startswith("lt") else "interval"
+        ax.scatter(gm, me, s=34, color=colours[family], marker=markers.get(fid[-3:], "o"), alpha=0.85)
+    lt_quanta = sorted({int(f.split("_q")[1].split("_")[0]) for f, _, _ in pts if f.startswith("lt_q")})
+    fidelities = [Line2D([], [], color=colours["at"], marker="o", linestyle="", label="AT"),
+                  Line2D([], [], color=colours["lt"], marker="o", linestyle="",
+                         label="LT" + (f" (quanta {', '.join(map(str, lt_quanta))})" if lt_quanta else "")),
+                  Line2D([], [], color=colours["interval"], marker="o", linestyle="", label="interval")]
+    rates = [Line2D([], [], color="grey", marker=m, linestyle="", label=l)
+             for l, m in (("whole frame", "o"), ("sample 50 %", "s"), ("sample 25 %", "^"), ("sample 10 %", "v"))]
+    first = ax.legend(handles=fidelities, title="fidelity", fontsize=7, title_fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    ax.add_artist(first)
+    ax.legend(handles=rates, title="simulated", fontsize=7, title_fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 0.55))
     ax.set_xscale("log")
-    ax.set_xlim(left=0.95)
-    ax.xaxis.set_major_formatter(matplotlib.ticker.FormatStrFormatter("%gx"))
-    ax.xaxis.set_minor_formatter(matplotlib.ticker.FormatStrFormatter("%gx"))
+    top = max(gm for _, gm, _ in pts)
+    ticks = [t for t in (1, 2, 3, 5, 10, 20, 50, 100, 200) if t <= top * 1.5]
+    ax.set_xlim(0.9, max(ticks[-1], top) * 1.2)  # every point inside the last tick's decade, with room
+    ax.set_xticks(ticks)
+    ax.set_xticklabels([f"{t}x" for t in ticks])
+    ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
     ax.set_xlabel("speed-up over AT (geomean over scenes)")
     ax.set_ylabel("mean |error| in total cycles (%)")
     ax.set_title("Speed against error")
     ax.grid(True, which="both", linewidth=0.3)
     fig.tight_layout()
-    fig.savefig(outdir / "pareto.png", dpi=110)
+    fig.savefig(outdir / "pareto.png", dpi=110, bbox_inches="tight", bbox_extra_artists=[first])  # the legends beside the axes
     p("![Pareto: speed-up against cycle error](pareto.png)")
     p("")
     def row(fid):
