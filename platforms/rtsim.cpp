@@ -72,6 +72,11 @@ void install_stop_handlers() {
     sigemptyset(&su.sa_mask);
     su.sa_flags = SA_RESTART;
     sigaction(SIGUSR1, &su, nullptr);
+    // A file-size limit (`ulimit -f`) raises SIGXFSZ, whose default ends the process at the write
+    // that crossed it, leaving the output's temporary file behind. Ignored, the write fails with
+    // EFBIG instead: an error that names the output, and no output is left (the run's outputs are
+    // all or none).
+    ::signal(SIGXFSZ, SIG_IGN);
 }
 
 const char* signal_name(int sig) {

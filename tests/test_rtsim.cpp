@@ -265,6 +265,14 @@ TEST(Rtsim, AnOutputThatCannotBeWrittenLeavesNone) {
     EXPECT_EQ(vcd.status, 2) << vcd.err;
     EXPECT_NE(vcd.err.find("out/w.vcd: cannot write: the file reached the size limit"), std::string::npos) << vcd.err;
     EXPECT_TRUE(left().empty()) << left().front();
+    // A shell's plain `ulimit -f`, whose SIGXFSZ would end rtsim at the crossing write and leave
+    // that output's temporary file behind: rtsim ignores the signal, so it is the same exit 2.
+    const std::string plain = write_text(dir.file("plain.sh"), "ulimit -f 16\nexec \"$@\"\n");
+    const std::string cmd = "bash " + plain + " " + RTU_RTSIM + " --scene cornell --workload primary --fidelity at --width 8 --height 8 -q" +
+                            outs + " > /dev/null 2> " + dir.file("e.txt") + " < /dev/null";
+    const int rc = std::system(cmd.c_str());
+    EXPECT_TRUE(WIFEXITED(rc) && WEXITSTATUS(rc) == 2) << rc << ": " << read_text(dir.file("e.txt"));
+    EXPECT_TRUE(left().empty()) << left().front();  // directory_iterator lists the hidden temporaries too
     // Without the limit both write everything.
     EXPECT_EQ(rtsim(dir, "--scene cornell --workload primary --fidelity at --width 32 --height 32 -q --vcd " + dir.file("out/w.vcd") + outs).status, 0);
     EXPECT_EQ(left().size(), 4u);
