@@ -4,6 +4,7 @@
 #pragma once
 #include <string>
 
+#include "file_io.h"
 #include "scene.h"
 
 namespace rtu {
@@ -31,9 +32,6 @@ uint32_t load_mesh_file(Scene& scene, const std::string& path, const ImporterLim
 // unless its counts agree, its numbers are finite and its indices are in range. Exposed for
 // fuzz/fuzz_importer, which feeds it any bytes and any status.
 void read_importer_answer(Scene& scene, Mesh& mesh, const std::string& path, const std::string& answer, int wait_status);
-
-// Whole file, transparently gunzipped. Throws InputError if it cannot be read.
-std::string read_file_maybe_gz(const std::string& path);
 
 // True if `path` names a format load_mesh_file accepts (by extension).
 bool is_mesh_file(const std::string& path);

@@ -11,7 +11,7 @@
 
 #include "input_error.h"
 #include "lumibench.h"
-#include "mesh_io.h"
+#include "file_io.h"
 
 namespace rtu {
 

@@ -20,26 +20,32 @@ check() {  # check NAME COMMAND...: passes when the command succeeds
 }
 prefix=$tmp/prefix
 check "cmake --install" cmake --install "$build" --prefix "$prefix"
+# The library's folder: Debian's multiarch one (lib/x86_64-linux-gnu) where the compiler names one.
+ma=$(gcc -print-multiarch 2>/dev/null)
+lib=lib${ma:+/$ma}
 
 # P1: the files, no build-tree paths, SystemC the only public dependency, the exports.
 files_present() {
-  for f in lib/librtunit.so lib/librtunit.so.0 include/rtunit/peripheral.h include/rtunit/job.h include/rtunit/rtu_regs.h \
-           include/rtunit/export.h lib/cmake/rtunit/rtunitConfig.cmake lib/cmake/rtunit/rtunitConfigVersion.cmake \
-           lib/cmake/rtunit/rtunitTargets.cmake lib/pkgconfig/rtunit.pc share/rtunit/examples/soc_vp/CMakeLists.txt \
+  for f in $lib/librtunit.so $lib/librtunit.so.0 include/rtunit/peripheral.h include/rtunit/job.h include/rtunit/rtu_regs.h \
+           include/rtunit/export.h $lib/cmake/rtunit/rtunitConfig.cmake $lib/cmake/rtunit/rtunitConfigVersion.cmake \
+           $lib/cmake/rtunit/rtunitTargets.cmake $lib/pkgconfig/rtunit.pc share/rtunit/examples/soc_vp/CMakeLists.txt \
            share/rtunit/examples/soc_vp/soc_vp.cpp share/rtunit/examples/soc_vp/soc_vp.h share/rtunit/data/cornell.rtubvh \
            share/rtunit/data/cornell.rays share/rtunit/data/cornell.hits; do
     [ -e "$prefix/$f" ] || { echo "missing: $f"; return 1; }
   done
 }
 check "installed files" files_present
-no_build_paths() { ! grep -rlE "$build|$(cd "$build/.." && pwd)/(model|tlm|platforms|workloads)" "$prefix/lib/cmake" "$prefix/lib/pkgconfig"; }
+no_build_paths() { ! grep -rlE "$build|$(cd "$build/.." && pwd)/(model|tlm|platforms|workloads)" "$prefix/$lib/cmake" "$prefix/$lib/pkgconfig"; }
 check "no build-tree paths in the package files" no_build_paths
-only_systemc() { grep -q 'INTERFACE_LINK_LIBRARIES "rtunit::systemc"' "$prefix/lib/cmake/rtunit/rtunitTargets.cmake"; }
+only_systemc() { grep -q 'INTERFACE_LINK_LIBRARIES "rtunit::systemc"' "$prefix/$lib/cmake/rtunit/rtunitTargets.cmake"; }
 check "SystemC is the only public dependency" only_systemc
-soname() { readelf -d "$prefix/lib/librtunit.so" | grep -q 'SONAME.*librtunit.so.0'; }
+soname() { readelf -d "$prefix/$lib/librtunit.so" | grep -q 'SONAME.*librtunit.so.0'; }
 check "SONAME librtunit.so.0" soname
+# The scene importer is rtsim's: the library loads neither Assimp nor Draco (nor Embree).
+no_importer() { ! readelf -d "$prefix/$lib/librtunit.so" | grep -E 'NEEDED.*(assimp|draco|embree)'; }
+check "the library needs neither Assimp, Draco nor Embree" no_importer
 exports() {
-  local syms; syms=$(nm -D --defined-only "$prefix/lib/librtunit.so" | c++filt)
+  local syms; syms=$(nm -D --defined-only "$prefix/$lib/librtunit.so" | c++filt)
   echo "$syms" | grep -q 'rtu::RtUnitPeripheral::RtUnitPeripheral' && echo "$syms" | grep -q 'rtu::reference_hits' &&
     ! echo "$syms" | grep -qE 'absl::|glm::|nlohmann|rtu::RtComplex|rtu::BvhImage'
 }
@@ -67,8 +73,8 @@ check "out-of-tree example, C++14 (raised to 17 by the package)" consumer 14
 # P3: pkg-config, as a Makefile-built platform would.
 pkgconf() {
   g++ -std=c++17 -O1 -o "$tmp/vp-pc" "$tmp/vp/soc_vp.cpp" -DRTU_SOC_VP_DATA="\"$prefix/share/rtunit/data/cornell\"" \
-      $(PKG_CONFIG_PATH="$prefix/lib/pkgconfig" pkg-config --cflags --libs rtunit) &&
-    LD_LIBRARY_PATH="$prefix/lib" "$tmp/vp-pc" --fidelity at --data "$prefix/share/rtunit/data/wknd" | grep -q ' passed, 0 failed'
+      $(PKG_CONFIG_PATH="$prefix/$lib/pkgconfig" pkg-config --cflags --libs rtunit) &&
+    LD_LIBRARY_PATH="$prefix/$lib" "$tmp/vp-pc" --fidelity at --data "$prefix/share/rtunit/data/wknd" | grep -q ' passed, 0 failed'
 }
 check "pkg-config consumer (AT, wknd's data)" pkgconf
 # P5: a newer version than the one installed is refused at configure time.
@@ -96,14 +102,14 @@ deb() {
   dpkg-deb -f "$pkg" Depends | tee "$tmp/deb-depends.txt" | grep -q 'libsystemc-dev (>= 2.3.4)' || { cat "$tmp/deb-depends.txt"; return 1; }
   grep -q 'libabsl' "$tmp/deb-depends.txt" || return 1
   dpkg-deb -x "$pkg" "$tmp/debroot" || return 1
-  for f in usr/lib/librtunit.so.0 usr/include/rtunit/peripheral.h usr/lib/cmake/rtunit/rtunitConfig.cmake usr/lib/pkgconfig/rtunit.pc \
+  for f in usr/$lib/librtunit.so.0 usr/include/rtunit/peripheral.h usr/$lib/cmake/rtunit/rtunitConfig.cmake usr/$lib/pkgconfig/rtunit.pc \
            usr/share/rtunit/examples/soc_vp/soc_vp.cpp usr/share/rtunit/data/cornell.rtubvh usr/bin/rtsim; do
     [ -e "$tmp/debroot/$f" ] || { echo "missing in the package: $f"; return 1; }
   done
   local b="$tmp/vp-build-deb"
   cp -r "$tmp/debroot/usr/share/rtunit/examples/soc_vp" "$tmp/vp-deb" &&
     cmake -S "$tmp/vp-deb" -B "$b" -DCMAKE_PREFIX_PATH="$tmp/debroot/usr" -DCMAKE_BUILD_TYPE=Release > "$b.log" 2>&1 &&
-    cmake --build "$b" -j2 >> "$b.log" 2>&1 && LD_LIBRARY_PATH="$tmp/debroot/usr/lib" "$b/soc_vp" | tee -a "$b.log" | grep -q ' passed, 0 failed' ||
+    cmake --build "$b" -j2 >> "$b.log" 2>&1 && LD_LIBRARY_PATH="$tmp/debroot/usr/$lib" "$b/soc_vp" | tee -a "$b.log" | grep -q ' passed, 0 failed' ||
     { tail -20 "$b.log"; return 1; }
 }
 check "Debian package (cpack -G DEB): dependencies, files, the example built against it" deb
