@@ -103,7 +103,8 @@ deb() {
   grep -q 'libabsl' "$tmp/deb-depends.txt" || return 1
   dpkg-deb -x "$pkg" "$tmp/debroot" || return 1
   for f in usr/$lib/librtunit.so.0 usr/include/rtunit/peripheral.h usr/$lib/cmake/rtunit/rtunitConfig.cmake usr/$lib/pkgconfig/rtunit.pc \
-           usr/share/rtunit/examples/soc_vp/soc_vp.cpp usr/share/rtunit/data/cornell.rtubvh usr/bin/rtsim; do
+           usr/share/rtunit/examples/soc_vp/soc_vp.cpp usr/share/rtunit/data/cornell.rtubvh usr/bin/rtsim \
+           usr/share/doc/rtunit-dev/copyright; do
     [ -e "$tmp/debroot/$f" ] || { echo "missing in the package: $f"; return 1; }
   done
   local b="$tmp/vp-build-deb"
