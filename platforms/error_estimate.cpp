@@ -42,6 +42,17 @@ nlohmann::ordered_json grid_config(const std::string& name) {
     return hardware(c.to_json());
 }
 
+// The presets whose hardware the run's is, with the run's prefetcher (empty: none). The sampling
+// grids that measured the design's bias bound ran the presets (platforms/configs/sampling_bias.json,
+// "grids"): a run on other hardware (a key set, a file) carries a bound measured elsewhere.
+bool preset_hardware(const Config& config) {
+    const nlohmann::ordered_json run = hardware(config.to_json());
+    const std::string kind = run.at("prefetch").at("kind").get<std::string>();
+    for (const std::string& name : Config::presets())
+        if (grid_config(name + "+" + kind) == run) return true;
+    return false;
+}
+
 // A sample of fewer than kAimStrata drawn strata (and not every cluster): its interval rests on
 // few strata, and the rate that draws kAimStrata, where the frame has that many clusters to draw.
 std::string few_strata(const SampleEstimate& e) {
@@ -166,6 +177,9 @@ ErrorEstimate estimate_error(const RunSpec& spec, const TimingResult& t, const s
         sampled_basis = "95 % sampling interval over " + std::to_string(t.estimate.design.strata) + " drawn strata" + model +
                         (t.estimate.design_bias > 0 ? " and " + SamplingBias::built_in().basis(spec.rays.empty() ? spec.workload : "") : "") +
                         " (docs/sampling.md)";
+        if (t.estimate.design_bias > 0 && !preset_hardware(spec.config))
+            sampled_basis += "; the bias bound was measured on the presets (" + join(Config::presets()) +
+                             "), not on this configuration";
         sampled_basis += few_strata(t.estimate);
     }
     const std::string fid = fidelity_name(spec.run.fidelity);

@@ -1888,7 +1888,27 @@ TEST(RtsimSampling, IntervalCarriesTheDesignBias) {
         EXPECT_GE(s["cycles_ci95"][1].get<double>() - c, bias * c * (1 - 1e-12)) << wl;
         EXPECT_NE(j["error_estimate"]["basis"].get<std::string>().find("the sample design's bias bound"), std::string::npos)
             << j["error_estimate"].dump();
+        EXPECT_EQ(j["error_estimate"]["basis"].get<std::string>().find("not on this configuration"), std::string::npos)
+            << j["error_estimate"].dump();
     }
+    // The grids measured the bound on the presets: a sampled AT run (whose estimate is the
+    // sample's interval alone; the other fidelities outside the error grid's configurations have
+    // none) with a key the presets do not set says so, whatever its prefetcher; a preset with TTP
+    // does not.
+    for (const std::string extra : {"--set rt.merge_in_flight=true", "--set l2.latency=180 --prefetcher ttp"}) {
+        const std::string stats = dir.file("keyed.json");
+        const Result r = rtsim(dir, "--scene cornell --fidelity at --width 512 --height 256 --spp 1 --workload pt --sample 0.25 " +
+                                        extra + " --stats " + stats);
+        ASSERT_EQ(r.status, 0) << r.err;
+        const auto j = nlohmann::json::parse(read_text(stats));
+        EXPECT_NE(j["error_estimate"]["basis"].get<std::string>().find("the bias bound was measured on the presets"), std::string::npos)
+            << extra << ": " << j["error_estimate"].dump();
+    }
+    const Result ttp = rtsim(dir, "--scene cornell --fidelity at --width 512 --height 256 --spp 1 --workload pt --sample 0.25 "
+                                  "--prefetcher ttp --stats " + dir.file("ttp.json"));
+    ASSERT_EQ(ttp.status, 0) << ttp.err;
+    EXPECT_EQ(nlohmann::json::parse(read_text(dir.file("ttp.json")))["error_estimate"]["basis"].get<std::string>().find("not on this configuration"),
+              std::string::npos);
 }
 
 // --check-error N simulates the same clusters in the run's fidelity and in AT. A frame of no more
