@@ -42,15 +42,22 @@ nlohmann::ordered_json grid_config(const std::string& name) {
     return hardware(c.to_json());
 }
 
-// The presets whose hardware the run's is, with the run's prefetcher (empty: none). The sampling
-// grids that measured the design's bias bound ran the presets (platforms/configs/sampling_bias.json,
+// Whether the hardware `run` is that of one of the configurations `names` (grid_config's names).
+bool one_of(const nlohmann::ordered_json& run, const std::vector<std::string>& names) {
+    for (const std::string& name : names)
+        if (grid_config(name) == run) return true;
+    return false;
+}
+
+// Whether the run's hardware is a preset's, with the run's prefetcher. The sampling grids that
+// measured the design's bias bound ran the presets (platforms/configs/sampling_bias.json,
 // "grids"): a run on other hardware (a key set, a file) carries a bound measured elsewhere.
 bool preset_hardware(const Config& config) {
     const nlohmann::ordered_json run = hardware(config.to_json());
     const std::string kind = run.at("prefetch").at("kind").get<std::string>();
-    for (const std::string& name : Config::presets())
-        if (grid_config(name + "+" + kind) == run) return true;
-    return false;
+    std::vector<std::string> names;
+    for (const std::string& name : Config::presets()) names.push_back(name + "+" + kind);
+    return one_of(run, names);
 }
 
 // A sample of fewer than kAimStrata drawn strata (and not every cluster): its interval rests on
@@ -151,9 +158,7 @@ std::optional<std::string> outside_regime(const RunSpec& spec, const ErrorBounds
                std::to_string(spec.params.spp) + " spp (the grid: " + std::to_string(*lo) + "^2 to " + std::to_string(*hi) + "^2 pixels at " +
                std::to_string(bounds.spp) + " spp)";
     if (spec.workload == "pt" && spec.params.bounces != WorkloadParams{}.bounces) return "a bounce limit other than the default";
-    const nlohmann::ordered_json run = hardware(spec.config.to_json());
-    for (const std::string& c : bounds.configs)
-        if (grid_config(c) == run) return std::nullopt;
+    if (one_of(hardware(spec.config.to_json()), bounds.configs)) return std::nullopt;
     return "a configuration other than the grid's (" + join(bounds.configs) + ", each at its preset's values)";
 }
 
