@@ -8,7 +8,9 @@ set -eu
 vp=$1
 first=""
 for q in 1 10 1000; do
-  out=$("$vp" --fidelity lt --memory shared --ram-syncs --quantum "$q" 2>&1) || { echo "$out"; echo "FAIL: exit $? at quantum $q ns"; exit 1; }
+  status=0
+  out=$("$vp" --fidelity lt --memory shared --ram-syncs --quantum "$q" 2>&1) || status=$?
+  [ "$status" = 0 ] || { echo "$out"; echo "FAIL: exit $status at quantum $q ns"; exit 1; }
   echo "$out" | grep -q " passed, 0 failed" || { echo "$out"; echo "FAIL: a check failed at quantum $q ns"; exit 1; }
   cycles=$(echo "$out" | grep -E "^(register-mode job|descriptor chain's last job):" | tr '\n' ' ')
   [ -n "$cycles" ] || { echo "$out"; echo "FAIL: no cycles printed at quantum $q ns"; exit 1; }

@@ -26,6 +26,7 @@
 #include <unistd.h>
 #include <zlib.h>
 
+#include "file_io.h"
 #include "input_error.h"
 
 namespace fs = std::filesystem;

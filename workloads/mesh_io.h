@@ -4,7 +4,6 @@
 #pragma once
 #include <string>
 
-#include "file_io.h"
 #include "scene.h"
 
 namespace rtu {

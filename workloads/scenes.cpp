@@ -15,6 +15,7 @@
 #include <glm/trigonometric.hpp>
 
 #include "input_error.h"
+#include "file_io.h"
 #include "mesh_io.h"
 
 namespace fs = std::filesystem;
