@@ -727,12 +727,11 @@ def main():
         "casts the same paths as ours on these scenes, `reports/correlation`, so the scenes themselves differ: suspected, the "
         f"assets); wknd's baseline L1 miss rate is {pct(R.val('base', 'wknd', 'l1_miss_rate'))}, so TTP has little to hide there (measured)")
     gap("TTP max", mx, PAPER["ttp_max"], lambda x: times(x, 2), f"ours on {peak_scene}; the paper's peak is on a scene we do not have")
-    gu_a = gm_of(R, "authors_perfect_up", "authors_base")
     gap("perfect-up limit", gu, PAPER["perfect_up"], lambda x: times(x, 2),
         "not modelled: the hit-result stores, which take priority over demand reads (abstract_hardware_model.cc ~l.855-887; "
         "effect not measured); the shaders' own loads through the same L1 and L2 (most of the authors' DRAM reads, "
         "`reports/correlation`) are `workload.shader_reads`, off in the preset: with them and the in-flight merging "
-        f"perfect-up is {times(gu_a, 2)} (the `authors` column, measured)")
+        f"perfect-up is {times(up_a, 2)} (the `authors` column, measured)")
     gap("perfect-down limit", gd, PAPER["perfect_down"], lambda x: times(x, 2),
         "measured: perfect-down beats perfect-up on " + (", ".join(f"{x} ({pct(1 - later_share[x], 0)})" for x in down_wins) or "no scene") +
         ", the share of the pops' DRAM misses that are first pops in brackets: where first pops carry most misses, making them "

@@ -232,15 +232,13 @@ def limit_section(md, ref, got, limit_keys):
          "where the RT unit would look them up. Speed-up = DFS baseline cycles / limit-study cycles, same frame and "
          "configuration; \"hits per ray\": 32 B reads per ray answered so.")
     md.p()
-    rows, agree, n, errs = [], 0, 0, []
+    rows, agree, errs = [], 0, []
     for b in frames:
         up, down = b[:4] + (b[4] + "-perfect-up",), b[:4] + (b[4] + "-perfect-down",)
         tb, ob = theirs(ref[b])["cycles"], got[b]["cycles"]
         t_up, t_down = tb / theirs(ref[up])["cycles"], tb / theirs(ref[down])["cycles"]
         o_up, o_down = ob / got[up]["cycles"], ob / got[down]["cycles"]
-        n += 1
-        same = (t_up > t_down) == (o_up > o_down)
-        agree += same
+        agree += (t_up > t_down) == (o_up > o_down)
         errs += [rel(o_up, t_up), rel(o_down, t_down)]
         ray_t, ray_o = theirs(ref[b])["rays"], got[b]["rays"]
         hits = [f"{(theirs(ref[c])['limit_hits'] or 0) / ray_t:.1f} / {got[c]['limit_hits'] / ray_o:.1f}" for c in (up, down)]
@@ -260,7 +258,7 @@ def limit_section(md, ref, got, limit_keys):
              f"{g['reference'][1]:.3f}x on the reference, {g['rtunit'][0]:.3f}x / {g['rtunit'][1]:.3f}x on rtunit.")
     worst = max(abs(e) for e in errs)
     md.p()
-    md.p(f"The larger of the two limits is the same on both sides on {agree} of {n} frames; rtunit's limit-study "
+    md.p(f"The larger of the two limits is the same on both sides on {agree} of {len(frames)} frames; rtunit's limit-study "
          f"speed-ups are within {100 * worst:.1f} % of the reference's (the worst of {len(errs)}).")
     md.p()
 
