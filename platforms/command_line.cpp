@@ -170,10 +170,6 @@ RunSpec spec_of(const Args& a, const std::atomic<int>* stop) {
             throw InputError(e.what());
         }
     }
-    // --check-error runs sampled clusters, which do not take the shader code's reads (frame_sample
-    // refuses them): say so now, not as the check's failure.
-    if (a.check_error && spec.hw.shader_reads > 0 && a.rays.empty())
-        throw InputError("--check-error samples the frame, and a sampled run does not model workload.shader_reads (set it to 0 for the check)");
     spec.scene = a.scene;
     spec.assets = a.assets;
     spec.flatten = a.flatten;

@@ -1,7 +1,6 @@
 #include "timing_run.h"
 
 #include <cmath>
-#include <cstdio>
 #include <stdexcept>
 
 #include "model/treelet.h"
@@ -41,12 +40,6 @@ SamplingOptions sampling_options(const HwConfig& c, const BvhImage& img, const T
 std::unique_ptr<FrameSample> frame_sample(const HwConfig& c, const BvhImage& img, const TimingOptions& o, const Treelets* treelets,
                                           const Workload& workload) {
     if (o.sample_rate >= 1.0) return nullptr;
-    if (c.shader_reads > 0 && workload.runs_shaders()) {
-        char per_ray[32];
-        std::snprintf(per_ray, sizeof per_ray, "%g", c.shader_reads);
-        throw std::invalid_argument(std::string("--sample with workload.shader_reads ") + per_ray +
-                                    ": the sampled estimate and its interval are not validated with the shader code's reads (run the whole frame, or set workload.shader_reads=0)");
-    }
     return std::make_unique<FrameSample>(sampling_options(c, img, o, treelets), c.sms, shader_timing(c, workload));
 }
 

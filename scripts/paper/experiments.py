@@ -2,8 +2,9 @@
 """The TTP paper's Results section as a sweep manifest: one line per run (scene, rtsim arguments,
 output path). Every run uses the `paper` preset (the TTP authors' MOBILE setup, docs/paper-preset.md)
 unless its id starts with `desktop_` (the authors' RTX 2060 setup), `mobile_` (the paper's
-Table 2 alone, for the report's second column) or `authors_` (the `paper` preset with what the
-authors' RT unit and application do that it leaves off: scripts/reference/paper_keys.py).
+Table 2 alone, for the report's second column) or `without_` (the `paper` preset without the keys
+by which it follows the authors' RT unit and application beyond their configuration file:
+scripts/reference/paper_keys.py).
 Usage: experiments.py MANIFEST [--size N] [--spp N] [--scenes a,b,...] [--no-256]"""
 import os
 import sys
@@ -58,9 +59,9 @@ OTHER_PRESETS = {
     "desktop": ["base", "ttp"],
     "mobile": ["base", "ttp", "perfect_up", "perfect_down", "park", "bfs_base", "bfs_ttp_n4", "treelet"],
 }
-# The `paper` preset with the authors' in-flight merging and shader reads (paper_keys.py): what
-# they would do to the figures the reference issue names.
-AUTHORS = ["base", "ttp", "perfect_up", "perfect_down", "park", "treelet"]
+# The `paper` preset without the authors' in-flight merging and shader reads (paper_keys.py): what
+# they do to the figures the reference issue names.
+WITHOUT = ["base", "ttp", "perfect_up", "perfect_down", "park", "treelet"]
 
 
 def experiments(size, spp, with_256):
@@ -75,7 +76,7 @@ def experiments(size, spp, with_256):
     for preset, eids in OTHER_PRESETS.items():
         runs += [(f"{preset}_{eid}", run(preset, size, main[eid])) for eid in eids]
     keys = " ".join(set_arguments())
-    runs += [(f"authors_{eid}", run("paper", size, f"{keys} {main[eid]}".strip())) for eid in AUTHORS]
+    runs += [(f"without_{eid}", run("paper", size, f"{keys} {main[eid]}".strip())) for eid in WITHOUT]
     for small in (32, 64):  # the paper's resolution study of Treelet against TTP
         for eid in ("base", "ttp", "treelet", "treelet_contiguous"):
             runs.append((f"res{small}_{eid}", run("paper", small, main[eid])))

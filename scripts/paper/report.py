@@ -7,7 +7,6 @@ PAPER below, each with the place in the paper it comes from."""
 import csv
 import datetime
 import json
-import math
 import os
 import pathlib
 import re
@@ -22,7 +21,7 @@ sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."
 from report_util import Markdown, direction, geomean, load, mean, number, order, pct, share_words, times  # noqa: E402
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "reference"))
-from paper_keys import PAPER_KEYS  # noqa: E402
+from paper_keys import WITHOUT_KEYS  # noqa: E402
 
 SCENES = ["wknd", "cornell", "ship", "bunny", "ref", "bath", "sprng", "party"]
 PAPER_SCENES = [s for s in SCENES if s != "cornell"]  # geometric means that compare with the paper's
@@ -219,8 +218,9 @@ def main():
     R.p("The `paper` preset is the TTP authors' MOBILE setup key by key (docs/paper-preset.md gives every key's source); "
         "the `mobile` column, where shown, is the paper's Table 2 alone, without the details of the authors' simulator "
         "(two-step leaf read, 100-cycle DRAM front end, 16 resident warps per SM, their address mapping and set hashing, "
-        "oldest-first RT warp scheduling, a 16-entry per-thread prefetch window, the kernel launch, the shader time measured "
-        "on their simulator, Treelet's default treelet size, queue check and vote period); the difference between the two columns is what those details "
+        "oldest-first RT warp scheduling, a 16-entry per-thread prefetch window, node reads merged into their warp's reads in "
+        "flight, the kernel launch, the shader time and the shaders' reads that reach L2 measured on their simulator, "
+        "Treelet's default treelet size, queue check and vote period); the difference between the two columns is what those details "
         "weigh. The paper's figures are over its 16 LumiBench scenes; ours are over the scenes of `../shared/scenes`, built "
         "and cast as LumiBench does (docs/lumibench.md; some assets are stand-ins or partial, see the gap table at the end).")
     R.p()
@@ -668,17 +668,16 @@ def main():
     R.p()
 
     # 21. What the authors' simulator details weigh: paper preset against mobile, and against the
-    # preset with what the authors' RT unit and application do that it leaves off.
-    R.p("## The `paper` preset against `mobile` (Table 2 alone) and against the authors' merging and shader reads")
+    # preset without what it takes from the authors' RT unit and application beyond their configuration.
+    R.p("## The `paper` preset against `mobile` (Table 2 alone) and without the authors' merging and shader reads")
     R.p()
-    R.p("The `authors` column is the `paper` preset with `" + "`, `".join(PAPER_KEYS) + "` "
-        "(`scripts/reference/paper_keys.py`): a node read joins its warp's read of the same chunk in flight, and the "
-        "shaders' reads that reach L2 after each trace, both measured against the authors' simulator in "
-        "`reports/correlation`, where the `paper` preset runs with them. The preset leaves them off until the error grid "
-        "and the sampling grids are rerun with them (docs/paper-preset.md).")
+    R.p("The `without` column is the `paper` preset with `" + "`, `".join(WITHOUT_KEYS) + "` "
+        "(`scripts/reference/paper_keys.py`): no node read joins its warp's read of the same chunk in flight, and no "
+        "shader reads reach L2 after each trace. The preset has both, as the authors' RT unit and application do, each "
+        "measured against the authors' simulator in `reports/correlation` (docs/paper-preset.md).")
     R.p()
     rows = []
-    variants = (("paper", ""), ("authors", "authors_"), ("mobile", "mobile_"))
+    variants = (("paper", ""), ("without", "without_"), ("mobile", "mobile_"))
     for label, exp, base, only, paper_fig in (("TTP", "ttp", "base", None, PAPER["ttp"]),
                                               ("perfect-up", "perfect_up", "base", None, PAPER["perfect_up"]),
                                               ("perfect-down", "perfect_down", "base", None, PAPER["perfect_down"]),
@@ -693,14 +692,14 @@ def main():
         have = {v: g for v, g in got.items() if known(g)}
         rows.append([label] + [times(got[v]) for v, _ in variants] + [times(paper_fig),
                      min(have, key=lambda v: abs(have[v] - paper_fig)) if len(have) > 1 else "-"])
-    R.table(["speed-up (geomean)", "`paper` preset", "`authors`", "`mobile` preset", "the paper", "nearer the paper"], rows)
-    up_a, down_a = gm_of(R, "authors_perfect_up", "authors_base"), gm_of(R, "authors_perfect_down", "authors_base")
-    park_a, ttp_a = gm_of(R, "authors_park", "authors_base"), gm_of(R, "authors_ttp", "authors_base")
-    if known(up_a, down_a, park_a, ttp_a):
-        order_words = "the paper's order" if up_a > down_a else "the reverse of the paper's order"
+    R.table(["speed-up (geomean)", "`paper` preset", "`without`", "`mobile` preset", "the paper", "nearer the paper"], rows)
+    up_w, down_w = gm_of(R, "without_perfect_up", "without_base"), gm_of(R, "without_perfect_down", "without_base")
+    park_w, ttp_w = gm_of(R, "without_park", "without_base"), gm_of(R, "without_ttp", "without_base")
+    if known(up_w, down_w, park_w, ttp_w):
+        order_words = "the paper's order" if up_w > down_w else "the reverse of the paper's order"
         R.p()
-        R.p(f"With the authors' merging and shader reads, perfect-up is {times(up_a, 3)} against perfect-down's "
-            f"{times(down_a, 3)} ({order_words}), and Park takes {pct((park_a - 1) / (ttp_a - 1), 0)} of TTP's gain "
+        R.p(f"Without the authors' merging and shader reads, perfect-up is {times(up_w, 3)} against perfect-down's "
+            f"{times(down_w, 3)} ({order_words}), and Park takes {pct((park_w - 1) / (ttp_w - 1), 0)} of TTP's gain "
             f"(paper: {pct((PAPER['park'] - 1) / (PAPER['ttp'] - 1), 0)}).")
     R.p()
 
@@ -730,8 +729,8 @@ def main():
     gap("perfect-up limit", gu, PAPER["perfect_up"], lambda x: times(x, 2),
         "not modelled: the hit-result stores, which take priority over demand reads (abstract_hardware_model.cc ~l.855-887; "
         "effect not measured); the shaders' own loads through the same L1 and L2 (most of the authors' DRAM reads, "
-        "`reports/correlation`) are `workload.shader_reads`, off in the preset: with them and the in-flight merging "
-        f"perfect-up is {times(up_a, 2)} (the `authors` column, measured)")
+        "`reports/correlation`) are the preset's `workload.shader_reads`: without them and the in-flight merging "
+        f"perfect-up is {times(up_w, 2)} (the `without` column, measured)")
     gap("perfect-down limit", gd, PAPER["perfect_down"], lambda x: times(x, 2),
         "measured: perfect-down beats perfect-up on " + (", ".join(f"{x} ({pct(1 - later_share[x], 0)})" for x in down_wins) or "no scene") +
         ", the share of the pops' DRAM misses that are first pops in brackets: where first pops carry most misses, making them "
@@ -740,8 +739,8 @@ def main():
     gap("DRAM bandwidth rise with TTP", m_bw, PAPER["dram_bw_overhead"], pct,
         f"measured: our traffic changes by {times(g_tr, 3)}, so our bandwidth rises with the speed-up; the paper's rises less "
         "than its speed-up with traffic unchanged too, so its figure must include traffic TTP does not change, such as the "
-        "shader cores' own loads, which the `paper` preset leaves off (`workload.shader_reads`; reasoned: they are most of the "
-        "authors' DRAM reads, `reports/correlation`)")
+        "shader cores' own: their loads that reach L2 are in the preset (`workload.shader_reads`, most of the authors' DRAM "
+        "reads, `reports/correlation`), their stores are not modelled (reasoned)")
     gap("L1 accuracy (authors' code)", a_l1, PAPER["l1_accuracy"], pct,
         f"measured: the same runs give {pct(m(acc, 'l1'))} by the text's definition; the authors' code counts a line used unless "
         "it is evicted unread, and lines still cached at the end as used")
@@ -779,9 +778,8 @@ def main():
             "these change how long a prefetched line waits to be useful;",
             "the shader code between trace calls, its time and its loads and stores through the L1 and L2: rtunit charges "
             "a constant measured on the authors' simulator (docs/paper-preset.md, `workload.shade_latency`); the loads that "
-            "reach L2 are `workload.shader_reads`, which the preset leaves off until the error grid is rerun with it (the "
-            "`authors` column and `reports/correlation` run with it); the stores are not modelled (10-14 sectors per ray "
-            "reach the authors' L2);",
+            "reach L2 are `workload.shader_reads` (5.5 sectors per ray of fresh data in the preset; the reads that hit L1 "
+            "are not modelled); the stores are not modelled (10-14 sectors per ray reach the authors' L2);",
             "the DRAM's read-to-precharge time (RTPL=4) and write-to-read turn (CDLR=9); reads alone do not reach the "
             "second, and the RT unit's stores are not modelled."):
         R.p("- " + item)

@@ -35,8 +35,6 @@ ROOT = HERE.parent.parent
 sys.path.insert(0, str(ROOT / "scripts" / "sweep"))
 from report_util import Markdown, geomean  # noqa: E402
 
-import paper_keys  # noqa: E402  (this folder)
-
 SCENE_ASSETS = {"wknd": None, "ship": "ship", "bunny": "bunny", "ref": "dragon", "bath": "bath", "sprng": "sprng",
                 "party": "party"}
 # reference config -> (rtunit configuration, traversal, prefetcher)
@@ -54,9 +52,6 @@ CONFIGS = {
 LIMIT_BASE = {"dfs-perfect-up": "dfs", "dfs-perfect-down": "dfs",
               "paper-dfs-perfect-up": "paper-dfs", "paper-dfs-perfect-down": "paper-dfs"}
 CONFIG_ARG = {"updated": str(HERE / "configs" / "updated-mobile.json"), "paper": "paper"}
-# What the authors' RT unit does that the `paper` preset does not switch on yet (docs/paper-preset.md
-# says why; paper_keys.py); updated-mobile.json has it.
-CONFIG_SETS = {"updated": [], "paper": paper_keys.set_arguments()}
 # The TTP speed-up: (baseline, with TTP) pairs of reference configs.
 PAIRS = [("dfs", "dfs-ttp", "DFS, updated-config"), ("base", "ttp", "BFS, updated-config"),
          ("paper-dfs", "paper-dfs-ttp", "DFS, paper (tested-cfgs)"), ("paper-base", "paper-ttp", "BFS, paper (tested-cfgs)")]
@@ -159,7 +154,7 @@ def run_rtunit(key, args, runs, rtsim, scenes):
     if out.exists():
         return key, json.loads(out.read_text())
     cmd = [rtsim, "--scene", scene, "--width", str(w), "--height", str(h), "--spp", str(spp), "--fidelity", "at",
-           "--config", CONFIG_ARG[cset], *CONFIG_SETS[cset], "--traversal", traversal, "--prefetcher", prefetcher, "--quiet",
+           "--config", CONFIG_ARG[cset], "--traversal", traversal, "--prefetcher", prefetcher, "--quiet",
            "--stats", str(out) + ".tmp"]
     if SCENE_ASSETS[scene]:
         cmd += ["--assets", str(pathlib.Path(scenes) / SCENE_ASSETS[scene])]
@@ -316,8 +311,7 @@ def main():
     md.p("Configurations: `dfs`, `dfs-ttp`, `base` (BFS), `ttp` (BFS with TTP) are the fork's "
          "`configs/updated-config/MOBILE-gpgpusim.config` with its two switches set; rtunit runs "
          "`scripts/reference/configs/updated-mobile.json` for them. `paper-*` are the same switches on "
-         "`configs/tested-cfgs/MOBILE/gpgpusim.config`, the paper's Table 2, against rtunit's `paper` preset"
-         + (f" with `{' '.join(CONFIG_SETS['paper'])}`" if CONFIG_SETS["paper"] else "") + ".")
+         "`configs/tested-cfgs/MOBILE/gpgpusim.config`, the paper's Table 2, against rtunit's `paper` preset.")
     md.p()
 
     # --- the workload: rays and nodes per ray
