@@ -143,22 +143,26 @@ void IntervalGpu::start_trace(uint32_t sm, const std::vector<WarpRay>& rays, uin
 void IntervalGpu::set_shader_reads(double per_ray) {
     shader_.clear();
     shader_free_.clear();
+    shader_scheduled_.clear();
     if (per_ray <= 0) return;
     shader_.resize(cfg_.sms);
     shader_free_.assign(cfg_.sms, 0);
+    shader_scheduled_.assign(cfg_.sms, 0);
     for (uint32_t s = 0; s < cfg_.sms; ++s) shader_[s].start(s, per_ray);
 }
 
 void IntervalGpu::finish(uint32_t id, std::vector<Finished>& finished) {
     Trace& tr = traces_[id];
     if (!shader_.empty()) {
+        // The shader code's reads leave one a cycle from the trace's end, each as an event of its
+        // cycle, so that they book the L1, L2 and DRAM in time order with the RT units' reads.
+        // Booked all at once here, they would take the L2's and DRAM's slots ahead of reads of
+        // earlier cycles that are scheduled later (docs/accuracy.md measures what that did).
         ShaderLoads& loads = shader_[tr.sm];
         loads.owe(tr.threads.size());
-        for (; loads.owed(); loads.issued()) {
-            const uint64_t at = std::max(tr.end, shader_free_[tr.sm]);
-            read(tr.sm, loads.next(), at, ReqKind::Shader);
-            shader_free_[tr.sm] = at + 1;
-            ++rt_[tr.sm].shader_reads;
+        if (loads.owed() && !shader_scheduled_[tr.sm]) {
+            shader_scheduled_[tr.sm] = 1;
+            events_.push({std::max(tr.end, shader_free_[tr.sm]), next_seq_++, tr.sm, kShader});
         }
     }
     Finished f{tr.sm, tr.end, {}};
@@ -220,14 +224,27 @@ void IntervalGpu::send_prefetch(uint32_t sm, uint64_t cycle) {
     events_.push({sent == cycle ? cycle + 1 : sent, next_seq_++, sm, kPrefetch});
 }
 
+void IntervalGpu::send_shader_read(uint32_t sm, uint64_t cycle) {
+    ShaderLoads& loads = shader_[sm];
+    read(sm, loads.next(), cycle, ReqKind::Shader);
+    loads.issued();
+    ++rt_[sm].shader_reads;
+    shader_free_[sm] = cycle + 1;
+    if (loads.owed())
+        events_.push({cycle + 1, next_seq_++, sm, kShader});
+    else
+        shader_scheduled_[sm] = 0;
+}
+
 uint64_t IntervalGpu::next_event() const { return events_.empty() ? ~0ull : events_.top().at; }
 
 // The events of one cycle run together, in the warp scheduler's order (model/warp_scheduler.h):
 // the prefetch queues first (they only try the request port in this cycle, which no demand of
 // this cycle books), then the threads' fetches, per SM by rt.warp_scheduler: round robin, the
 // slots from the one after the last picked; oldest first, by their trace's entry (the TTP
-// authors' scheduler, the first non-stalled warp in uid order, shader.cc l.3254-3267). No event
-// of a cycle schedules another in the same cycle.
+// authors' scheduler, the first non-stalled warp in uid order, shader.cc l.3254-3267), then the
+// shader ports. No event of a cycle schedules another in the same cycle, but for a shader port's
+// first read at a trace's end, which runs after the cycle's batch, as the shader ports run last.
 void IntervalGpu::run_next(std::vector<Finished>& finished) {
     const uint64_t at = events_.top().at;
     batch_.clear();
@@ -239,6 +256,7 @@ void IntervalGpu::run_next(std::vector<Finished>& finished) {
     const bool oldest = cfg_.warp_order == WarpOrder::OldestFirst;
     auto order = [&](const Event& e) -> std::pair<uint64_t, uint64_t> {
         if (e.thread == kPrefetch) return {0, 0};
+        if (e.thread == kShader) return {~0ull, e.trace};  // after the RT units' reads, as AT's shader port
         const Trace& tr = traces_[e.trace];
         return {1 + (oldest ? 0 : (tr.slot + slots - rr_next_[tr.sm]) % slots), tr.age};
     };
@@ -249,6 +267,7 @@ void IntervalGpu::run_next(std::vector<Finished>& finished) {
 void IntervalGpu::run_event(const Event& ev, std::vector<Finished>& finished) {
     advance(ev.at);  // every later fetch is scheduled at or after this one
     if (ev.thread == kPrefetch) return send_prefetch(ev.trace, ev.at);
+    if (ev.thread == kShader) return send_shader_read(ev.trace, ev.at);
     if (ev.at != coalesce_at_) {
         coalescer_.clear();
         coalesced_.clear();

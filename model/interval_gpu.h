@@ -141,8 +141,9 @@ private:
         absl::flat_hash_map<uint64_t, Served> chunks;
     };
     // A thread's next node fetch, scheduled at `at`; or, with thread == kPrefetch, SM `trace`'s
-    // prefetch queue trying to send its oldest chunk in cycle `at`.
-    static constexpr uint32_t kPrefetch = ~0u;
+    // prefetch queue trying to send its oldest chunk in cycle `at`; or, with thread == kShader,
+    // SM `trace`'s shader port sending its next read in cycle `at`.
+    static constexpr uint32_t kPrefetch = ~0u, kShader = ~0u - 1;
     struct Event {
         uint64_t at, seq;  // seq: scheduling order, for ties
         uint32_t trace, thread;
@@ -154,6 +155,7 @@ private:
     void finish(uint32_t trace, std::vector<Finished>& finished);
     void run_event(const Event& ev, std::vector<Finished>& finished);
     void send_prefetch(uint32_t sm, uint64_t cycle);
+    void send_shader_read(uint32_t sm, uint64_t cycle);
 
     std::vector<Trace> traces_;
     std::vector<uint32_t> free_traces_;
@@ -169,10 +171,11 @@ private:
     std::vector<std::vector<uint8_t>> slot_busy_;  // per SM and warp-buffer slot: holds a trace
     uint64_t next_age_ = 0;
     std::vector<Event> batch_;            // the events of one cycle, in the order they run
-    // The shader reads (set_shader_reads): per SM, what is owed and the cycle its shader port is
-    // free; empty: none.
+    // The shader reads (set_shader_reads): per SM, what is owed, the cycle its shader port is
+    // free and whether its next read is an event already; empty: none.
     std::vector<ShaderLoads> shader_;
     std::vector<uint64_t> shader_free_;
+    std::vector<uint8_t> shader_scheduled_;
 };
 
 }  // namespace rtu
