@@ -617,8 +617,8 @@ std::pair<nlohmann::json, nlohmann::json> wknd_without_and_with(TempDir& dir, co
 // fraction); each a fresh sector, so every one misses L1 and L2, and the DRAM reads are the L2's
 // misses of all three kinds (a conservation law of the read-only memory system); the rays'
 // nodes and hits do not change, the frame takes longer. Given rays run no shader code: none.
-// A sampled run's clusters read them after their own traces: fewer than the whole frame's, more
-// than one per ray of the frame's share the sample simulated (docs/sampling.md validates it).
+// A sampled run's clusters read them after their own traces, by the same law over the rays they
+// simulate (docs/sampling.md measures such samples' intervals).
 TEST(RtsimTiming, ShaderReadsGoThroughL1L2AndDram) {
     TempDir dir;
     auto misses = [](const nlohmann::json& c) { return c["sector_misses"].get<uint64_t>() + c["line_misses"].get<uint64_t>(); };
