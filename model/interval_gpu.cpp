@@ -143,11 +143,9 @@ void IntervalGpu::start_trace(uint32_t sm, const std::vector<WarpRay>& rays, uin
 void IntervalGpu::set_shader_reads(double per_ray) {
     shader_.clear();
     shader_free_.clear();
-    shader_scheduled_.clear();
     if (per_ray <= 0) return;
     shader_.resize(cfg_.sms);
     shader_free_.assign(cfg_.sms, 0);
-    shader_scheduled_.assign(cfg_.sms, 0);
     for (uint32_t s = 0; s < cfg_.sms; ++s) shader_[s].start(s, per_ray);
 }
 
@@ -158,12 +156,11 @@ void IntervalGpu::finish(uint32_t id, std::vector<Finished>& finished) {
         // cycle, so that they book the L1, L2 and DRAM in time order with the RT units' reads.
         // Booked all at once here, they would take the L2's and DRAM's slots ahead of reads of
         // earlier cycles that are scheduled later (docs/accuracy.md measures what that did).
+        // The port has an event queued exactly while it owes reads (send_shader_read).
         ShaderLoads& loads = shader_[tr.sm];
+        const bool port_idle = loads.owed() == 0;
         loads.owe(tr.threads.size());
-        if (loads.owed() && !shader_scheduled_[tr.sm]) {
-            shader_scheduled_[tr.sm] = 1;
-            events_.push({std::max(tr.end, shader_free_[tr.sm]), next_seq_++, tr.sm, kShader});
-        }
+        if (port_idle && loads.owed()) events_.push({std::max(tr.end, shader_free_[tr.sm]), next_seq_++, tr.sm, kShader});
     }
     Finished f{tr.sm, tr.end, {}};
     for (const Thread& t : tr.threads) {
@@ -230,10 +227,7 @@ void IntervalGpu::send_shader_read(uint32_t sm, uint64_t cycle) {
     loads.issued();
     ++rt_[sm].shader_reads;
     shader_free_[sm] = cycle + 1;
-    if (loads.owed())
-        events_.push({cycle + 1, next_seq_++, sm, kShader});
-    else
-        shader_scheduled_[sm] = 0;
+    if (loads.owed()) events_.push({cycle + 1, next_seq_++, sm, kShader});
 }
 
 uint64_t IntervalGpu::next_event() const { return events_.empty() ? ~0ull : events_.top().at; }

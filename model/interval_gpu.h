@@ -171,11 +171,10 @@ private:
     std::vector<std::vector<uint8_t>> slot_busy_;  // per SM and warp-buffer slot: holds a trace
     uint64_t next_age_ = 0;
     std::vector<Event> batch_;            // the events of one cycle, in the order they run
-    // The shader reads (set_shader_reads): per SM, what is owed, the cycle its shader port is
-    // free and whether its next read is an event already; empty: none.
+    // The shader reads (set_shader_reads): per SM, what is owed and the cycle its shader port is
+    // free; empty: none.
     std::vector<ShaderLoads> shader_;
     std::vector<uint64_t> shader_free_;
-    std::vector<uint8_t> shader_scheduled_;
 };
 
 }  // namespace rtu
