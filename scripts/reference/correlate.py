@@ -117,11 +117,12 @@ def rt_cache(r, prefix):
     a HIT_RESERVED, counted here as a hit, as rtunit's MSHR hits are. L1 is a streaming cache (`s`
     in -gpgpu_cache:dl1: allocated on fill, gpu-sim's gpu-cache.h l.572-585), so such a read finds
     no line and counts as a MISS or SECTOR_MISS (gpu-cache.cc l.316-322) that merges into the
-    pending MSHR (l.1214-1223): rtunit's L1 miss rate counts its MSHR hits as misses to match."""
+    pending MSHR (l.1214-1223): rtunit's L1 miss rate counts its MSHR hits as misses to match.
+    A prefetch's own lookup is not among these reads (`if(mf->is_prefetched() == false)`,
+    data_cache::access, gpu-cache.cc l.1795), and PREFETCH_HIT is not an outcome of its own:
+    it counts again a HIT on a line a prefetch filled (l.1786-1793), so it is left out."""
     hit, hr, miss, sec = (f(r, prefix + k) or 0.0 for k in ("read_hit", "read_hit_reserved", "read_miss", "read_sector_miss"))
-    pf = f(r, prefix + "read_prefetch_hit") or 0.0
-    acc = hit + hr + miss + sec + pf
-    return acc, miss + sec
+    return hit + hr + miss + sec, miss + sec
 
 
 def global_reads(r, level):
@@ -136,8 +137,6 @@ def shader_traffic(r):
     rays = f(r, "rt_n_total_rays") or 1.0
     rt1, _ = rt_cache(r, "rtc_")
     rt2, _ = rt_cache(r, "rtl2_")
-    rt1 -= f(r, "rtc_read_prefetch_hit") or 0.0
-    rt2 -= f(r, "rtl2_read_prefetch_hit") or 0.0
     g1, g2 = global_reads(r, "L1D"), global_reads(r, "L2")
     g1_miss = sum(f(r, f"L1D_global_r_{k}") or 0.0 for k in ("miss", "sector_miss"))
     rt1_miss = (f(r, "rtc_read_miss") or 0.0) + (f(r, "rtc_read_sector_miss") or 0.0)
@@ -491,8 +490,7 @@ def main():
          "`rtunit.csv`) and the DRAM reads (the reference's include the shaders' loads). "
          "At L1 a read that merges into a fetch already under way is a miss on both sides: the reference's L1 is a "
          "streaming cache, allocated on fill, where such a read finds no line (`rt_cache()` in the script cites the "
-         "lines); at L2 it is a hit on both. With TTP the reference's L1 reads include the prefetches' own lookups, "
-         "rtunit's do not. DRAM reads are 32 B sectors on both sides: the reference counts a read per 16 B column "
+         "lines); at L2 it is a hit on both. Neither side counts a prefetch's own lookups among these reads. DRAM reads are 32 B sectors on both sides: the reference counts a read per 16 B column "
          "access (a 2-byte bus, burst length 8), which the report halves; "
          "{} of {} runs have exactly two such reads per L2 read miss.".format(*dram_sectors_check([ref[k] for k in keys])))
     md.p()
@@ -509,6 +507,15 @@ def main():
         md.p()
         md.p(f"Prefetch fills at L1 on the {len(fills)} runs with TTP: rtunit's are {min(fills):.2f}x to {max(fills):.2f}x "
              f"the reference's (geometric mean {geomean(fills):.2f}x; {sum(abs(x - 1) <= 0.10 for x in fills)} within 10 %).")
+    # The L1 miss rates side by side, without and with TTP: how much of the reference's L1
+    # misses rtunit's L1 shows, and whether TTP removes a like share on both sides.
+    for with_ttp in (False, True):
+        l1 = [got[k]["l1_miss"] / theirs(ref[k])["l1_miss"] for k in keys
+              if bool(theirs(ref[k])["prefetches"]) == with_ttp and theirs(ref[k])["l1_miss"]]
+        if l1:
+            md.p()
+            md.p(f"RT-unit L1 miss rates on the {len(l1)} runs {'with' if with_ttp else 'without'} TTP: rtunit's are "
+                 f"{min(l1):.2f}x to {max(l1):.2f}x the reference's (geometric mean {geomean(l1):.2f}x).")
     md.p()
 
     # --- the shaders' memory traffic (rtunit models their reads that reach L2, workload.shader_reads)
