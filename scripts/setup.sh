@@ -14,6 +14,7 @@ packages=(
   libstb-dev                # PNG output
   libabsl-dev               # Abseil flat hash maps (cache tags, MSHRs)
   parallel                  # the sweeps' local engine, which the test suite runs (tests/sweep_*_test.sh)
+  libtinyobjloader-dev      # LumiBench's OBJ loader: the tests check rtunit's triangulation against it
   python3-pandas            # statistics as DataFrames (scripts/python/rtunit_stats): the main job's summary and its test
 )
 # Options, any number of them together (scripts/setup.sh --reports --fuzz):

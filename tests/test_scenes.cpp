@@ -128,6 +128,36 @@ TEST(MeshFiles, ObjTrianglesAreNumberedInFileOrderAndPolygonsFanned) {
     EXPECT_EQ(m.material[5], m.material[0]);
 }
 
+// LumiBench's own scenes are triangulated as its loader does (tinyobjloader 2.0.0rc10): a polygon
+// of five or more corners has its ears clipped, worked by hand through tiny_obj_loader.h
+// l.1689-1910 (axes x, y: the first corner's edges turn about z).
+//  - The convex pentagon (1,1) (3,1) (4,3) (2,4) (0,3): the triple from corner 0 turns left (+4) but
+//    (p0 x p1) = 1*1 - 1*3 < 0, so it is passed over; (1,2,3) is an ear (turn +5, p1 x p2 = 5 > 0,
+//    corners 4 and 0 outside) and corner 2 goes; then (1,3,4) (turn +7, p1 x p3 = 10 > 0; corner 0
+//    outside) and corner 3 goes; (0,1,4) is what remains.
+//  - The concave pentagon (1,3) (0,0) (1,0) (2,1) (3,0): (0,1,2) is cut (p0 x p1 = 0), corner 1
+//    goes; of the four triples left, three have a turn of the other sign than (p_g x p_g+1) and the
+//    fourth, (4,0,2), holds corner 3, so the loader runs out of tries and the rest is lost.
+TEST(MeshFiles, LumiBenchPolygonsHaveTheirEarsClippedAsItsLoaderDoes) {
+    TempDir dir;
+    const std::string obj = write_text(dir.file("p.obj"),
+                                       "v 1 1 0\nv 3 1 0\nv 4 3 0\nv 2 4 0\nv 0 3 0\n"
+                                       "v 1 3 0\nv 0 0 0\nv 1 0 0\nv 2 1 0\nv 3 0 0\n"
+                                       "f 1 2 3 4 5\nf 6 7 8 9 10\n");
+    const glm::vec3 p[] = {{}, {1, 1, 0}, {3, 1, 0}, {4, 3, 0}, {2, 4, 0}, {0, 3, 0}, {1, 3, 0}, {0, 0, 0}, {1, 0, 0}, {2, 1, 0}, {3, 0, 0}};
+    Scene s;
+    load_mesh_file(s, obj, {}, true);
+    const Mesh& m = s.meshes[0];
+    const int expect[4][3] = {{2, 3, 4}, {2, 4, 5}, {1, 2, 5}, {6, 7, 8}};
+    ASSERT_EQ(m.triangles.size(), 4u);
+    for (int i = 0; i < 4; ++i)
+        for (int k = 0; k < 3; ++k) EXPECT_EQ(m.vertices[m.triangles[i][k]], p[expect[i][k]]) << "triangle " << i << " corner " << k;
+    // A mesh given by path keeps the fan: three triangles from each.
+    Scene fanned;
+    load_mesh_file(fanned, obj);
+    EXPECT_EQ(fanned.meshes[0].triangles.size(), 6u);
+}
+
 // A material library that is not one (3 KB of other text, or binary) is read with a warning that
 // says so: the faces then take the default material, not the file's colours (issue 50).
 TEST(MeshFiles, AGarbageMaterialLibraryIsWarnedAbout) {

@@ -9,6 +9,7 @@
 #include <cstring>
 #include <filesystem>
 #include <iostream>
+#include <limits>
 #include <array>
 #include <map>
 #include <set>
@@ -207,23 +208,98 @@ Corner parse_corner(std::string_view tok, long nv, long nvt, long nvn, const std
     return c;
 }
 
+// tinyobjloader's point-in-polygon test (W. R. Franklin's crossing test, tiny_obj_loader.h
+// l.1388-1398) on a triangle: whether (x, y) lies inside, boundary points by its half-open rule.
+bool crossing_inside(const float vx[3], const float vy[3], float x, float y) {
+    bool inside = false;
+    for (int i = 0, j = 2; i < 3; j = i++)
+        if ((vy[i] > y) != (vy[j] > y) && x < (vx[j] - vx[i]) * (y - vy[i]) / (vy[j] - vy[i]) + vx[i]) inside = !inside;
+    return inside;
+}
+
+// A polygon of five or more corners as LumiBench's loader clips its ears (tinyobjloader
+// 2.0.0rc10 built without TINYOBJLOADER_USE_MAPBOX_EARCUT, as Debian's libtinyobjloader and
+// vcpkg's port are: tiny_obj_loader.h l.1689-1910, in float). The polygon is projected on two
+// axes chosen from the first corner whose edges are not parallel; then, from corner 0, a corner
+// triple (g, g+1, g+2) of what remains is cut off as a triangle unless its turn has the other
+// sign than (p_g x p_g+1) -- the loader compares with that product of the two positions, not with
+// the polygon's winding -- or another remaining corner lies inside it; otherwise the next triple
+// is tried. A polygon that runs out of tries with more than three corners left loses them, as
+// there.
+void clip_ears(const std::vector<Corner>& poly, const std::vector<glm::vec3>& pos, std::vector<std::array<size_t, 3>>& out) {
+    const size_t n = poly.size();
+    const auto at = [&](size_t k) { return pos[size_t(poly[k].v)]; };
+    int ax0 = 1, ax1 = 2;
+    for (size_t k = 0; k < n; ++k) {
+        const glm::vec3 e0 = at((k + 1) % n) - at(k), e1 = at((k + 2) % n) - at((k + 1) % n);
+        const float cx = std::fabs(e0.y * e1.z - e0.z * e1.y), cy = std::fabs(e0.z * e1.x - e0.x * e1.z),
+                    cz = std::fabs(e0.x * e1.y - e0.y * e1.x);
+        const float eps = std::numeric_limits<float>::epsilon();
+        if (cx > eps || cy > eps || cz > eps) {
+            if (!(cx > cy && cx > cz)) {
+                ax0 = 0;
+                if (cz > cx && cz > cy) ax1 = 1;
+            }
+            break;
+        }
+    }
+    std::vector<size_t> left(n);
+    for (size_t k = 0; k < n; ++k) left[k] = k;
+    size_t guess = 0, tries = n, before = n;
+    while (left.size() > 3 && tries > 0) {
+        const size_t m = left.size();
+        if (guess >= m) guess -= m;
+        if (before != m) before = tries = m;
+        else --tries;
+        size_t idx[3];
+        float vx[3], vy[3];
+        for (int k = 0; k < 3; ++k) {
+            idx[k] = left[(guess + size_t(k)) % m];
+            vx[k] = at(idx[k])[ax0];
+            vy[k] = at(idx[k])[ax1];
+        }
+        const float turn = (vx[1] - vx[0]) * (vy[2] - vy[1]) - (vy[1] - vy[0]) * (vx[2] - vx[1]);
+        const float area = (vx[0] * vy[1] - vy[0] * vx[1]) * 0.5f;
+        if (turn * area < 0.0f) {
+            ++guess;
+            continue;
+        }
+        bool overlap = false;
+        for (size_t o = 3; o < m && !overlap; ++o) {
+            const glm::vec3 p = at(left[(guess + o) % m]);
+            overlap = crossing_inside(vx, vy, p[ax0], p[ax1]);
+        }
+        if (overlap) {
+            ++guess;
+            continue;
+        }
+        out.push_back({idx[0], idx[1], idx[2]});
+        left.erase(left.begin() + std::ptrdiff_t((guess + 1) % m));
+    }
+    if (left.size() == 3) out.push_back({left[0], left[1], left[2]});
+}
+
 // The triangles of a polygon, as corner indices into it: a fan (v0,v1,v2), (v0,v2,v3), ...; with
-// `tinyobj_quads` a quad is split along its shorter diagonal as LumiBench's loader (tinyobjloader
-// 2.0.0rc10, tiny_obj_loader.h l.1463-1550) does: (0,1,2), (0,2,3) if |v2 - v0| < |v3 - v1|,
-// else (0,1,3), (1,2,3). Larger polygons are fanned either way (tinyobjloader clips ears).
-void triangulate(const std::vector<Corner>& poly, const std::vector<glm::vec3>& pos, bool tinyobj_quads, std::vector<std::array<size_t, 3>>& out) {
+// `tinyobj` as LumiBench's loader (tinyobjloader 2.0.0rc10) makes them: a quad split along its
+// shorter diagonal (tiny_obj_loader.h l.1463-1550), (0,1,2), (0,2,3) if |v2 - v0| < |v3 - v1|,
+// else (0,1,3), (1,2,3); a larger polygon's ears clipped (clip_ears).
+void triangulate(const std::vector<Corner>& poly, const std::vector<glm::vec3>& pos, bool tinyobj, std::vector<std::array<size_t, 3>>& out) {
     out.clear();
-    if (tinyobj_quads && poly.size() == 4) {
+    if (tinyobj && poly.size() == 4) {
         const glm::vec3 e02 = pos[size_t(poly[2].v)] - pos[size_t(poly[0].v)], e13 = pos[size_t(poly[3].v)] - pos[size_t(poly[1].v)];
         const float sqr02 = e02.x * e02.x + e02.y * e02.y + e02.z * e02.z, sqr13 = e13.x * e13.x + e13.y * e13.y + e13.z * e13.z;
         if (sqr02 < sqr13) out = {{0, 1, 2}, {0, 2, 3}};
         else out = {{0, 1, 3}, {1, 2, 3}};
         return;
     }
+    if (tinyobj && poly.size() > 4) {
+        clip_ears(poly, pos, out);
+        return;
+    }
     for (size_t k = 1; k + 1 < poly.size(); ++k) out.push_back({0, k, k + 1});
 }
 
-void load_obj(Scene& scene, Mesh& mesh, const std::string& path, bool tinyobj_quads) {
+void load_obj(Scene& scene, Mesh& mesh, const std::string& path, bool tinyobj) {
     const std::string data = read_file_maybe_gz(path);
     size_t pos = 0;
     std::map<std::string, uint32_t> materials;
@@ -271,7 +347,7 @@ void load_obj(Scene& scene, Mesh& mesh, const std::string& path, bool tinyobj_qu
                 poly.push_back(parse_corner(t[k], long(positions.size()), texcoords, long(normals.size()), path, lineno));
             const long mat = named ? long(current) : -1;  // -1: the default, resolved at the end
             any_default |= mat < 0;
-            triangulate(poly, positions, tinyobj_quads, tris);
+            triangulate(poly, positions, tinyobj, tris);
             for (const auto& tri : tris) {
                 glm::uvec3 idx;
                 for (int k = 0; k < 3; ++k) {
@@ -869,7 +945,7 @@ bool is_mesh_file(const std::string& path) {
     return imp.IsExtensionSupported("." + ext);
 }
 
-uint32_t load_mesh_file(Scene& scene, const std::string& path, const ImporterLimits& limits, bool tinyobj_quads) {
+uint32_t load_mesh_file(Scene& scene, const std::string& path, const ImporterLimits& limits, bool tinyobj) {
     std::error_code ec;
     if (!fs::exists(path, ec)) throw input_error(path, 0, "file not found");
     // A FIFO, socket or device would block the reader (Assimp waits forever on a FIFO) or never end.
@@ -882,7 +958,7 @@ uint32_t load_mesh_file(Scene& scene, const std::string& path, const ImporterLim
     mesh.name = path;
     const std::string ext = mesh_extension(path);
     if (ext == "obj") {
-        load_obj(scene, mesh, path, tinyobj_quads);
+        load_obj(scene, mesh, path, tinyobj);
     } else if (ext == "ply") {
         const uint32_t mat = add_material(scene, Material{});
         PlyReader(path, read_file_maybe_gz(path)).load(mesh, mat);

@@ -20,9 +20,10 @@ struct ImporterLimits {
 // Loads one mesh file as one geometry of `scene` (vertices as-is, in the file's coordinates),
 // as LumiBench's model loader reads an OBJ (every shape of the file in one mesh; materials
 // Lambertian of Kd; the file's normals, else smooth ones). Polygons are fanned (v0,v1,v2),
-// (v0,v2,v3), ...; with `tinyobj_quads` (LumiBench's own scenes) a quad is split along its
-// shorter diagonal as LumiBench's loader does. Returns the new mesh index. Throws InputError.
-uint32_t load_mesh_file(Scene& scene, const std::string& path, const ImporterLimits& limits = {}, bool tinyobj_quads = false);
+// (v0,v2,v3), ...; with `tinyobj` (LumiBench's own scenes) they are triangulated as LumiBench's
+// loader does: a quad split along its shorter diagonal, a larger polygon's ears clipped.
+// Returns the new mesh index. Throws InputError.
+uint32_t load_mesh_file(Scene& scene, const std::string& path, const ImporterLimits& limits = {}, bool tinyobj = false);
 
 // The parent's side of the importer's pipe: what the child sent (`answer`) and how it ended
 // (`wait_status`, as waitpid gives it) made into `mesh` and the materials it adds to `scene`, or

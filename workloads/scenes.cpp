@@ -172,14 +172,14 @@ std::string find_camera_file(const std::string& dir) {
 
 // A folder of mesh files, one model each; `keep(file, mesh)` decides whether a loaded file is
 // kept (LumiBench's SPRNG drops empty files and Dirt_grass*).
-Scene load_folder(const std::string& dir, float vfov, bool tinyobj_quads,
+Scene load_folder(const std::string& dir, float vfov, bool tinyobj,
                   const std::function<bool(const std::string&, const Mesh&)>& keep = nullptr) {
     Scene s;
     s.name = dir;
     const auto files = mesh_files_in(dir);
     if (files.empty()) throw input_error(dir, 0, "folder holds no mesh files (.obj, .ply, .ply.gz)");
     for (const auto& f : files) {
-        load_mesh_file(s, (fs::path(dir) / f).string(), {}, tinyobj_quads);
+        load_mesh_file(s, (fs::path(dir) / f).string(), {}, tinyobj);
         if (keep && !keep(f, s.meshes.back())) s.meshes.pop_back();
     }
     add_identity_instances(s);
