@@ -218,14 +218,16 @@ bool crossing_inside(const float vx[3], const float vy[3], float x, float y) {
 }
 
 // A polygon of five or more corners as LumiBench's loader clips its ears (tinyobjloader
-// 2.0.0rc10 built without TINYOBJLOADER_USE_MAPBOX_EARCUT, as Debian's libtinyobjloader and
-// vcpkg's port are: tiny_obj_loader.h l.1689-1910, in float). The polygon is projected on two
+// 2.0.0rc10 built without TINYOBJLOADER_USE_MAPBOX_EARCUT, as Debian's libtinyobjloader is:
+// tiny_obj_loader.h l.1689-1910, in float). The polygon is projected on two
 // axes chosen from the first corner whose edges are not parallel; then, from corner 0, a corner
 // triple (g, g+1, g+2) of what remains is cut off as a triangle unless its turn has the other
 // sign than (p_g x p_g+1) -- the loader compares with that product of the two positions, not with
 // the polygon's winding -- or another remaining corner lies inside it; otherwise the next triple
 // is tried. A polygon that runs out of tries with more than three corners left loses them, as
-// there.
+// there. The signs are of float products taken in the loader's order, so a near-degenerate
+// triple goes the same way as there where neither build fuses a multiply and an add (x86-64's
+// baseline has no FMA); tests/test_tinyobj.cpp compares with the loader on the machine it runs on.
 void clip_ears(const std::vector<Corner>& poly, const std::vector<glm::vec3>& pos, std::vector<std::array<size_t, 3>>& out) {
     const size_t n = poly.size();
     const auto at = [&](size_t k) { return pos[size_t(poly[k].v)]; };
