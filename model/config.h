@@ -15,6 +15,7 @@
 #include "address_map.h"
 #include "dram_scheduler.h"
 #include "prefetch_config.h"
+#include "shader_loads.h"
 
 namespace rtu {
 
@@ -74,6 +75,7 @@ struct HwConfig {
     uint32_t shade_latency;
     uint32_t launch_latency;
     double shader_reads;      // sectors per ray the shader code reads after a trace (workload.shader_reads)
+    double shader_lines_per_read;  // L1 lines those reads open per read (workload.shader_lines_per_read)
     uint32_t resident_warps;  // shader warps per SM at once (0: all)
     CacheConfig l1;
     uint32_t l2_slices;
@@ -85,6 +87,8 @@ struct HwConfig {
     EnergyTable energy;
     // Where addresses live (L2 slice, DRAM channel, bank, row); checked by Config::resolve.
     AddressMap address_map() const { return AddressMap(dram.address_map, dram.channels, dram.banks, dram.row_bytes, l2_slices, l2.line); }
+    // The shader code's reads of a frame that runs it (none for given rays, which run no shader code).
+    ShaderReads shader_reads_of(bool runs_shaders) const { return {runs_shaders ? shader_reads : 0.0, shader_lines_per_read, l1.line}; }
 };
 
 class Config {

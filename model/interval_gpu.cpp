@@ -140,13 +140,13 @@ void IntervalGpu::start_trace(uint32_t sm, const std::vector<WarpRay>& rays, uin
     if (tr.live == 0) finish(id, finished);  // every ray missed the root box
 }
 
-void IntervalGpu::set_shader_reads(double per_ray) {
+void IntervalGpu::set_shader_reads(const ShaderReads& reads) {
     shader_.clear();
     shader_free_.clear();
-    if (per_ray <= 0) return;
+    if (reads.per_ray <= 0) return;
     shader_.resize(cfg_.sms);
     shader_free_.assign(cfg_.sms, 0);
-    for (uint32_t s = 0; s < cfg_.sms; ++s) shader_[s].start(s, per_ray);
+    for (uint32_t s = 0; s < cfg_.sms; ++s) shader_[s].start(s, reads);
 }
 
 void IntervalGpu::finish(uint32_t id, std::vector<Finished>& finished) {

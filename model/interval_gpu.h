@@ -69,7 +69,7 @@ public:
     // The shader code's loads after each trace (workload.shader_reads), as the AT and LT RT
     // units issue them (tlm/rt_unit.h): per_ray sectors per ray of a finished trace, of data no
     // cache holds, through the SM's L1 from the trace's end, one per cycle per SM.
-    void set_shader_reads(double per_ray);
+    void set_shader_reads(const ShaderReads& reads);
     // The cycle of the earliest scheduled node fetch (~0: none).
     uint64_t next_event() const;
     // Runs that fetch: its chunks, the node's tests, and the thread's next fetch. A trace whose

@@ -150,7 +150,7 @@ GpuPlatform::GpuPlatform(const HwConfig& cfg, const BvhImage& image, Workload& w
     Impl& m = *impl_;
     m.driver.keep_rays(opt.keep_rays);
     // Given rays (a ray file) run no shader code, and so no shader reads.
-    m.gpu.set_shader_reads(workload.runs_shaders() ? cfg.shader_reads : 0.0);
+    m.gpu.set_shader_reads(cfg.shader_reads_of(workload.runs_shaders()));
     // Sampled run: when an SM starts a simulated cluster, its caches are warmed with its node
     // fetches of the clusters skipped before it (its L1, then L2 on an L1 miss).
     if (m.sample)

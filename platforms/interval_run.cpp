@@ -9,7 +9,7 @@ namespace rtu {
 
 TimingResult run_interval(const HwConfig& cfg, const BvhImage& image, Workload& workload, const TimingOptions& opt) {
     IntervalGpu gpu(cfg, image, opt.order);
-    gpu.set_shader_reads(workload.runs_shaders() ? cfg.shader_reads : 0.0);  // given rays run no shader code
+    gpu.set_shader_reads(cfg.shader_reads_of(workload.runs_shaders()));
     const std::unique_ptr<FrameSample> sample = frame_sample(cfg, image, opt, nullptr, workload);
     // Sampled run: when an SM starts a simulated cluster, its caches are warmed with its node
     // fetches of the clusters skipped before it (its L1, then L2 on an L1 miss).

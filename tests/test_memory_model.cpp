@@ -867,3 +867,42 @@ TEST(MemoryPolicies, ADramSchedulerIsOneClassAndOneRegistration) {
     config.set("dram.scheduler=test-newest-first");
     EXPECT_EQ(config.resolve().dram.scheduler_name, "test-newest-first");
 }
+
+// The shader code's reads (workload.shader_reads) open workload.shader_lines_per_read L1 lines per
+// read: counted by hand, 0.75 opens a line on reads 1, 2, 3, 5, 6, 7, 9, ... (after read k the
+// lines opened must reach 0.75 k), each further read the next sector of the open line; 0.25 reads
+// every sector of a line in turn (four a 128 B line); 1 gives every read a line of its own.
+TEST(ShaderLoads, ReadsOpenTheirLinesPerRead) {
+    using rtu::ShaderLoads;
+    using rtu::ShaderReads;
+    for (const double p : {0.25, 0.5, 0.75, 1.0}) {
+        ShaderLoads s;
+        s.start(3, ShaderReads{1.0, p, 128});
+        s.owe(400);
+        ASSERT_EQ(s.owed(), 400u);
+        std::vector<uint64_t> addr;
+        while (s.owed()) {
+            addr.push_back(s.next());
+            s.issued();
+        }
+        std::map<uint64_t, int> per_line;
+        for (size_t i = 0; i < addr.size(); ++i) {
+            EXPECT_EQ(addr[i] % 32, 0u);
+            if (i) {
+                EXPECT_GT(addr[i], addr[i - 1]) << "read " << i << ": never a sector read before";
+            }
+            ++per_line[addr[i] / 128];
+        }
+        EXPECT_EQ(addr.front(), ShaderLoads::kRegion + 3 * ShaderLoads::kRegionPerSm) << "SM 3's own region";
+        EXPECT_EQ(per_line.size(), size_t(p * 400)) << p;
+        for (const auto& [line, n] : per_line) EXPECT_LE(n, 4) << p;
+        if (p == 0.25) {
+            for (size_t i = 1; i < addr.size(); ++i) EXPECT_EQ(addr[i], addr[i - 1] + 32) << "four sectors a line, in turn";
+        }
+        if (p == 0.75) {  // lines opened by reads 1, 2, 3, 5, 6, 7, 9: read 4 shares read 3's line
+            EXPECT_EQ(addr[3], addr[2] + 32);
+            EXPECT_EQ(addr[4] / 128, addr[3] / 128 + 1);
+            EXPECT_EQ(addr[1] / 128, addr[0] / 128 + 1);
+        }
+    }
+}

@@ -111,9 +111,9 @@ void RtComplex::start_job() {
     work_.notify(SC_ZERO_TIME);
 }
 
-void RtComplex::set_shader_reads(double per_ray) {
+void RtComplex::set_shader_reads(const ShaderReads& reads) {
     for (size_t s = 0; s < rt_.size(); ++s)
-        rt_[s]->set_shader_reads(per_ray, [l1 = l1_[s].get()](uint64_t addr, uint64_t cycle) { return l1->shader_read(addr, cycle); });
+        rt_[s]->set_shader_reads(reads, [l1 = l1_[s].get()](uint64_t addr, uint64_t cycle) { return l1->shader_read(addr, cycle); });
 }
 
 void RtComplex::warm(uint32_t sm, uint64_t addr) {

@@ -76,7 +76,7 @@ public:
     void warm(uint32_t sm, uint64_t addr);
     // The shader code's loads after each trace (workload.shader_reads; RtUnit::set_shader_reads),
     // each SM's into its own L1. A frame of given rays runs no shader code: its platform leaves them out.
-    void set_shader_reads(double per_ray);
+    void set_shader_reads(const ShaderReads& reads);
 
 private:
     void lt_schedule();  // LT

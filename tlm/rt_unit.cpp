@@ -25,8 +25,8 @@ RtUnit::RtUnit(sc_module_name name, uint32_t sm, const HwConfig& cfg, const BvhI
     }  // LT: the RT complex steps it (lt_run)
 }
 
-void RtUnit::set_shader_reads(double per_ray, std::function<bool(uint64_t, uint64_t)> read) {
-    shader_.start(sm_, per_ray);
+void RtUnit::set_shader_reads(const ShaderReads& reads, std::function<bool(uint64_t, uint64_t)> read) {
+    shader_.start(sm_, reads);
     shader_read_ = std::move(read);
 }
 

@@ -49,7 +49,7 @@ public:
     // The shader code's loads after each trace (workload.shader_reads): `per_ray` sectors per ray
     // of a retired trace, of data no cache holds, handed one per cycle from the trace's end to
     // `read` (the SM's L1, Cache::shader_read), which may refuse one (retried the next cycle).
-    void set_shader_reads(double per_ray, std::function<bool(uint64_t addr, uint64_t cycle)> read);
+    void set_shader_reads(const ShaderReads& reads, std::function<bool(uint64_t addr, uint64_t cycle)> read);
 
 private:
     void tick();     // AT
