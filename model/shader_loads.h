@@ -31,7 +31,6 @@ public:
     void start(uint32_t sm, const ShaderReads& r) {
         r_ = r;
         next_ = kRegion + uint64_t(sm) * kRegionPerSm;
-        sector_ = 0;
         opened_ = 1;  // the first read opens the region's first line
         reads_ = 1;
     }
@@ -53,14 +52,12 @@ public:
         // that the choice is exact whatever the frame's length: 0.25 lines per read (four sectors
         // a line) opens a line every fourth read.
         ++reads_;
-        const uint32_t sectors = r_.line_bytes / kChunkBytes;
-        if (double(opened_) < r_.lines_per_read * double(reads_) || sector_ + 1 >= sectors) {
+        const bool line_full = (next_ + kChunkBytes) % r_.line_bytes == 0;  // the open line's last sector read
+        if (double(opened_) < r_.lines_per_read * double(reads_) || line_full) {
             next_ = (next_ / r_.line_bytes + 1) * r_.line_bytes;
-            sector_ = 0;
             ++opened_;
         } else {
             next_ += kChunkBytes;
-            ++sector_;
         }
     }
 
@@ -68,7 +65,6 @@ private:
     ShaderReads r_;
     double fraction_ = 0;
     uint64_t owed_ = 0, next_ = 0, opened_ = 0, reads_ = 0;
-    uint32_t sector_ = 0;
 };
 
 }  // namespace rtu

@@ -17,6 +17,8 @@
 #include <type_traits>
 
 #include <absl/container/flat_hash_map.h>
+#include <glm/common.hpp>
+#include <glm/geometric.hpp>
 #include <assimp/Importer.hpp>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
@@ -233,14 +235,13 @@ void clip_ears(const std::vector<Corner>& poly, const std::vector<glm::vec3>& po
     const auto at = [&](size_t k) { return pos[size_t(poly[k].v)]; };
     int ax0 = 1, ax1 = 2;
     for (size_t k = 0; k < n; ++k) {
-        const glm::vec3 e0 = at((k + 1) % n) - at(k), e1 = at((k + 2) % n) - at((k + 1) % n);
-        const float cx = std::fabs(e0.y * e1.z - e0.z * e1.y), cy = std::fabs(e0.z * e1.x - e0.x * e1.z),
-                    cz = std::fabs(e0.x * e1.y - e0.y * e1.x);
+        // The loader's |e0 x e1| by components: the same products and differences as glm::cross.
+        const glm::vec3 c = glm::abs(glm::cross(at((k + 1) % n) - at(k), at((k + 2) % n) - at((k + 1) % n)));
         const float eps = std::numeric_limits<float>::epsilon();
-        if (cx > eps || cy > eps || cz > eps) {
-            if (!(cx > cy && cx > cz)) {
+        if (c.x > eps || c.y > eps || c.z > eps) {
+            if (!(c.x > c.y && c.x > c.z)) {
                 ax0 = 0;
-                if (cz > cx && cz > cy) ax1 = 1;
+                if (c.z > c.x && c.z > c.y) ax1 = 1;
             }
             break;
         }

@@ -495,14 +495,15 @@ def main():
          "{} of {} runs have exactly two such reads per L2 read miss.".format(*dram_sectors_check([ref[k] for k in keys])))
     md.p()
     rows = []
+    th = {k: theirs(ref[k]) for k in keys}
     for k in keys:
-        t, o = theirs(ref[k]), got[k]
+        t, o = th[k], got[k]
         rows.append([k[0], f"{k[1]}x{k[2]}", k[4], f"{t['l1_miss']:.3f} / {o['l1_miss']:.3f}" if t["l1_miss"] is not None else "—",
                      f"{t['l2_miss']:.3f} / {o['l2_miss']:.3f}" if t["l2_miss"] is not None else "—",
                      f"{t['prefetches']:,.0f} / {o['prefetches']:,}" if t["prefetches"] else f"0 / {o['prefetches']:,}",
                      f"{t['dram_reads']:,.0f} / {o['dram_reads']:,}"])
     md.table(["scene", "frame", "config", "L1 miss rate (reference / rtunit)", "L2 miss rate", "prefetch fills at L1", "DRAM reads"], rows)
-    fills = [got[k]["prefetches"] / theirs(ref[k])["prefetches"] for k in keys if theirs(ref[k])["prefetches"]]
+    fills = [got[k]["prefetches"] / th[k]["prefetches"] for k in keys if th[k]["prefetches"]]
     if fills:
         md.p()
         md.p(f"Prefetch fills at L1 on the {len(fills)} runs with TTP: rtunit's are {min(fills):.2f}x to {max(fills):.2f}x "
@@ -510,8 +511,7 @@ def main():
     # The L1 miss rates side by side, without and with TTP: how much of the reference's L1
     # misses rtunit's L1 shows, and whether TTP removes a like share on both sides.
     for with_ttp in (False, True):
-        l1 = [got[k]["l1_miss"] / theirs(ref[k])["l1_miss"] for k in keys
-              if bool(theirs(ref[k])["prefetches"]) == with_ttp and theirs(ref[k])["l1_miss"]]
+        l1 = [got[k]["l1_miss"] / th[k]["l1_miss"] for k in keys if bool(th[k]["prefetches"]) == with_ttp and th[k]["l1_miss"]]
         if l1:
             md.p()
             md.p(f"RT-unit L1 miss rates on the {len(l1)} runs {'with' if with_ttp else 'without'} TTP: rtunit's are "
