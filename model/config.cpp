@@ -53,6 +53,8 @@ const Key kSchema[] = {
     {"l1.mshrs", "MSHRs", Type::Int, 1, 1 << 16, false, "miss status holding registers"},
     {"l1.mshr_merge", "requests", Type::Int, 1, 1024, false, "requests merged into one MSHR"},
     {"l1.replacement", "", Type::Text, 0, 0, false, "which line a new line replaces: lru, fifo, or a policy registered in code (model/replacement.h)"},
+    {"l1.miss_queue", "misses", Type::Int, 0, 1 << 16, false, "misses waiting to leave for the L2 (GPGPU-Sim's miss queue): while this many less one wait, a read that would miss, or join a miss (allocation at fill), is refused and retried (0: unbounded)"},
+    {"l1.allocation", "", Type::Text, 0, 0, false, "when a missing line takes its way: miss (the way is held, its sectors pending, from the miss on; a set whose ways are all pending refuses misses) or fill (when the data arrives; GPGPU-Sim's streaming L1)"},
     {"l2.slices", "slices", Type::Int, 1, 256, false, "L2 slices"},
     {"l2.slice_kb", "KiB", Type::Int, 1, 1 << 22, false, "capacity of one slice"},
     {"l2.assoc", "ways", Type::Int, 0, 1 << 16, false, "ways (0: fully associative)"},
@@ -62,6 +64,8 @@ const Key kSchema[] = {
     {"l2.mshr_merge", "requests", Type::Int, 1, 1024, false, "requests merged into one MSHR"},
     {"l2.latency", "core cycles", Type::Int, 0, 100000, false, "L2 hit latency (core cycles)"},
     {"l2.replacement", "", Type::Text, 0, 0, false, "which line a new line replaces: lru, fifo, or a policy registered in code (model/replacement.h)"},
+    {"l2.miss_queue", "misses", Type::Int, 0, 1 << 16, false, "misses waiting to leave for DRAM, per slice (as l1.miss_queue)"},
+    {"l2.allocation", "", Type::Text, 0, 0, false, "when a missing line takes its way: miss or fill (as l1.allocation)"},
     {"l2.set_index", "", Type::Text, 0, 0, false, "how a slice picks a line's set from the slice's own address: linear, or ipoly (GPGPU-Sim's IPOLY hash; 16, 32 or 64 sets)"},
     {"xbar.latency", "core cycles", Type::Int, 0, 10000, false, "crossbar latency each way (core cycles)"},
     {"dram.channels", "channels", Type::Int, 1, 256, false, "channels"},
@@ -317,6 +321,9 @@ HwConfig Config::resolve() const {
         c.sector = u32((p + ".sector").c_str());
         c.mshrs = u32((p + ".mshrs").c_str());
         c.mshr_merge = u32((p + ".mshr_merge").c_str());
+        c.miss_queue = u32((p + ".miss_queue").c_str());
+        if (c.miss_queue == 1)
+            throw ConfigError("key '" + p + ".miss_queue' = 1 refuses every miss (a miss is refused while the queue holds this many less one); allowed are 0 (unbounded) or 2 and more");
         c.latency = latency;
         c.replacement = values_.at(p + ".replacement").get<std::string>();
         try {
@@ -324,6 +331,10 @@ HwConfig Config::resolve() const {
         } catch (const std::invalid_argument& e) {
             throw ConfigError("key '" + p + ".replacement': " + e.what());
         }
+        const std::string allocation = values_.at(p + ".allocation").get<std::string>();
+        if (allocation != "miss" && allocation != "fill")
+            throw ConfigError("key '" + p + ".allocation' = '" + allocation + "': allowed are miss, fill");
+        c.allocate_on_fill = allocation == "fill";
         if (c.sector > c.line) throw ConfigError("key '" + p + ".sector' (" + std::to_string(c.sector) + ") must not exceed '" + p + ".line' (" + std::to_string(c.line) + ")");
         const uint64_t lines = c.size_bytes / c.line;
         if (lines == 0 || c.size_bytes % c.line) throw ConfigError("key '" + p + ".size' must be a multiple of '" + p + ".line'");

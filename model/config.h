@@ -31,6 +31,13 @@ struct CacheConfig {
     SliceLocal local{};  // an L2 slice: its sets are indexed with the slice's own address
     bool ipoly = false;  // sets by GPGPU-Sim's IPOLY hash (l2.set_index) instead of linearly
     std::string replacement = "lru";  // the replacement policy's name (model/replacement.h)
+    // A missing line takes its way when its data arrives (GPGPU-Sim's ON_FILL, which its streaming
+    // L1 uses), not at the miss (ON_MISS): no way is held while a fetch is on its way.
+    bool allocate_on_fill = false;
+    // Misses waiting to leave for the level below (GPGPU-Sim's miss queue); a read that would send
+    // a miss or join one is refused (a reservation fail) while `miss_queue` - 1 or more wait, as
+    // GPGPU-Sim's miss_queue_full(1) refuses it (gpu-cache.cc l.1652). 0: unbounded.
+    uint32_t miss_queue = 0;
 };
 
 struct DramConfig {

@@ -7,7 +7,7 @@
 namespace rtu {
 
 SectorCache::SectorCache(const CacheConfig& c)
-    : line_(c.line), sector_(c.sector), mshrs_(c.mshrs), merge_(c.mshr_merge), local_(c.local), ipoly_(c.ipoly) {
+    : line_(c.line), sector_(c.sector), mshrs_(c.mshrs), merge_(c.mshr_merge), on_fill_(c.allocate_on_fill), local_(c.local), ipoly_(c.ipoly) {
     const uint64_t lines = c.size_bytes / c.line;
     assoc_ = c.assoc ? c.assoc : uint32_t(lines);
     sets_ = uint32_t(lines / assoc_);
@@ -51,6 +51,13 @@ SectorCache::Way* SectorCache::find(uint64_t line) {
     return it == where_.end() ? nullptr : &ways_[it->second];
 }
 
+bool SectorCache::would_miss(uint64_t addr) const {
+    const uint64_t line = addr / line_ * line_;
+    const uint32_t bit = 1u << ((addr - line) / sector_);
+    const Way* w = find(line);
+    return !(w && ((w->valid | (on_fill_ ? 0 : w->pending)) & bit));
+}
+
 CacheOutcome SectorCache::read(uint64_t addr, uint64_t token, ReqKind kind) {
     CacheAccessCounts& st = counts_.of(kind);
     ++st.accesses;
@@ -68,14 +75,26 @@ CacheOutcome SectorCache::read(uint64_t addr, uint64_t token, ReqKind kind) {
         }
         return CacheOutcome::Hit;
     }
-    if (w && (w->pending & bit)) {
-        Mshr& m = mshr_.at(sector);
+    // The sector on its way: its MSHR takes the read. Allocated at the miss, the sector is pending
+    // in its way; allocated at the fill, only the MSHR knows it (the line may be absent).
+    Mshr* pending = nullptr;
+    if (on_fill_) {
+        auto it = mshr_.find(sector);
+        if (it != mshr_.end()) pending = &it->second;
+    } else if (w && (w->pending & bit)) {
+        pending = &mshr_.at(sector);
+    }
+    if (pending) {
+        Mshr& m = *pending;
         if (m.tokens.size() >= merge_) {
             ++st.reservation_fails;
             return CacheOutcome::ReservationFail;
         }
         m.tokens.push_back(token);
-        touch(*w);
+        // A read of a reserved sector uses its line (GPGPU-Sim's HIT_RESERVED); allocated at the
+        // fill, nothing is reserved and the read is a miss that touches no line (gpu-cache.cc
+        // l.346-375).
+        if (!on_fill_) touch(*w);
         ++st.mshr_hits;
         if (kind == ReqKind::Demand && m.prefetch && !m.demanded) {
             m.demanded = true;
@@ -88,19 +107,18 @@ CacheOutcome SectorCache::read(uint64_t addr, uint64_t token, ReqKind kind) {
         ++st.reservation_fails;
         return CacheOutcome::ReservationFail;
     }
-    CacheOutcome out = CacheOutcome::SectorMiss;
-    if (!w) {
-        w = allocate(line, &st);
-        if (!w) {
+    const CacheOutcome out = w ? CacheOutcome::SectorMiss : CacheOutcome::LineMiss;
+    if (!on_fill_) {
+        if (!w && !(w = allocate(line, &st))) {
             ++st.reservation_fails;
             return CacheOutcome::ReservationFail;
         }
-        out = CacheOutcome::LineMiss;
+        w->pending |= bit;
+        touch(*w);
     }
-    w->pending |= bit;
-    touch(*w);
     Mshr& m = mshr_[sector];
     m.tokens.push_back(token);
+    m.kind = kind;
     m.prefetch = kind == ReqKind::Prefetch;
     if (out == CacheOutcome::LineMiss) ++st.line_misses;
     else ++st.sector_misses;
@@ -166,7 +184,7 @@ bool SectorCache::warm(uint64_t addr) {
         touch(*w);
         return true;
     }
-    if (w && (w->pending & bit)) return false;
+    if (on_fill_ ? mshr_.contains(sector_of(addr)) : w && (w->pending & bit)) return false;
     if (!w && !(w = allocate(line, nullptr))) return false;
     w->valid |= bit;
     touch(*w);
@@ -179,10 +197,19 @@ SectorCache::Tokens SectorCache::fill(uint64_t sector_addr) {
     Tokens tokens = std::move(it->second.tokens);
     const bool unused_prefetch = it->second.prefetch && !it->second.demanded;
     const bool by_prefetch = it->second.prefetch;
+    const ReqKind kind = it->second.kind;
     mshr_.erase(it);
     const uint64_t line = sector_addr / line_ * line_;
     Way* w = find(line);
-    if (!w) throw std::logic_error("fill of a sector whose line was evicted while pending");
+    if (on_fill_) {
+        // The line takes its way now (the policy's victim, never held: no way is pending), or its
+        // sector is filled into the way it has; either way the line is used now (tag_array::fill,
+        // gpu-cache.cc l.416-434).
+        if (!w) w = allocate(line, &counts_.of(kind));
+        touch(*w);
+    } else if (!w) {
+        throw std::logic_error("fill of a sector whose line was evicted while pending");
+    }
     const uint32_t bit = 1u << ((sector_addr - line) / sector_);
     w->pending &= ~bit;
     w->valid |= bit;

@@ -1,7 +1,10 @@
 // Tag and MSHR logic of a sector cache (L1 per SM, L2 slices): 128 B lines of 32 B sectors,
 // N-way or fully associative, a replacement policy chosen by configuration (model/replacement.h;
 // the presets' LRU), MSHRs that merge requests to a pending sector up to a limit, and reservation
-// fails when no MSHR or no replaceable line is left.
+// fails when no MSHR is left. A missing line takes its way at the miss (GPGPU-Sim's ON_MISS: the
+// way is held while its sectors are pending, and a set whose ways are all pending refuses the
+// miss) or when its data arrives (ON_FILL, `allocate_on_fill`: the victim is chosen then, and no
+// way is ever held).
 // Plain C++ (no SystemC); the tlm/ cache module drives it.
 #pragma once
 #include <array>
@@ -29,8 +32,8 @@ enum class CacheOutcome : uint8_t {
     Hit,              // sector present
     MshrHit,          // sector pending: merged into its MSHR
     SectorMiss,       // line present, sector absent: MSHR allocated, sector must be fetched
-    LineMiss,         // line absent: line allocated (the policy's victim evicted), MSHR allocated, fetch
-    ReservationFail,  // no MSHR, merge limit reached, or every way of the set has pending sectors
+    LineMiss,         // line absent: MSHR allocated, fetch; the line allocated (the policy's victim evicted) now or at the fill
+    ReservationFail,  // no MSHR, merge limit reached, or (allocation at the miss) every way of the set has pending sectors
 };
 
 // Lookups of one requester kind (demand or prefetch).
@@ -43,7 +46,7 @@ struct CacheAccessCounts {
         {"sector_misses", &CacheAccessCounts::sector_misses, "lookups", "line present, sector absent: fetched from below"},
         {"line_misses", &CacheAccessCounts::line_misses, "lookups", "line absent: a line allocated (LRU victim evicted) and the sector fetched"},
         {"reservation_fails", &CacheAccessCounts::reservation_fails, "lookups", "no MSHR, merge limit reached, or every way of the set pending: retried later"},
-        {"evictions", &CacheAccessCounts::evictions, "lines", "lines with valid sectors evicted by this kind's line misses"},
+        {"evictions", &CacheAccessCounts::evictions, "lines", "lines with valid sectors evicted by this kind's line misses (at the miss, or at the fill with l1/l2.allocation = fill)"},
     };
 };
 
@@ -92,12 +95,17 @@ public:
     // and LineMiss the caller fetches the sector and calls fill(); on ReservationFail nothing
     // changed and the caller retries later.
     CacheOutcome read(uint64_t addr, uint64_t token, ReqKind kind);
+    // Whether a read of `addr` now would send a miss below or join one on its way as a miss
+    // (allocated at the fill, a sector on its way is not in its line: GPGPU-Sim's streaming L1
+    // probes a miss), rather than hit or merge into a reserved sector.
+    bool would_miss(uint64_t addr) const;
     // The sector arrived: valid from now on; returns the tokens that waited on it (allocating
     // request first, then merged ones in arrival order) and frees the MSHR.
     Tokens fill(uint64_t sector_addr);
     // Functional warming (sampled simulation): the sector holding `addr` becomes valid and most
     // recently used at once, with no statistic counted; returns whether it was already valid.
-    // A sector whose fetch is pending, or a set with every way pending, is left alone.
+    // A sector whose fetch is pending, or (allocation at the miss) a set with every way pending,
+    // is left alone.
     bool warm(uint64_t addr);
 
     // Every line invalid, as after a reset (statistics kept); no fetch may be pending.
@@ -143,14 +151,17 @@ private:
     void touch(Way& w);  // used now (the replacement policy is told)
     struct Mshr {
         Tokens tokens;
+        ReqKind kind = ReqKind::Demand;  // the allocating request's
         bool prefetch = false;   // allocated by a prefetch
         bool demanded = false;   // a demand read merged into it
     };
     Way* find(uint64_t line);
+    const Way* find(uint64_t line) const { return const_cast<SectorCache*>(this)->find(line); }
     Way* allocate(uint64_t line, CacheAccessCounts* st);
 
     uint32_t set_of(uint64_t line) const;  // the set a line goes to
     uint32_t line_, sector_, assoc_, sets_, mshrs_, merge_;
+    bool on_fill_;  // lines allocated when their data arrives
     SliceLocal local_;
     bool ipoly_;
     std::vector<Way> ways_;  // set-major: set s owns ways [s*assoc, (s+1)*assoc)

@@ -78,6 +78,54 @@ TEST(SectorCache, FullyAssociativeLru) {
     EXPECT_EQ(c.read(0, 9, ReqKind::Demand), CacheOutcome::Hit);
 }
 
+// Allocation at the fill (l1.allocation fill, GPGPU-Sim's streaming L1), hand-worked on set 0 of
+// tiny_cache (lines 0x000, 0x100, 0x200, 0x300). Nothing is reserved at a miss: set 0 takes a
+// third and fourth line miss while two are on their way, where allocation at the miss refuses
+// the third (HandWorkedSequence); the victim is chosen when the data arrives, by the LRU order
+// then; and a read of a sector on its way joins its MSHR whether or not its line is there.
+TEST(SectorCache, AllocationAtTheFillChoosesTheVictimWhenTheDataArrives) {
+    CacheConfig cfg = tiny_cache();
+    cfg.allocate_on_fill = true;
+    cfg.mshrs = 4;
+    SectorCache c(cfg);
+    for (uint64_t line : {0x000, 0x100}) {
+        ASSERT_EQ(c.read(line, 1, ReqKind::Demand), CacheOutcome::LineMiss);
+        c.fill(line);
+    }
+    // Both ways valid, 0x000 least recently used. Two line misses leave with no way taken.
+    EXPECT_TRUE(c.would_miss(0x200));
+    EXPECT_EQ(c.read(0x200, 2, ReqKind::Demand), CacheOutcome::LineMiss);
+    EXPECT_TRUE(c.would_miss(0x200));  // on its way, not in its line: a miss that joins the MSHR
+    EXPECT_EQ(c.read(0x210, 3, ReqKind::Demand), CacheOutcome::MshrHit);
+    EXPECT_EQ(c.read(0x300, 4, ReqKind::Shader), CacheOutcome::LineMiss);
+    EXPECT_EQ(c.read(0x000, 5, ReqKind::Demand), CacheOutcome::Hit);  // now 0x100 is the LRU line
+    EXPECT_EQ(c.fill(0x200), (SectorCache::Tokens{2, 3}));                 // evicts 0x100, not 0x000
+    EXPECT_EQ(c.read(0x000, 6, ReqKind::Demand), CacheOutcome::Hit);
+    EXPECT_EQ(c.read(0x100, 7, ReqKind::Demand), CacheOutcome::LineMiss);
+    EXPECT_EQ(c.fill(0x300), (SectorCache::Tokens{4}));  // evicts 0x200 (0x000 used since it came)
+    EXPECT_EQ(c.read(0x200, 8, ReqKind::Demand), CacheOutcome::LineMiss);
+    EXPECT_EQ(c.read(0x300, 9, ReqKind::Demand), CacheOutcome::Hit);
+    EXPECT_FALSE(c.would_miss(0x300));
+    const CacheAccessCounts d = c.stats(ReqKind::Demand), s = c.stats(ReqKind::Shader);
+    EXPECT_EQ(d.reservation_fails + s.reservation_fails, 0u);
+    EXPECT_EQ(d.evictions, 1u);  // 0x200's fill evicted 0x100
+    EXPECT_EQ(s.evictions, 1u);  // the shader read's fill evicted 0x200
+    EXPECT_EQ(c.mshrs_in_use(), 2u);  // 0x100 and 0x200 on their way
+
+    // Allocated at the miss, the same reads find set 0 without a free way at the second miss.
+    CacheConfig at_miss = tiny_cache();
+    at_miss.mshrs = 4;
+    SectorCache m(at_miss);
+    for (uint64_t line : {0x000, 0x100}) {
+        ASSERT_EQ(m.read(line, 1, ReqKind::Demand), CacheOutcome::LineMiss);
+        m.fill(line);
+    }
+    EXPECT_EQ(m.read(0x200, 2, ReqKind::Demand), CacheOutcome::LineMiss);   // evicts 0x000 now
+    EXPECT_FALSE(m.would_miss(0x210));                                      // reserved: merges
+    EXPECT_EQ(m.read(0x300, 4, ReqKind::Shader), CacheOutcome::LineMiss);   // evicts 0x100
+    EXPECT_EQ(m.read(0x000, 5, ReqKind::Demand), CacheOutcome::ReservationFail);  // both ways pending
+}
+
 // FIFO (l1.replacement fifo, GPGPU-Sim's F): set 0 of tiny_cache takes lines 0x000 then 0x100;
 // line 0 is read again, which LRU counts and FIFO does not, so 0x200 evicts line 0 (the first in)
 // where LRU evicts 0x100.

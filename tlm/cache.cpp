@@ -24,6 +24,10 @@ Cache::Cache(sc_module_name name, CacheRole role, const CacheConfig& cfg, uint32
 // A read of the sector at `addr` for `up`; null: a shader read (shader_read), which nobody waits
 // for and whose miss carries no data of the image.
 bool Cache::lookup(uint64_t addr, const RtExtension& e, tlm::tlm_generic_payload* up) {
+    if (miss_queue_full() && tags_.would_miss(addr)) {
+        tags_.count_reservation_fail(e.kind);
+        return false;
+    }
     const uint64_t token = next_token_++;
     switch (tags_.read(addr, token, e.kind)) {
         case CacheOutcome::ReservationFail:
@@ -65,6 +69,17 @@ bool Cache::shader_read(uint64_t addr, uint64_t cycle) {
     b_transport(*t, d);
     t->release();
     return true;
+}
+
+// GPGPU-Sim's miss_queue_full(1) (CacheConfig::miss_queue): `miss_queue` - 1 misses or more wait to
+// leave. A miss joins the queue once its tag lookup's hit latency is over (GPGPU-Sim times the L2's
+// latency before the lookup, in its ROP queue); misses queue in the order they may leave.
+bool Cache::miss_queue_full() const {
+    if (!cfg_.miss_queue || miss_queue_.size() + 1 < cfg_.miss_queue) return false;
+    const uint64_t now = clock_.cycle_at_or_after(sc_time_stamp());
+    size_t waiting = 0;
+    for (auto it = miss_queue_.begin(); it != miss_queue_.end() && it->first <= now && waiting + 1 < cfg_.miss_queue; ++it) ++waiting;
+    return waiting + 1 >= cfg_.miss_queue;
 }
 
 void Cache::respond_later(tlm::tlm_generic_payload& t, bool hit) {
@@ -134,6 +149,7 @@ void Cache::send_misses() {
     if (s == tlm::TLM_UPDATED && ph == tlm::END_REQ) {
         miss_queue_.pop_front();
         if (!miss_queue_.empty()) miss_event_.notify(clock_.period());  // send_misses waits for its due cycle
+        retry_blocked();
     } else if (s == tlm::TLM_ACCEPTED) {
         down_waiting_end_req_ = true;
     } else {
@@ -146,6 +162,7 @@ tlm::tlm_sync_enum Cache::nb_transport_bw(tlm::tlm_generic_payload& t, tlm::tlm_
         down_waiting_end_req_ = false;
         miss_queue_.pop_front();
         if (!miss_queue_.empty()) miss_event_.notify(clock_.period());
+        retry_blocked();
         return tlm::TLM_ACCEPTED;
     }
     if (ph != tlm::BEGIN_RESP) {
@@ -164,13 +181,17 @@ tlm::tlm_sync_enum Cache::nb_transport_bw(tlm::tlm_generic_payload& t, tlm::tlm_
         respond_later(*up, false);
     }
     t.release();
-    // An MSHR freed: retry the request held by a reservation fail.
+    retry_blocked();  // an MSHR freed
+    return tlm::TLM_COMPLETED;
+}
+
+// An MSHR freed or a miss left: the request held by a reservation fail tries again.
+void Cache::retry_blocked() {
     if (blocked_ && lookup(blocked_->get_address(), ext(*blocked_), blocked_)) {
         tlm::tlm_generic_payload* b = blocked_;
         blocked_ = nullptr;
         send_end_request(in.operator->(), *b);
     }
-    return tlm::TLM_COMPLETED;
 }
 
 // ---- LT ---------------------------------------------------------------------------------------

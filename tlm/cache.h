@@ -57,6 +57,8 @@ private:
     // LT
     void b_transport(tlm::tlm_generic_payload& t, sc_core::sc_time& d);
 
+    void retry_blocked();
+    bool miss_queue_full() const;
     CacheRole role_;
     CacheConfig cfg_;
     uint32_t hit_latency_;

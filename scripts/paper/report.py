@@ -791,9 +791,8 @@ def main():
             "a 32 B store for every triangle hit and the traversal results, which take precedence over new demand reads and "
             "which a warp waits for before it leaves (ahm.cc l.855-887, shader.cc l.3283-3291): more memory time per ray in "
             "both runs;",
-            "the L1's streaming allocation (cfg l.101 `s`: a line is taken when its data arrives, not at the miss) and the L1 "
-            "filled when the RT unit drains its response FIFO rather than when the data arrives (shader.cc l.3025-3030): "
-            "these change how long a prefetched line waits to be useful;",
+            "the L1 filled when the RT unit drains its response FIFO rather than when the data arrives (shader.cc "
+            "l.3025-3030): this changes how long a prefetched line waits to be useful;",
             "the shader code between trace calls, its time and its loads and stores through the L1 and L2: rtunit charges "
             "a constant measured on the authors' simulator (docs/paper-preset.md, `workload.shade_latency`); the loads that "
             "reach L2 are `workload.shader_reads` (5.5 sectors per ray of fresh data in the preset; the reads that hit L1 "
