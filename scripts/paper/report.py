@@ -236,6 +236,7 @@ def main():
     R.p("The `paper` preset is the TTP authors' MOBILE setup key by key (docs/paper-preset.md gives every key's source); "
         "the `mobile` column, where shown, is the paper's Table 2 alone, without the details of the authors' simulator "
         "(two-step leaf read, 100-cycle DRAM front end, 16 resident warps per SM, their address mapping and set hashing, "
+        "their streaming L1 (4,096 MSHRs, lines allocated at the fill, a 16-entry miss queue) and the L2's 32-entry miss queue, "
         "oldest-first RT warp scheduling, a 16-entry per-thread prefetch window, node reads merged into their warp's reads in "
         "flight, the kernel launch, the shader time and the shaders' reads that reach L2 measured on their simulator, "
         "Treelet's default treelet size, queue check and vote period); the difference between the two columns is what those details "
