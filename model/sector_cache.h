@@ -44,8 +44,8 @@ struct CacheAccessCounts {
         {"hits", &CacheAccessCounts::hits, "lookups", "found the sector valid"},
         {"mshr_hits", &CacheAccessCounts::mshr_hits, "lookups", "found the sector on its way and merged into its MSHR"},
         {"sector_misses", &CacheAccessCounts::sector_misses, "lookups", "line present, sector absent: fetched from below"},
-        {"line_misses", &CacheAccessCounts::line_misses, "lookups", "line absent: a line allocated (LRU victim evicted) and the sector fetched"},
-        {"reservation_fails", &CacheAccessCounts::reservation_fails, "lookups", "no MSHR, merge limit reached, or every way of the set pending: retried later"},
+        {"line_misses", &CacheAccessCounts::line_misses, "lookups", "line absent: the sector fetched and a line allocated (the policy's victim evicted), at the miss or at the fill (l1/l2.allocation)"},
+        {"reservation_fails", &CacheAccessCounts::reservation_fails, "lookups", "no MSHR, merge limit reached, every way of the set pending (allocation at the miss), or the miss queue full (l1/l2.miss_queue, AT): retried later"},
         {"evictions", &CacheAccessCounts::evictions, "lines", "lines with valid sectors evicted by this kind's line misses (at the miss, or at the fill with l1/l2.allocation = fill)"},
     };
 };
