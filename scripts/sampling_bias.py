@@ -7,15 +7,30 @@ interval sees (docs/sampling.md, "The sample design's bias"). Per workload kind 
 and every other workload), the largest such mean is the bias bound that rtsim adds to each
 sampled interval of that kind, in quadrature (platforms/configs/sampling_bias.json, compiled in).
 Usage: scripts/sampling_bias.py OUT.json DIR...   (COMMIT: the rtsim the runs were made with;
-default the repository's HEAD). Prints every cell with a bias, largest first."""
+default the repository's HEAD). DIR=FOLDER:SCENE,SCENE takes only those scenes of the folder (a
+speed_error folder of an older rtsim whose other scenes' statistics have changed since). Prints
+every cell with a bias, largest first."""
 import datetime, glob, json, os, re, statistics, subprocess, sys
 
 # Student's t, two-sided 95 %, by degrees of freedom (draws - 1); beyond 10: 2.2 (conservative to 30).
 T95 = {1: 12.706, 2: 4.303, 3: 3.182, 4: 2.776, 5: 2.571, 6: 2.447, 7: 2.365, 8: 2.306, 9: 2.262, 10: 2.228}
 
 
-def runs_of(d):
-    """(cell, error) per sampled run with a stored full run of its frame."""
+def frame_of(d):
+    """A speed_error folder's frame size, from its manifest's --width."""
+    with open(f"{d}/manifest.tsv") as f:
+        m = re.search(r"--width (\d+)", f.read())
+    return m.group(1) if m else "?"
+
+
+def split(arg):
+    """DIR or DIR:SCENE,SCENE -> (folder, scenes taken or None for all)."""
+    d, _, only = arg.partition(":")
+    return d, (set(only.split(",")) if only else None)
+
+
+def runs_of(d, only=None):
+    """(cell, error) per sampled run with a stored full run of its frame (of the scenes `only`, if given)."""
     def cycles(path):
         try:
             with open(path) as f:
@@ -31,9 +46,9 @@ def runs_of(d):
             fid, pct, pf = m.groups()
             full = f"{d}/{'at' if fid == 'at' else 'interval'}_{pf}/{os.path.basename(f)}"
             est, truth = cycles(f), cycles(full)
-            if est and truth:
-                scene = os.path.basename(f)[:-5]
-                out.append(((scene, "pt", "256", "mobile" + ("+ttp" if pf == "ttp" else ""), "at" if fid == "at" else "interval",
+            scene = os.path.basename(f)[:-5]
+            if est and truth and (only is None or scene in only):
+                out.append(((scene, "pt", frame_of(d), "mobile" + ("+ttp" if pf == "ttp" else ""), "at" if fid == "at" else "interval",
                              f"{int(pct) / 100:g}"), est / truth - 1))
         return out
     with open(f"{d}/summary.json") as f:  # scripts/bench_sampling_grid.py
@@ -45,28 +60,34 @@ def runs_of(d):
         name, size, preset, rate, _ = m.groups()
         scene, _, wl = name.partition("-")
         est, truth = cycles(f), cycles(f"{d}/{name}_{size}_{preset}_full.json")
-        if est and truth:
+        if est and truth and (only is None or scene in only):
             out.append(((scene, wl or "pt", size, preset, fid, f"{float(rate):g}"), est / truth - 1))
     return out
 
 
-def grid_of(d):
+def grid_of(d, only=None):
     """What a folder holds: bench_sampling_grid's grid, or speed_error's sampled runs."""
     if os.path.exists(f"{d}/manifest.tsv"):
-        scenes = sorted({os.path.basename(f)[:-5] for f in glob.glob(f"{d}/*_s*_*/*.json")})
-        return f"scripts/speed_error.sh: path tracing 256x256, mobile, {','.join(scenes)}, AT and interval, 10/25/50 %"
+        scenes = sorted({os.path.basename(f)[:-5] for f in glob.glob(f"{d}/*_s*_*/*.json")} & (only or set(scenes_all(d))))
+        n = frame_of(d)
+        return f"scripts/speed_error.sh: path tracing {n}x{n}, mobile, {','.join(scenes)}, AT and interval, 10/25/50 %"
     with open(f"{d}/summary.json") as f:
         g = json.load(f)["grid"]
+    scenes = [s for s in g["scenes"] if only is None or s in only]
     return (f"scripts/bench_sampling_grid.py: {g['fidelity']}, {','.join(g['workloads'])}, {','.join(map(str, g['sizes']))}, "
-            f"{','.join(g['presets'])}, {','.join(g['scenes'])}, rates {','.join(g['rates'])}, {g['seeds']} seeds")
+            f"{','.join(g['presets'])}, {','.join(scenes)}, rates {','.join(g['rates'])}, {g['seeds']} seeds")
+
+
+def scenes_all(d):
+    return {os.path.basename(f)[:-5] for f in glob.glob(f"{d}/*_s*_*/*.json")}
 
 
 def main():
     if len(sys.argv) < 3:
         sys.exit(__doc__)
     cells = {}
-    for d in sys.argv[2:]:
-        for cell, e in runs_of(d):
+    for arg in sys.argv[2:]:
+        for cell, e in runs_of(*split(arg)):
             cells.setdefault(cell, []).append(e)
     biased = []
     for cell, errs in cells.items():
@@ -91,7 +112,7 @@ def main():
                                                         cwd=os.path.dirname(os.path.abspath(__file__))).stdout.strip()
     doc = {"measured_on": commit, "date": datetime.date.today().isoformat(),
            "command": "scripts/sampling_bias.py OUT DIR...",
-           "grids": [grid_of(d) for d in sys.argv[2:]],
+           "grids": [grid_of(*split(arg)) for arg in sys.argv[2:]],
            "rule": "per workload kind, the largest |mean error of a cell's draws| among the cells (3 draws or more) whose mean lies "
                    "beyond Student's 95 % quantile times its standard error; cell: scene workload frame preset fidelity rate",
            "bias": bias}

@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """scripts/sampling_bias.py on hand-made grids whose biases are known: a bias only where a cell's
 mean lies beyond Student's 95 % quantile times its standard error, the largest one per workload
-kind, and both kinds of folder (bench_sampling_grid.py's and speed_error.sh's) read."""
+kind, both kinds of folder (bench_sampling_grid.py's and speed_error.sh's, its frame size from its
+manifest) read, and a folder limited to the scenes named after it (DIR:SCENE,...)."""
 import json, os, subprocess, sys, tempfile
 
 script = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "scripts", "sampling_bias.py")
@@ -37,19 +38,29 @@ with tempfile.TemporaryDirectory() as tmp:
     # speed_error.sh's layout: c at 25 %, +4 % with a spread of 0.5 %, the largest path-tracing bias.
     speed = f"{tmp}/speed"
     os.makedirs(speed)
-    open(f"{speed}/manifest.tsv", "w").close()
+    with open(f"{speed}/manifest.tsv", "w") as f:
+        f.write("id\targs\toutput\nat_base/c\t--scene c --fidelity at --workload pt --width 384 --height 384 --spp 2\tat_base/c.json\n")
     put(f"{speed}/at_base/c.json", 10000)
     for d, c in [("at_s25_base", 10350), ("at_s25_seed2_base", 10400), ("at_s25_seed3_base", 10450)]:
         put(f"{speed}/{d}/c.json", c)
+    # d in the same folder: +9 %, biased, but left out where the folder is limited to c.
+    put(f"{speed}/at_base/d.json", 10000)
+    for d, c in [("at_s25_base", 10890), ("at_s25_seed2_base", 10900), ("at_s25_seed3_base", 10910)]:
+        put(f"{speed}/{d}/d.json", c)
     out = f"{tmp}/bias.json"
-    p = subprocess.run([sys.executable, script, out, grid, speed], capture_output=True, text=True, env=dict(os.environ, COMMIT="test"))
+    every = subprocess.run([sys.executable, script, out, grid, speed], capture_output=True, text=True, env=dict(os.environ, COMMIT="test"))
+    assert every.returncode == 0, every.stderr
+    with open(out) as f:
+        assert json.load(f)["bias"]["other"]["cell"] == "d pt 384 mobile at 0.25"
+    p = subprocess.run([sys.executable, script, out, grid, speed + ":c"], capture_output=True, text=True, env=dict(os.environ, COMMIT="test"))
     assert p.returncode == 0, p.stderr
     with open(out) as f:
         b = json.load(f)
     assert b["measured_on"] == "test"
     other, primary = b["bias"]["other"], b["bias"]["primary"]
     assert abs(other["value"] - 0.04) < 1e-12, other
-    assert other["cell"] == "c pt 256 mobile at 0.25", other
+    assert other["cell"] == "c pt 384 mobile at 0.25", other
+    assert "path tracing 384x384, mobile, c, AT" in b["grids"][1], b["grids"]
     assert (other["cells"], other["runs"], other["biased_cells"]) == (3, 9, 2), other
     assert abs(primary["value"] - 0.05) < 1e-12, primary
     assert primary["cell"] == "a primary 64 mobile interval 0.1", primary
