@@ -51,9 +51,14 @@ SectorCache::Way* SectorCache::find(uint64_t line) {
     return it == where_.end() ? nullptr : &ways_[it->second];
 }
 
+SectorCache::Mshr* SectorCache::on_its_way(const Way* w, uint64_t sector, uint32_t bit) {
+    if (!on_fill_) return w && (w->pending & bit) ? &mshr_.at(sector) : nullptr;
+    auto it = mshr_.find(sector);
+    return it == mshr_.end() ? nullptr : &it->second;
+}
+
 bool SectorCache::would_miss(uint64_t addr) const {
-    const uint64_t line = addr / line_ * line_;
-    const uint32_t bit = 1u << ((addr - line) / sector_);
+    const auto [line, bit] = place_of(addr);
     const Way* w = find(line);
     return !(w && ((w->valid | (on_fill_ ? 0 : w->pending)) & bit));
 }
@@ -61,9 +66,8 @@ bool SectorCache::would_miss(uint64_t addr) const {
 CacheOutcome SectorCache::read(uint64_t addr, uint64_t token, ReqKind kind) {
     CacheAccessCounts& st = counts_.of(kind);
     ++st.accesses;
-    const uint64_t line = addr / line_ * line_;
+    const auto [line, bit] = place_of(addr);
     const uint64_t sector = sector_of(addr);
-    const uint32_t bit = 1u << ((addr - line) / sector_);
     Way* w = find(line);
     if (w && (w->valid & bit)) {
         touch(*w);
@@ -75,16 +79,8 @@ CacheOutcome SectorCache::read(uint64_t addr, uint64_t token, ReqKind kind) {
         }
         return CacheOutcome::Hit;
     }
-    // The sector on its way: its MSHR takes the read. Allocated at the miss, the sector is pending
-    // in its way; allocated at the fill, only the MSHR knows it (the line may be absent).
-    Mshr* pending = nullptr;
-    if (on_fill_) {
-        auto it = mshr_.find(sector);
-        if (it != mshr_.end()) pending = &it->second;
-    } else if (w && (w->pending & bit)) {
-        pending = &mshr_.at(sector);
-    }
-    if (pending) {
+    // The sector on its way: its MSHR takes the read.
+    if (Mshr* pending = on_its_way(w, sector, bit)) {
         Mshr& m = *pending;
         if (m.tokens.size() >= merge_) {
             ++st.reservation_fails;
@@ -177,14 +173,13 @@ void SectorCache::invalidate() {
 }
 
 bool SectorCache::warm(uint64_t addr) {
-    const uint64_t line = addr / line_ * line_;
-    const uint32_t bit = 1u << ((addr - line) / sector_);
+    const auto [line, bit] = place_of(addr);
     Way* w = find(line);
     if (w && (w->valid & bit)) {
         touch(*w);
         return true;
     }
-    if (on_fill_ ? mshr_.contains(sector_of(addr)) : w && (w->pending & bit)) return false;
+    if (on_its_way(w, sector_of(addr), bit)) return false;
     if (!w && !(w = allocate(line, nullptr))) return false;
     w->valid |= bit;
     touch(*w);
@@ -199,7 +194,7 @@ SectorCache::Tokens SectorCache::fill(uint64_t sector_addr) {
     const bool by_prefetch = it->second.prefetch;
     const ReqKind kind = it->second.kind;
     mshr_.erase(it);
-    const uint64_t line = sector_addr / line_ * line_;
+    const auto [line, bit] = place_of(sector_addr);
     Way* w = find(line);
     if (on_fill_) {
         // The line takes its way now (the policy's victim, never held: no way is pending), or its
@@ -210,7 +205,6 @@ SectorCache::Tokens SectorCache::fill(uint64_t sector_addr) {
     } else if (!w) {
         throw std::logic_error("fill of a sector whose line was evicted while pending");
     }
-    const uint32_t bit = 1u << ((sector_addr - line) / sector_);
     w->pending &= ~bit;
     w->valid |= bit;
     if (unused_prefetch) w->prefetched |= bit;

@@ -157,6 +157,19 @@ private:
     };
     Way* find(uint64_t line);
     const Way* find(uint64_t line) const { return const_cast<SectorCache*>(this)->find(line); }
+    // Where the sector holding `addr` lives: its line's address and its bit in the line's masks.
+    struct Place {
+        uint64_t line;
+        uint32_t bit;
+    };
+    Place place_of(uint64_t addr) const {
+        const uint64_t line = addr / line_ * line_;
+        return {line, 1u << ((addr - line) / sector_)};
+    }
+    // The MSHR of `sector` (at `bit` of way `w`, null if its line is absent) while its data is on
+    // its way, or null. Allocated at the miss, the sector is pending in its way; allocated at the
+    // fill, only the MSHR knows it (the line may be absent).
+    Mshr* on_its_way(const Way* w, uint64_t sector, uint32_t bit);
     Way* allocate(uint64_t line, CacheAccessCounts* st);
 
     uint32_t set_of(uint64_t line) const;  // the set a line goes to
