@@ -39,6 +39,7 @@ def runs_of(d, only=None):
             return None
     out = []
     if os.path.exists(f"{d}/manifest.tsv"):  # scripts/speed_error.sh: at_s25_seed3_base/ship.json against at_base/ship.json
+        size = frame_of(d)
         for f in glob.glob(f"{d}/*_s*_*/*.json"):
             m = re.match(r"(at|iv)_s(\d+)(?:_seed\d+)?_(base|ttp)$", os.path.basename(os.path.dirname(f)))
             if not m:
@@ -48,7 +49,7 @@ def runs_of(d, only=None):
             est, truth = cycles(f), cycles(full)
             scene = os.path.basename(f)[:-5]
             if est and truth and (only is None or scene in only):
-                out.append(((scene, "pt", frame_of(d), "mobile" + ("+ttp" if pf == "ttp" else ""), "at" if fid == "at" else "interval",
+                out.append(((scene, "pt", size, "mobile" + ("+ttp" if pf == "ttp" else ""), "at" if fid == "at" else "interval",
                              f"{int(pct) / 100:g}"), est / truth - 1))
         return out
     with open(f"{d}/summary.json") as f:  # scripts/bench_sampling_grid.py
@@ -68,7 +69,7 @@ def runs_of(d, only=None):
 def grid_of(d, only=None):
     """What a folder holds: bench_sampling_grid's grid, or speed_error's sampled runs."""
     if os.path.exists(f"{d}/manifest.tsv"):
-        scenes = sorted({os.path.basename(f)[:-5] for f in glob.glob(f"{d}/*_s*_*/*.json")} & (only or set(scenes_all(d))))
+        scenes = sorted(scenes_all(d) & only if only else scenes_all(d))
         n = frame_of(d)
         return f"scripts/speed_error.sh: path tracing {n}x{n}, mobile, {','.join(scenes)}, AT and interval, 10/25/50 %"
     with open(f"{d}/summary.json") as f:
@@ -79,6 +80,7 @@ def grid_of(d, only=None):
 
 
 def scenes_all(d):
+    """The scenes of a speed_error folder's sampled runs."""
     return {os.path.basename(f)[:-5] for f in glob.glob(f"{d}/*_s*_*/*.json")}
 
 
