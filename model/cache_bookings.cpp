@@ -77,14 +77,16 @@ CacheBookings::Lookup CacheBookings::lookup(uint64_t addr, uint64_t cycle, ReqKi
 }
 
 // Sectors whose data arrived by the floor are plain hits for every later read: they are
-// forgotten when the map has grown to twice its size after the last pruning (at least 4 entries
-// per cache line), so that pruning costs O(1) per read.
+// forgotten when the map has grown to twice its size after the last pruning (and to at least 64
+// entries), so that pruning costs O(1) per read and the map stays about the size of the misses
+// in flight, small enough for the host's caches (at 4 entries per cache line an L2 slice's map
+// grew to hundreds of thousands, and its lookups missed the host's caches).
 void CacheBookings::fill(uint64_t addr, const Lookup& miss, uint64_t done, bool dram, ReqKind kind) {
     const uint64_t sector = tags_.sector_of(addr);
     mshr_free_.push(done);
     tags_.fill(sector);
     sectors_[sector] = {miss.cycle, done, dram, 0, kind == ReqKind::Prefetch};
-    if (sectors_.size() <= std::max(prune_above_, 4 * tags_.lines())) return;
+    if (sectors_.size() <= std::max<size_t>(prune_above_, 64)) return;
     for (auto it = sectors_.begin(); it != sectors_.end();) {
         if (it->second.at <= floor_)
             sectors_.erase(it++);

@@ -28,9 +28,6 @@
 #include <queue>
 #include <vector>
 
-#include <absl/container/flat_hash_map.h>
-#include <absl/container/flat_hash_set.h>
-
 #include "bvh_image.h"
 #include "cache_bookings.h"
 #include "calendar.h"
@@ -136,9 +133,12 @@ private:
         uint64_t age = 0;   // order of entry into a warp buffer (the warp scheduler's oldest first)
         uint32_t slot = 0;  // its warp-buffer slot (the scheduler's round robin)
         std::vector<Thread> threads;
-        // rt.merge_in_flight: the trace's demand chunks by address, where each was served and the
-        // cycle its response drains (`at`; a read scheduled before then joins it).
-        absl::flat_hash_map<uint64_t, Served> chunks;
+        // rt.merge_in_flight: the trace's demand chunks in flight, by address, where each was
+        // served and the cycle its response drains (`at`; a read scheduled before then joins it).
+        // Fetches run in time order, so a chunk once drained is never joined again: each fetch
+        // drops those first, which keeps the list as short as the trace's reads in flight (a map
+        // of every chunk the trace read cost 15 % of party's run in host cache misses).
+        std::vector<std::pair<uint64_t, Served>> chunks;
     };
     // A thread's next node fetch, scheduled at `at`; or, with thread == kPrefetch, SM `trace`'s
     // prefetch queue trying to send its oldest chunk in cycle `at`; or, with thread == kShader,

@@ -6,7 +6,9 @@
 # Usage: scripts/bench_against.sh OLD_RTSIM [REPS]   (default 5; SHARED overrides ../shared/scenes)
 # LARGE=1 runs the frames where the functional traversal dominates instead: ship path tracing
 # 512x512 (functional; interval sampled at 10 %), the bunny's path tracing 512x512 sampled at 10 %
-# and its primary rays 1024x1024 (functional), one thread each.
+# and its primary rays 1024x1024 (functional), one thread each. PARTY=1 runs the large scene whose
+# memory events dominate instead: party path tracing 128x128 under `paper`, interval and LT, with
+# and without TTP, one thread each.
 # Prints one line per run kind: old and new wall seconds (the simulation alone, time_s.run),
 # new / old, and whether the two binaries wrote the same statistics (wall times aside). A change
 # meant to keep the speed should stay within the spread of repeated runs.
@@ -28,6 +30,12 @@ if [ "${LARGE:-0}" = 1 ]; then
          "ship_pt512_interval_10pct|--scene ship --assets $shared/ship $pt512 --fidelity interval --sample 0.1"
          "bunny_pt512_interval_10pct|--scene bunny --assets $shared/bunny $pt512 --fidelity interval --sample 0.1"
          "bunny_primary1024_functional|--scene bunny --assets $shared/bunny --workload primary --width 1024 --height 1024 --spp 2 -q --threads 1 --fidelity functional")
+fi
+if [ "${PARTY:-0}" = 1 ]; then
+  [ -d "$shared/party" ] || { echo "error: $shared/party not found (set SHARED to the scenes folder)" >&2; exit 2; }
+  party="--scene party --assets $shared/party --workload pt --width 128 --height 128 --config paper -q --threads 1"
+  kinds=("party_pt128_interval|$party --fidelity interval" "party_pt128_interval_ttp|$party --fidelity interval --prefetcher ttp"
+         "party_pt128_lt|$party --fidelity lt" "party_pt128_lt_ttp|$party --fidelity lt --prefetcher ttp")
 fi
 for r in $(seq 1 "$reps"); do
   echo "repetition $r of $reps" >&2
