@@ -1,8 +1,11 @@
 #include "child_runs.h"
 
+#include <algorithm>
 #include <cerrno>
+#include <csignal>
 #include <cstdio>
 #include <cstring>
+#include <deque>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -39,7 +42,10 @@ std::string exact(double v) {
     return r;
 }
 
-void run_child(std::vector<std::string> args, const std::string& err, const std::string& what) {
+namespace {
+
+// rtsim started with `args` (its output to /dev/null, its standard error into the file `err`).
+pid_t spawn_child(std::vector<std::string> args, const std::string& err, const std::string& what) {
     args.insert(args.begin(), "rtsim");
     std::vector<char*> argv;
     for (std::string& s : args) argv.push_back(s.data());
@@ -52,18 +58,34 @@ void run_child(std::vector<std::string> args, const std::string& err, const std:
     const int rc = posix_spawn(&pid, "/proc/self/exe", &fa, nullptr, argv.data(), environ);
     posix_spawn_file_actions_destroy(&fa);
     if (rc != 0) throw std::runtime_error(what + ": cannot start rtsim: " + std::string(std::strerror(rc)));
+    return pid;
+}
+
+// The exit status of child `pid` (blocking).
+int reap(pid_t pid) {
     int status = 0;
     while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
     }
-    if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-        std::ifstream in(err);
-        std::stringstream msg;
-        msg << in.rdbuf();
-        const std::string text = what + " failed (" + (WIFEXITED(status) ? "exit " + std::to_string(WEXITSTATUS(status)) : std::string("a signal")) +
-                                 "): " + msg.str();
-        if (WIFEXITED(status) && WEXITSTATUS(status) == 2) throw InputError(text);
-        throw std::runtime_error(text);
-    }
+    return status;
+}
+
+// Throws, with the child's error text (the file `err`), if `status` is not exit 0; InputError for
+// exit status 2.
+void check_child(int status, const std::string& err, const std::string& what) {
+    if (WIFEXITED(status) && WEXITSTATUS(status) == 0) return;
+    std::ifstream in(err);
+    std::stringstream msg;
+    msg << in.rdbuf();
+    const std::string text = what + " failed (" + (WIFEXITED(status) ? "exit " + std::to_string(WEXITSTATUS(status)) : std::string("a signal")) +
+                             "): " + msg.str();
+    if (WIFEXITED(status) && WEXITSTATUS(status) == 2) throw InputError(text);
+    throw std::runtime_error(text);
+}
+
+}  // namespace
+
+void run_child(std::vector<std::string> args, const std::string& err, const std::string& what) {
+    check_child(reap(spawn_child(std::move(args), err, what)), err, what);
 }
 
 ErrorCheck run_error_check(const std::vector<std::string>& frame_args, const std::string& fidelity, std::optional<uint64_t> quantum,
@@ -108,24 +130,71 @@ ErrorCheck run_error_check(const std::vector<std::string>& frame_args, const std
     return c;
 }
 
-std::vector<SegmentRun> run_segment_children(const std::vector<std::string>& segment_args, uint32_t segments, const StopRequest& stop,
-                                             bool quiet) {
+std::vector<SegmentRun> run_segment_children(const std::vector<std::string>& segment_args, uint32_t segments, unsigned threads,
+                                             const std::string& plan, const StopRequest& stop, bool quiet) {
     const TempFolder dir("--sample-segments");
-    std::vector<SegmentRun> runs;
-    for (uint32_t i = 0; i < segments; ++i) {
-        if (stop.requested()) throw Interrupted{stop.signal()};
-        if (!quiet) std::cerr << "segment " << i + 1 << " of " << segments << "\n";
+    // Up to `threads` children at once, the threads shared among them (a child's results do not
+    // depend on its threads); the first, alone until its pre-pass is done, takes them all.
+    const uint32_t parallel = std::max(1u, std::min<uint32_t>(segments, threads));
+    auto with_threads = [&](unsigned n) {
         std::vector<std::string> args = segment_args;
-        const std::string stats = (dir.path / ("segment" + std::to_string(i) + ".json")).string();
-        args.insert(args.end(), {"--segment", std::to_string(i), "--stats", stats});
-        try {
-            run_child(args, (dir.path / ("segment" + std::to_string(i) + ".err")).string(), "segment " + std::to_string(i));
-        } catch (...) {
-            if (stop.requested()) throw Interrupted{stop.signal()};  // the child got the signal too
-            throw;
+        const auto t = std::find(args.begin(), args.end(), std::string("--threads"));
+        if (t != args.end() && t + 1 != args.end()) *(t + 1) = std::to_string(std::max(1u, n));
+        return args;
+    };
+    const std::vector<std::string> first = with_threads(threads), rest = with_threads(threads / parallel);
+    auto stats_of = [&](uint32_t i) { return (dir.path / ("segment" + std::to_string(i) + ".json")).string(); };
+    auto err_of = [&](uint32_t i) { return (dir.path / ("segment" + std::to_string(i) + ".err")).string(); };
+    auto what_of = [](uint32_t i) { return "segment " + std::to_string(i); };
+    struct Running {
+        uint32_t index;
+        pid_t pid;
+        std::optional<int> status;  // reaped already
+    };
+    std::deque<Running> running;  // in the order started
+    auto start = [&](uint32_t i) {
+        if (!quiet) std::cerr << "segment " << i + 1 << " of " << segments << (parallel > 1 ? " started" : "") << "\n";
+        std::vector<std::string> args = i == 0 ? first : rest;
+        args.insert(args.end(), {"--segment", std::to_string(i), "--stats", stats_of(i)});
+        running.push_back({i, spawn_child(args, err_of(i), what_of(i)), std::nullopt});
+    };
+    // A failure or a stop ends the others: they are told to stop (SIGTERM) and reaped first.
+    auto end_all = [&] {
+        for (const Running& r : running)
+            if (!r.status) kill(r.pid, SIGTERM);
+        for (const Running& r : running)
+            if (!r.status) reap(r.pid);
+        running.clear();
+    };
+    uint32_t next = 0;
+    try {
+        start(next++);
+        // The first segment writes the frame's plan right after its pre-pass: the others start
+        // when the plan is there (`plan`; empty: when the first ends), so the frame is traced once.
+        if (parallel > 1 && segments > 1) {
+            if (plan.empty()) running.front().status = reap(running.front().pid);
+            while (!running.front().status && !std::filesystem::exists(plan) && !stop.requested()) {
+                int status = 0;
+                if (waitpid(running.front().pid, &status, WNOHANG) == running.front().pid) running.front().status = status;
+                else usleep(20000);
+            }
         }
-        runs.push_back(read_segment(stats));
+        while (!running.empty()) {
+            if (!running.front().status)
+                while (next < segments && running.size() < parallel && !stop.requested()) start(next++);
+            const Running r = running.front();
+            const int status = r.status ? *r.status : reap(r.pid);
+            running.pop_front();
+            if (stop.requested()) throw Interrupted{stop.signal()};  // the children got the signal too
+            check_child(status, err_of(r.index), what_of(r.index));
+            if (running.empty() && next < segments) start(next++);
+        }
+    } catch (...) {
+        end_all();
+        throw;
     }
+    std::vector<SegmentRun> runs;
+    for (uint32_t i = 0; i < segments; ++i) runs.push_back(read_segment(stats_of(i)));
     return runs;
 }
 

@@ -1,5 +1,5 @@
 // rtsim run as child processes of itself (SystemC elaborates one platform per process): the
-// segments of a split sample run one after another (--sample-segments K alone), and
+// segments of a split sample, up to --threads at once (--sample-segments K alone), and
 // --check-error's two runs of the same clusters in the run's fidelity and in AT. Each child gets
 // the parent's frame, workload and configuration options (`frame_args`).
 #pragma once
@@ -34,12 +34,16 @@ void run_child(std::vector<std::string> args, const std::string& err, const std:
 ErrorCheck run_error_check(const std::vector<std::string>& frame_args, const std::string& fidelity, std::optional<uint64_t> quantum,
                            double rate, uint64_t sample_seed, bool quiet);
 
-// --sample-segments K without --segment: each segment simulated by a child rtsim, one after
-// another, and their statistics read back for the merge (the same files an array of cluster
-// tasks would write, so the estimate is the same, bit for bit). `segment_args`: the frame's and
-// the sample's options; a stop requested ends it between segments (Interrupted).
-std::vector<SegmentRun> run_segment_children(const std::vector<std::string>& segment_args, uint32_t segments, const StopRequest& stop,
-                                             bool quiet);
+// --sample-segments K without --segment: each segment simulated by a child rtsim, up to `threads`
+// at once (each child given threads / that many threads), and their statistics read back in
+// segment order for the merge (the same files an array of cluster tasks would write, so the
+// estimate is the same, bit for bit, for any `threads`). The first segment writes the frame's
+// plan (`plan`) after its pre-pass; the others start when that file exists (`plan` empty: when
+// the first ends), so the frame is traced once. `segment_args`: the frame's and the sample's
+// options. A stop requested ends it (Interrupted); a child that fails ends the others (SIGTERM)
+// and its error is thrown.
+std::vector<SegmentRun> run_segment_children(const std::vector<std::string>& segment_args, uint32_t segments, unsigned threads,
+                                             const std::string& plan, const StopRequest& stop, bool quiet);
 
 // A double as rtsim reads it back exactly.
 std::string exact(double v);

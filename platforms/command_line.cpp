@@ -202,10 +202,15 @@ RunSpec spec_of(const Args& a, const std::atomic<int>* stop) {
     spec.dump_hits = a.dump_hits;
     spec.check_error = a.check_error;
     spec.command_line = a.command_line;
-    // Child runs of rtsim itself: the segments of a split sample, one after another, and the
+    // Child runs of rtsim itself: the segments of a split sample, up to --threads at once, and the
     // check's two runs.
     if (a.sample_segments > 1 && !a.segment && a.merge_segments.empty())
-        spec.run_segments = [&a, stop = run.stop] { return run_segment_children(segment_args(a), uint32_t(a.sample_segments), stop, a.quiet); };
+        spec.run_segments = [&a, stop = run.stop] {
+            // The plan's file, when its name is known before the run (not a folder's plan-HASH.bin).
+            const bool folder = a.sample_plan.empty() || a.sample_plan.back() == '/' || std::filesystem::is_directory(a.sample_plan);
+            return run_segment_children(segment_args(a), uint32_t(a.sample_segments), unsigned(a.threads), folder ? std::string() : a.sample_plan,
+                                        stop, a.quiet);
+        };
     if (a.check_error)
         spec.run_check = [&a](double rate) {
             return run_error_check(frame_args(a), a.fidelity, a.quantum, rate, a.sample_seed.value_or(a.seed), a.quiet);
@@ -261,7 +266,7 @@ std::optional<int> parse_command_line(int argc, char** argv, Args& a) {
         ("sample-unchecked", po::bool_switch(&a.sample_unchecked),
          "run a sample too small for a 95 % interval (fewer than 10 strata) and report no interval")
         ("sample-segments", po::value(&a.sample_segments), "simulate the sample as K independent segments and merge them "
-         "(docs/sampling.md, \"Segments\"); alone: each segment in a child process, one after another")
+         "(docs/sampling.md, \"Segments\"); alone: each segment in a child process, up to --threads at once")
         ("segment", po::value<uint64_t>()->notifier([&a](uint64_t v) { a.segment = v; }),
          "with --sample-segments K: simulate only segment I (0..K-1) and write it for --merge-segments (a cluster's array task)")
         ("sample-plan", po::value(&a.sample_plan), "keep the sampling pre-pass in this file (or, given a folder, in a file of the "
@@ -270,8 +275,9 @@ std::optional<int> parse_command_line(int argc, char** argv, Args& a) {
         ("merge-segments", po::value(&a.merge_segments)->multitoken(),
          "with --sample-segments K and the same frame options: merge the K segments' --stats files into the frame's estimate")
         ("threads", po::value(&a.threads)->default_value(a.threads),
-         "threads of the functional pass, --verify's checks against Embree and --sample's pre-pass (default: the cores this "
-         "process may use; the timing fidelities simulate on one; results do not depend on it)")
+         "threads of the functional pass, --verify's checks against Embree and --sample's pre-pass, and --sample-segments' "
+         "child runs at once (default: the cores this process may use; the timing fidelities simulate on one; results do not "
+         "depend on it)")
         ("check-error", po::value<uint64_t>()->notifier([&a](uint64_t v) {
              if (v == 0) throw po::validation_error(po::validation_error::invalid_option_value, "check-error", "0");
              a.check_error = v;

@@ -1070,7 +1070,8 @@ TEST(RtsimSampling, IntervalFidelitySampledAsAt) {
 
 // A sample split into segments (docs/sampling.md, "Segments"): the segments run as separate
 // processes (as array tasks on a cluster would) and merged in any order give the same statistics,
-// bit for bit, as rtsim --sample-segments alone; the segments together simulate the warps of
+// bit for bit, as rtsim --sample-segments alone, with its children one at a time or three at
+// once; the segments together simulate the warps of
 // the continuous sample, each once, and their cycles add up to the merged run's simulated
 // cycles; the merged interval covers the full run. A sample plan (the pre-pass kept in a file)
 // changes no statistic, and a plan of another frame is refused. Merging refuses a missing
@@ -1110,6 +1111,18 @@ TEST(RtsimSampling, SegmentsMergedEqualTheSingleProcessRun) {
         ASSERT_EQ(merged.status, 0) << merged.err;
         const auto m = load("merged.json");
         EXPECT_EQ(m, load("single.json"));
+        // The three segments' children at once (--threads 3; the others start when the first has
+        // written the frame's plan, on its 3 threads): the same statistics, but for the record of
+        // the pre-pass's threads.
+        std::string split3 = split;
+        split3.replace(split3.find("--threads 1"), 11, "--threads 3");
+        const Result concurrent = rtsim(dir, split3 + " --stats " + dir.file("concurrent.json"));
+        ASSERT_EQ(concurrent.status, 0) << concurrent.err;
+        auto together = load("concurrent.json"), one = m;
+        EXPECT_EQ(together["timing"]["sampling"]["prepass_threads"], 3);
+        together["timing"]["sampling"].erase("prepass_threads");
+        one["timing"]["sampling"].erase("prepass_threads");
+        EXPECT_EQ(together, one);
         // The same through a sample plan: the first segment writes the pre-pass, the others and
         // the merge read it; the statistics do not change.
         std::filesystem::remove(dir.file("plan.bin"));
