@@ -82,8 +82,9 @@ void Dram::schedule() {
     for (uint32_t c = 0; c < channels_.size(); ++c) {
         DramChannel& ch = channels_[c];
         if (ch.empty()) continue;
-        if (ch.next_decision() > now) {
-            next = std::min(next, ch.next_decision());
+        const uint64_t decision = ch.next_decision();  // a scan of the banks: once
+        if (decision > now) {
+            next = std::min(next, decision);
             continue;
         }
         DramRequest r;
