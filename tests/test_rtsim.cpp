@@ -1113,16 +1113,19 @@ TEST(RtsimSampling, SegmentsMergedEqualTheSingleProcessRun) {
         EXPECT_EQ(m, load("single.json"));
         // The three segments' children at once (--threads 3; the others start when the first has
         // written the frame's plan, on its 3 threads): the same statistics, but for the record of
-        // the pre-pass's threads.
-        std::string split3 = split;
-        split3.replace(split3.find("--threads 1"), 11, "--threads 3");
-        const Result concurrent = rtsim(dir, split3 + " --stats " + dir.file("concurrent.json"));
-        ASSERT_EQ(concurrent.status, 0) << concurrent.err;
-        auto together = load("concurrent.json"), one = m;
-        EXPECT_EQ(together["timing"]["sampling"]["prepass_threads"], 3);
-        together["timing"]["sampling"].erase("prepass_threads");
-        one["timing"]["sampling"].erase("prepass_threads");
-        EXPECT_EQ(together, one);
+        // the pre-pass's threads. The children are run alike whatever their fidelity: checked on
+        // the faster one.
+        if (std::string(fidelity) == "interval") {
+            std::string split3 = split;
+            split3.replace(split3.find("--threads 1"), 11, "--threads 3");
+            const Result concurrent = rtsim(dir, split3 + " --stats " + dir.file("concurrent.json"));
+            ASSERT_EQ(concurrent.status, 0) << concurrent.err;
+            auto together = load("concurrent.json"), one = m;
+            EXPECT_EQ(together["timing"]["sampling"]["prepass_threads"], 3);
+            together["timing"]["sampling"].erase("prepass_threads");
+            one["timing"]["sampling"].erase("prepass_threads");
+            EXPECT_EQ(together, one);
+        }
         // The same through a sample plan: the first segment writes the pre-pass, the others and
         // the merge read it; the statistics do not change.
         std::filesystem::remove(dir.file("plan.bin"));
@@ -2136,9 +2139,9 @@ TEST(Rtsim, Sigusr1WritesTheStatisticsSoFarAndTheRunGoesOn) {
     const std::string stats = dir.file("s.json"), err = dir.file("stderr.txt");
     const pid_t pid = spawn_rtsim(err, {"--scene", "wknd", "--fidelity", "interval", "--width", "640", "--height", "640", "--stats", stats});
     int status = 0;
-    bool sent = false, snapshot_seen = false;
+    bool sent = false, snapshot_seen = false, exited = false;
     nlohmann::json snapshot;
-    for (int i = 0; i < 1200 && waitpid(pid, &status, WNOHANG) != pid; ++i) {  // up to 120 s
+    for (int i = 0; i < 1200 && !(exited = waitpid(pid, &status, WNOHANG) == pid); ++i) {  // watched for up to 120 s
         const std::string e = read_text(err);
         if (!sent && e.find("cycle ") != std::string::npos) {
             kill(pid, SIGUSR1);
@@ -2150,6 +2153,9 @@ TEST(Rtsim, Sigusr1WritesTheStatisticsSoFarAndTheRunGoesOn) {
         }
         usleep(50000);
     }
+    // A slow build (a sanitizer's, on a loaded machine) may still be running: its end is awaited,
+    // not taken for exit status 0.
+    if (!exited) waitpid(pid, &status, 0);
     ASSERT_TRUE(WIFEXITED(status)) << read_text(err);
     ASSERT_EQ(WEXITSTATUS(status), 0) << read_text(err);
     ASSERT_TRUE(sent) << "the run finished before its progress line showed: make the frame larger";
