@@ -95,6 +95,7 @@ const Key kSchema[] = {
     {"prefetch.treelet_stride", "bytes", Type::Int, 0, 1 << 20, false, "Treelet, contiguous layout: bytes between treelet blocks beyond the budget (the Treelet code's treelet_remap_stride)"},
     {"prefetch.treelet_queue_limit", "entries", Type::Int, 1, 1 << 30, false, "Treelet: a treelet is enqueued only if its nodes plus the chunks already in the RT unit's prefetch queue are at most this (the Treelet code's max_prefetch_queue_size, which mixes the two units)"},
     {"prefetch.treelet_vote_period", "cycles", Type::Int, 1, 1 << 20, false, "Treelet: cycles between two votes for the most popular treelet (the Treelet code's prefetch_delay)"},
+    {"prefetch.treelet_order", "", Type::Text, 0, 0, false, "treelet traversal, when its treelet is finished: treelets (into the treelet of the newest deferred node; every treelet finished before the next, Chou et al.'s design) or root-then-dfs (the Treelet code as both papers ran it: only the root treelet is kept to, every later node is read in DFS order)"},
     {"prefetch.ttp_depth_s1", "entries", Type::Int, 0, 64, false, "TTP (DFS; BFS under the trend policy): entries prefetched on the first pop after a push"},
     {"prefetch.ttp_depth_s2", "entries", Type::Int, 0, 64, false, "TTP (DFS; BFS under trend): on the second consecutive pop"},
     {"prefetch.ttp_depth_s3", "entries", Type::Int, 0, 64, false, "TTP (DFS; BFS under trend): on the third and later consecutive pops"},
@@ -419,6 +420,10 @@ HwConfig Config::resolve() const {
     h.prefetch.treelet_stride = u32("prefetch.treelet_stride");
     h.prefetch.treelet_queue_limit = u32("prefetch.treelet_queue_limit");
     h.prefetch.treelet_vote_period = u32("prefetch.treelet_vote_period");
+    const std::string treelet_order = values_.at("prefetch.treelet_order").get<std::string>();
+    if (treelet_order != "treelets" && treelet_order != "root-then-dfs")
+        throw ConfigError("key 'prefetch.treelet_order' = '" + treelet_order + "': allowed are treelets, root-then-dfs");
+    h.prefetch.treelet_order = treelet_order == "treelets" ? TreeletOrder::Treelets : TreeletOrder::RootThenDfs;
     h.energy = {num("energy.l1_access_pj"), num("energy.l2_access_pj"), num("energy.dram_read_pj"),
                 num("energy.dram_write_pj"), num("energy.dram_activate_pj"), num("energy.static_w")};
     h.quantum = values_.at("sim.quantum").get<uint64_t>();

@@ -12,6 +12,11 @@ namespace rtu {
 enum class PrefetcherKind : uint8_t { None, Ttp, Park, Treelet, PerfectUp, PerfectDown };
 // When the Treelet prefetcher submits the RT unit's most popular treelet (model/prefetcher.cpp).
 enum class TreeletHeuristic : uint8_t { Always, Popularity };
+// Where treelet traversal goes when its current treelet is finished (model/traversal.h): into the
+// treelet of the newest deferred node, every treelet finished before the next (Treelets: Chou et
+// al.'s design), or, as the Treelet code both papers ran does, nowhere: only the root treelet is
+// kept to, and every node after it is read in DFS order (RootThenDfs; docs/paper-preset.md).
+enum class TreeletOrder : uint8_t { Treelets, RootThenDfs };
 // How many queue entries TTP prefetches per pop under BFS (model/prefetcher.h TtpBfs).
 enum class BfsPolicy : uint8_t { Fixed, Trend };
 PrefetcherKind parse_prefetcher(const std::string& name);  // throws std::invalid_argument
@@ -43,6 +48,7 @@ struct PrefetchConfig {
     uint32_t treelet_stride = 256;            // Treelet, contiguous layout: bytes between blocks beyond the budget
     uint32_t treelet_queue_limit = 1000000;   // Treelet: a treelet is enqueued only if its nodes + the queue's chunks fit
     uint32_t treelet_vote_period = 1;         // Treelet: cycles between two votes
+    TreeletOrder treelet_order = TreeletOrder::Treelets;  // treelet traversal: see TreeletOrder
 };
 
 }  // namespace rtu

@@ -218,10 +218,16 @@ StepInfo TraversalThread::step(const BvhImage& image) {
         stack_.pop_back();
         info.from_stack = true;
     } else if (order_ == TraversalOrder::Treelet) {
-        // The current treelet is finished: move to the one on top of the deferred stack.
+        // The current treelet is finished: move to the one on top of the deferred stack. The
+        // Treelet code both papers ran (vulkan_ray_tracing.cc traceRayWithTreelets, l.1749-1754 at
+        // yavuz650/vulkan-sim 62af1437) sets its current treelet to the popped entry's host
+        // address, while treelets are named by device addresses (l.468-490; device_offset is
+        // never 0), so no node matches it again: every later child is deferred and popped last in,
+        // first out, a DFS over what the root treelet left (RootThenDfs; kNoTreelet, since
+        // treelet_of gives ~0 for an address outside every treelet).
         e = deferred_.back();
         deferred_.pop_back();
-        current_treelet_ = treelets_->treelet_of(e.addr);
+        current_treelet_ = treelets_->order == TreeletOrder::RootThenDfs ? kNoTreelet : treelets_->treelet_of(e.addr);
         info.from_stack = true;
     } else {
         e = stack_.front();

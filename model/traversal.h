@@ -35,7 +35,8 @@
 namespace rtu {
 
 // DFS and BFS as described above; Treelet: DFS within the current treelet, with children in
-// other treelets deferred on a second stack until the current treelet is finished (Chou et al.).
+// other treelets deferred on a second stack until the current treelet is finished (Chou et al.);
+// where it goes then is the treelets' TreeletOrder (model/prefetch_config.h).
 enum class TraversalOrder : uint8_t { DFS, BFS, Treelet };
 
 struct Treelets;
@@ -82,8 +83,9 @@ public:
         if (order_ == TraversalOrder::BFS) return stack_.front();
         return stack_.empty() ? deferred_.back() : stack_.back();
     }
-    // Treelet traversal: the treelet the thread works in, and the one it will move to next
-    // (~0 when it has none waiting).
+    // Treelet traversal: the treelet the thread works in (kNoTreelet once the root treelet is
+    // finished under TreeletOrder::RootThenDfs), and the one it will move to next (~0 when it has
+    // none waiting).
     uint32_t current_treelet() const { return current_treelet_; }
     uint32_t next_treelet() const;
     // Takes the next node, reads its bytes from the image and runs its tests.
@@ -118,6 +120,7 @@ private:
     std::deque<StackEntry> stack_, deferred_;  // deferred: entries of other treelets (Treelet order)
     const Treelets* treelets_ = nullptr;
     uint32_t current_treelet_ = ~0u;
+    static constexpr uint32_t kNoTreelet = ~0u - 1;  // matches no node (TreeletOrder::RootThenDfs)
     StackEntry next_;
     bool has_next_ = false;
     bool headers_ = false;   // the image's headers are read (ImageHeader::has_headers)

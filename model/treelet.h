@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "bvh_image.h"
+#include "prefetch_config.h"
 #include "traversal.h"
 
 namespace rtu {
@@ -28,6 +29,7 @@ struct Treelets {
     std::vector<std::vector<StackEntry>> nodes; // treelet -> its nodes (address, type), root first
     std::vector<uint64_t> bytes;                // treelet -> bytes of its nodes
     std::unordered_map<uint64_t, uint64_t> moved;  // contiguous layout: node address -> its place in memory
+    TreeletOrder order = TreeletOrder::Treelets;  // how a treelet traversal moves between them (prefetch.treelet_order)
     uint32_t treelet_of(uint64_t addr) const {
         auto it = of.find(addr);
         return it == of.end() ? ~0u : it->second;

@@ -133,7 +133,8 @@ std::string prepass_identity(const RunSpec& spec, const std::string& scene, cons
     if (spec.run.order == TraversalOrder::Treelet)  // the treelets the traversal keeps to (traversal_treelets)
         id += "prefetch.treelet_budget=" + std::to_string(hw.prefetch.treelet_budget) +
               "\nprefetch.treelet_contiguous=" + (hw.prefetch.treelet_contiguous ? "true" : "false") +
-              "\nprefetch.treelet_stride=" + std::to_string(hw.prefetch.treelet_stride) + "\n";
+              "\nprefetch.treelet_stride=" + std::to_string(hw.prefetch.treelet_stride) +
+              "\nprefetch.treelet_order=" + (hw.prefetch.treelet_order == TreeletOrder::Treelets ? "treelets" : "root-then-dfs") + "\n";
     return id;
 }
 
@@ -278,11 +279,9 @@ void functional_stage(const WorkloadStage& w, const BvhImage& image, const Embre
                       RunResult& out) {
     FunctionalOptions fo;
     fo.order = w.spec.run.order;
-    std::unique_ptr<Treelets> treelets;
-    if (fo.order == TraversalOrder::Treelet) {
-        treelets = std::make_unique<Treelets>(form_treelets(image, PrefetchConfig{}.treelet_budget));
-        fo.treelets = treelets.get();
-    }
+    // The treelets of the configuration, as the timing fidelities' traversal keeps to them.
+    const std::unique_ptr<Treelets> treelets = traversal_treelets(w.spec.hw, image, fo.order);
+    fo.treelets = treelets.get();
     fo.progress = w.spec.run.progress;
     fo.threads = w.spec.run.threads;
     fo.measure_speed = w.spec.verify;

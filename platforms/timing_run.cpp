@@ -57,7 +57,9 @@ void take_estimate(TimingResult& r, const FrameSample* sample, const WorkloadDri
 
 std::unique_ptr<Treelets> traversal_treelets(const HwConfig& c, const BvhImage& img, TraversalOrder order) {
     if (order != TraversalOrder::Treelet) return nullptr;
-    return std::make_unique<Treelets>(form_treelets(img, c.prefetch.treelet_budget, c.prefetch.treelet_contiguous, c.prefetch.treelet_stride));
+    auto t = std::make_unique<Treelets>(form_treelets(img, c.prefetch.treelet_budget, c.prefetch.treelet_contiguous, c.prefetch.treelet_stride));
+    t->order = c.prefetch.treelet_order;
+    return t;
 }
 
 }  // namespace rtu

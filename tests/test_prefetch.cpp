@@ -516,6 +516,69 @@ TEST(Treelets, TraversalFindsTheDfsHitsAndFinishesATreeletBeforeLeaving) {
     EXPECT_GT(switches, 1000);
 }
 
+// The order of the Treelet code both papers ran (prefetch.treelet_order=root-then-dfs): the root
+// treelet first, exactly as treelet-first traversal walks it, then every other node in DFS order,
+// so a ray leaves the root treelet once and may go back into other treelets it left (treelet-first
+// never does: the test above). Same closest hits as DFS.
+TEST(Treelets, RootThenDfsWalksTheRootTreeletThenInDfsOrder) {
+    RTU_NEED_SHARED_SCENES();
+    const Scene s = load_scene("bunny", rtu::test::shared_dir() + "/scenes/bunny");
+    const BvhImage img = build_bvh_image(s);
+    const Treelets first = form_treelets(img, 512);
+    Treelets root = form_treelets(img, 512);
+    root.order = TreeletOrder::RootThenDfs;
+    const uint32_t root_id = root.treelet_of(img.header().root);
+    // The node addresses a traversal reads, and how many of them lie in the root treelet before
+    // it first reads a node outside it.
+    const auto reads = [&img](const Ray& r, const Treelets& t, uint32_t root_treelet, size_t& in_root_first) {
+        std::vector<uint64_t> nodes;
+        in_root_first = 0;
+        bool left = false;
+        TraversalThread th;
+        th.start(r, img.header(), TraversalOrder::Treelet, &t);
+        while (!th.done()) {
+            nodes.push_back(th.peek().addr);
+            left = left || t.treelet_of(th.peek().addr) != root_treelet;
+            if (!left) ++in_root_first;
+            th.step(img);
+        }
+        return nodes;
+    };
+    int hits = 0, reentries = 0, differ = 0;
+    for (int i = 0; i < 2000; ++i) {
+        Ray r;
+        r.org = {278, 278, 800};
+        r.dir = glm::vec3(-0.3f + 0.6f * float(i % 50) / 49.0f, -0.3f + 0.6f * float(i / 50) / 39.0f, -1.0f);
+        const TraceResult a = trace_ray(img, r, TraversalOrder::DFS);
+        const TraceResult b = trace_ray(img, r, TraversalOrder::Treelet, &root);
+        ASSERT_EQ(a.hit.hit, b.hit.hit) << i;
+        if (a.hit.hit) {
+            EXPECT_EQ(a.hit.t, b.hit.t) << i;
+            ++hits;
+        }
+        size_t prefix_first = 0, prefix_root = 0;
+        const std::vector<uint64_t> f = reads(r, first, root_id, prefix_first), d = reads(r, root, root_id, prefix_root);
+        // The root treelet is walked alike, and never entered again once left.
+        ASSERT_EQ(prefix_first, prefix_root) << i;
+        EXPECT_TRUE(std::equal(d.begin(), d.begin() + long(prefix_root), f.begin())) << i;
+        std::set<uint32_t> left;
+        uint32_t current = root_id;
+        for (size_t k = prefix_root; k < d.size(); ++k) {
+            const uint32_t id = root.treelet_of(d[k]);
+            EXPECT_NE(id, root_id) << "ray " << i << " reads the root treelet again at read " << k;
+            if (id != current) {
+                if (left.count(id)) ++reentries;
+                left.insert(current);
+                current = id;
+            }
+        }
+        differ += d != f;
+    }
+    EXPECT_GT(hits, 500);
+    EXPECT_GT(reentries, 100) << "past the root treelet, the reads should follow DFS, which goes back into treelets";
+    EXPECT_GT(differ, 200);
+}
+
 namespace {
 ChunkRequest chunk(uint64_t id, uint64_t addr, uint32_t warp, bool prefetch = false, bool more = false) {
     ChunkRequest r;

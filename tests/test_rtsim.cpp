@@ -1752,6 +1752,7 @@ TEST(RtsimConfig, EveryKeyOfEveryPresetIsRead) {
         {{"prefetch.treelet_heuristic=always|popularity"}, treelet}, {{"prefetch.treelet_layout=bvh|contiguous"}, treelet},
         {{"prefetch.treelet_stride=1024"}, treelet + " --set prefetch.treelet_layout=contiguous"},
         {{"prefetch.treelet_queue_limit=2"}, treelet}, {{"prefetch.treelet_vote_period=64"}, treelet},
+        {{"prefetch.treelet_order=treelets|root-then-dfs"}, treelet + " --set prefetch.treelet_budget=512"},
         {{"prefetch.ttp_depth_s1=4"}, ttp}, {{"prefetch.ttp_depth_s2=8"}, ttp}, {{"prefetch.ttp_depth_s3=2"}, ttp},
         {{"prefetch.bfs_n=4"}, ttp + " --traversal bfs"}, {{"prefetch.bfs_policy=fixed|trend"}, ttp + " --traversal bfs"}, {{"prefetch.priority_after=5"}, ttp}, {{"prefetch.queue=1"}, ttp}, {{"prefetch.thread_window=2"}, ttp},
         {{"energy.l1_access_pj=40"}}, {{"energy.l2_access_pj=160"}}, {{"energy.dram_read_pj=1000"}},

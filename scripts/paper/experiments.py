@@ -47,6 +47,7 @@ MAIN = [
     ("treelet", TREELET),
     ("treelet_contiguous", f"{TREELET} {CONTIGUOUS}"),
     ("treelet_trav", "--traversal treelet"),
+    ("treelet_first", f"{TREELET} --set prefetch.treelet_order=treelets"),
     # The spread over ray seeds: the speed-up of one frame is one draw of the rays' paths.
     ("seed2_base", "--seed 2"), ("seed2_ttp", "--seed 2 --prefetcher ttp"),
     ("seed3_base", "--seed 3"), ("seed3_ttp", "--seed 3 --prefetcher ttp"),

@@ -239,7 +239,7 @@ def main():
         "their streaming L1 (4,096 MSHRs, lines allocated at the fill, a 16-entry miss queue) and the L2's 32-entry miss queue, "
         "oldest-first RT warp scheduling, a 16-entry per-thread prefetch window, node reads merged into their warp's reads in "
         "flight, the kernel launch, the shader time and the shaders' reads that reach L2 measured on their simulator, "
-        "Treelet's default treelet size, queue check and vote period); the difference between the two columns is what those details "
+        "Treelet's default treelet size, queue check, vote period and the code's traversal order); the difference between the two columns is what those details "
         "weigh. The paper's figures are over its 16 LumiBench scenes; ours are over the scenes of `../shared/scenes`, built "
         "and cast as LumiBench does (docs/lumibench.md; some assets are stand-ins or partial, see the gap table at the end).")
     R.p()
@@ -558,8 +558,13 @@ def main():
     R.p("## Treelet prefetcher against TTP (paper Figures 'treeletvs_pt', 'treeletres', 'treelet_dram_reads')")
     R.p()
     pf = json.loads((pathlib.Path(__file__).resolve().parents[2] / "platforms" / "configs" / "paper.json").read_text())["prefetch"]
+    order_words = {"root-then-dfs": "the root treelet first, then every other node in DFS order, as the code walks: "
+                                    "after its first switch it names the current treelet by a host address, which matches "
+                                    "no treelet (read in their code, not run; docs/paper-preset.md)",
+                   "treelets": "each treelet finished before the next (Chou et al.'s design)"}
     R.p("Treelet = treelet traversal (two stacks) with whole-treelet prefetching as the code the paper ran "
-        f"(branch treelet_traversal), with the `paper` preset's keys: {pf['treelet_budget']:,} B treelets formed until the first "
+        f"(branch treelet_traversal), with the `paper` preset's keys: {order_words[pf['treelet_order']]}; "
+        f"{pf['treelet_budget']:,} B treelets formed until the first "
         f"node that does not fit; every {pf['treelet_vote_period']} cycles the RT unit's most popular next treelet is prefetched "
         f"unless it was the last one or its nodes plus the chunks already queued exceed {pf['treelet_queue_limit']:,}; "
         f"{'in the BVH' + chr(39) + 's own layout' if pf['treelet_layout'] == 'bvh' else 'each treelet in a block of its own'}; normalised to the DFS baseline at the same "
@@ -590,19 +595,23 @@ def main():
     if sc:
         R.p(f"Per scene at {size}, over the DFS baseline:")
         R.p()
-        R.table(["scene", "Treelet", "treelet traversal alone", "chunks prefetched per node read"],
-                [[x, times(R.speedup("treelet", "base", x)), times(R.speedup("treelet_trav", "base", x)),
-                  f"{R.val('treelet', x, 'pf_sent') / R.val('treelet', x, 'node_fetches'):.2f}" if R.val("treelet", x, "node_fetches") else "-"]
+        first_order = "treelets" if pf["treelet_order"] != "treelets" else None
+        R.table(["scene", "Treelet", "treelet traversal alone"] + (["Treelet, each treelet finished first"] if first_order else []) +
+                ["chunks prefetched per node read"],
+                [[x, times(R.speedup("treelet", "base", x)), times(R.speedup("treelet_trav", "base", x))] +
+                 ([times(R.speedup("treelet_first", "base", x)) if x in R.scenes_with("treelet_first", "base") else "-"] if first_order else []) +
+                 [f"{R.val('treelet', x, 'pf_sent') / R.val('treelet', x, 'node_fetches'):.2f}" if R.val("treelet", x, "node_fetches") else "-"]
                  for x in sc])
         R.p(f"Treelet traversal alone (no prefetching) runs at {times(R.gm({x: R.speedup('treelet_trav', 'base', x) for x in sc}))} "
             "of the DFS baseline.")
         losses = [x for x in sc if x in PAPER_TREELET_LOSSES]
         for x in losses:
             t_x, tr_x = R.speedup("treelet", "base", x), R.speedup("treelet_trav", "base", x)
+            f_x = R.speedup("treelet_first", "base", x) if x in R.scenes_with("treelet_first", "base") else None
             R.p(f"The paper's Treelet loses on {x}; ours {'loses' if t_x < 1 else 'gains'} there ({times(t_x)}), and the treelet "
-                f"traversal order alone accounts for {times(tr_x)} of it. Suspected: the authors' treelet traversal keeps its "
-                "current treelet as a host address after the first switch while it looks nodes up by device address, so past the "
-                "root treelet it walks in DFS order (read in their code, not run); ours walks treelet-first throughout.")
+                f"traversal alone runs at {times(tr_x)}" +
+                (f"; walking each treelet to its end before the next, as Chou et al. designed it, Treelet would "
+                 f"{'lose' if f_x < 1 else 'gain'} {times(f_x)}." if f_x is not None and first_order else "."))
         R.p()
     R.p(f"Paper: Treelet raises DRAM reads {times(PAPER['treelet_dram'], 2)}.")
     R.p()
@@ -774,7 +783,7 @@ def main():
     tl_bw = [(x, R.val("base", x, "dram_bw"), R.val("treelet", x, "dram_bw")) for x in R.scenes_with("base", "treelet") if x in PAPER_SCENES]
     tl_top = max(tl_bw, key=lambda t: t[2] or 0, default=None)
     gap(f"Treelet at {size}", t128, PAPER["treelet_128"], lambda x: times(x, 2),
-        "rtunit's Treelet follows the code the paper ran (formation, popularity vote, BVH layout), with the code's default "
+        "rtunit's Treelet follows the code the paper ran (formation, traversal order, popularity vote, BVH layout), with the code's default "
         "48 KB treelets, its prefetch-queue size check of 500 (which keeps treelets of more nodes than that from ever being "
         "prefetched) and its vote every 32 cycles (the paper ran it unmodified, docs/paper-preset.md). The paper blames Treelet's loss at 128x128 on "
         "saturated DRAM bandwidth (spnza 58 % -> 80 %); ours peaks at " +
