@@ -5,10 +5,14 @@
 # Release suite. Extra arguments go to ctest (e.g. -R Rtsim).
 #
 # Sweeps.* is left to the Release suite: it drives rtsim through the sweep shell scripts and runs
-# no rtsim code that other tests do not, and it is the suite's longest group (about 2.5 of its 8
-# Release test-minutes); CI must stay under 20 minutes. So is RtsimSampling.IntervalCoversTheFullRun,
+# no rtsim code that other tests do not, and it is among the suite's longest groups; CI must stay
+# under 20 minutes. So is RtsimSampling.IntervalCoversTheFullRun,
 # the suite's longest test under ASan (about 100 s): a statistical check of sampled intervals
 # over many draws, whose code (sampled interval runs) the other RtsimSampling tests run here.
+# The tests are built with RTU_SANITIZED=1 (tests/test_util.h kSanitized): the longest of the
+# rest check a smaller frame or fewer cases here, each saying which (SIGUSR1 and the stop signals,
+# segments, sample plans, every key of every preset, the sampled interval fidelity against AT).
+# The build is -O1 -g1 (CMakeLists.txt: line tables for the reports, half the compile time).
 # (Package.* is not built here at all: tests/CMakeLists.txt.) Tests run one more at a time than
 # there are cores: many of them wait on rtsim child processes or poll for a signal's answer.
 set -euo pipefail

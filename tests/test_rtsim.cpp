@@ -1035,7 +1035,10 @@ TEST(RtsimSampling, FullFrameSampleEqualsTheUnsampledRun) {
 TEST(RtsimSampling, IntervalFidelitySampledAsAt) {
     RTU_NEED_SHARED_SCENES();
     TempDir dir;
-    for (const std::string& scene : {std::string("cornell"), "bunny --assets " + rtu::test::shared_dir() + "/scenes/bunny"}) {
+    // Under the sanitizers the bunny, the slower of the two scenes, is left to the Release suite.
+    std::vector<std::string> scenes = {"cornell"};
+    if (!rtu::test::kSanitized) scenes.push_back("bunny --assets " + rtu::test::shared_dir() + "/scenes/bunny");
+    for (const std::string& scene : scenes) {
         const std::string base = "--scene " + scene + " --workload pt --width 128 --height 256 --spp 1 --fidelity ";
         auto stats = [&](const std::string& args) {
             const Result r = rtsim(dir, base + args + " --stats " + dir.file("s.json"));
@@ -1079,10 +1082,14 @@ TEST(RtsimSampling, IntervalFidelitySampledAsAt) {
 // segment is refused, or runs without an interval when unchecked.
 TEST(RtsimSampling, SegmentsMergedEqualTheSingleProcessRun) {
     TempDir dir;
-    for (const char* fidelity : {"at", "interval"}) {
+    // Under the sanitizers, the interval fidelity alone: the segments' code is the same for both,
+    // and AT's sampled runs are checked there by other tests (FullFrameSampleEqualsTheUnsampledRun).
+    const std::vector<std::string> fidelities = rtu::test::kSanitized ? std::vector<std::string>{"interval"}
+                                                                      : std::vector<std::string>{"at", "interval"};
+    for (const std::string& fidelity : fidelities) {
         SCOPED_TRACE(fidelity);
         // 512x256 at 1 spp: 128 clusters, 64 simulated, 21-22 per segment (16 needed).
-        const std::string base = std::string("--scene cornell --width 512 --height 256 --spp 1 --sample 0.5 --threads 1 --fidelity ") + fidelity;
+        const std::string base = "--scene cornell --width 512 --height 256 --spp 1 --sample 0.5 --threads 1 --fidelity " + fidelity;
         const std::string split = base + " --sample-segments 3";
         auto load = [&](const std::string& f) {
             auto j = nlohmann::json::parse(read_text(dir.file(f)));
@@ -1115,7 +1122,7 @@ TEST(RtsimSampling, SegmentsMergedEqualTheSingleProcessRun) {
         // written the frame's plan, on its 3 threads): the same statistics, but for the record of
         // the pre-pass's threads. The children are run alike whatever their fidelity: checked on
         // the faster one.
-        if (std::string(fidelity) == "interval") {
+        if (fidelity == "interval") {
             std::string split3 = split;
             split3.replace(split3.find("--threads 1"), 11, "--threads 3");
             const Result concurrent = rtsim(dir, split3 + " --stats " + dir.file("concurrent.json"));
@@ -1256,11 +1263,15 @@ TEST(RtsimSampling, APlanServesEveryRunOfTheFrameAndNoOther) {
     ASSERT_EQ(rtsim(dir, frame + "--fidelity interval" + plan).status, 0);
     ASSERT_TRUE(exists(dir.file("plan.bin")));
     int i = 0;
-    for (const std::string other : {"--fidelity lt --prefetcher ttp", "--fidelity at --set gpu.sms=4 --sample-seed 3",
-                                    "--fidelity interval --config paper --set l1.size_kb=64", "--fidelity interval --sample 0.75"}) {
+    // Under the sanitizers, the two interval cases alone: the plan is read alike in every fidelity.
+    std::vector<std::string> others = {"--fidelity interval --config paper --set l1.size_kb=64", "--fidelity interval --sample 0.75"};
+    if (!rtu::test::kSanitized) others.insert(others.begin(), {"--fidelity lt --prefetcher ttp", "--fidelity at --set gpu.sms=4 --sample-seed 3"});
+    std::map<std::string, std::string> without_plan;  // case -> its statistics without the plan
+    for (const std::string& other : others) {
         SCOPED_TRACE(other);
         const std::string args = (other.find("--sample 0.75") != std::string::npos ? "--scene cornell --width 512 --height 256 --spp 1 --threads 1 " : frame) + other;
         const std::string without = "n" + std::to_string(i) + ".json", with = "y" + std::to_string(i) + ".json";
+        without_plan[other] = without;
         ++i;
         const Result a = rtsim(dir, args + " --stats " + dir.file(without));
         ASSERT_EQ(a.status, 0) << a.err;
@@ -1317,9 +1328,10 @@ TEST(RtsimSampling, APlanServesEveryRunOfTheFrameAndNoOther) {
         return n;
     };
     EXPECT_EQ(files(), 2u);
-    ASSERT_EQ(rtsim(dir, frame + "--fidelity lt --prefetcher ttp" + folder + " --stats " + dir.file("f.json")).status, 0);
+    const std::string another = others.front();  // LT with TTP; under the sanitizers `paper` with 64 KB L1s
+    ASSERT_EQ(rtsim(dir, frame + another + folder + " --stats " + dir.file("f.json")).status, 0);
     EXPECT_EQ(files(), 2u);
-    EXPECT_EQ(load("f.json"), load("n0.json"));
+    EXPECT_EQ(load("f.json"), load(without_plan.at(another)));
 }
 
 // The sampled estimate against the truth, known from simulating the whole frame: on two scenes
@@ -1412,7 +1424,7 @@ TEST(RtsimSampling, PrimaryRaysOfASparseFrame) {
                              "/scenes/bunny/stanford-bunny.obj --workload primary --fidelity interval --width 512 --height 512 ";
     ASSERT_EQ(rtsim(dir, base + "--stats " + dir.file("full.json")).status, 0);
     const double truth = nlohmann::json::parse(read_text(dir.file("full.json")))["cycles"].get<double>();
-    for (int seed = 1; seed <= 2; ++seed) {
+    for (int seed = 1; seed <= (rtu::test::kSanitized ? 1 : 2); ++seed) {  // the second draw: Release only
         const Result r = rtsim(dir, base + "--sample 0.25 --sample-seed " + std::to_string(seed) + " --stats " + dir.file("s.json"));
         ASSERT_EQ(r.status, 0) << r.err;
         const auto j = nlohmann::json::parse(read_text(dir.file("s.json")));
@@ -1801,7 +1813,10 @@ TEST(RtsimConfig, EveryKeyOfEveryPresetIsRead) {
     for (const Case& c : cases)
         for (const std::string& s : c.sets) covered.insert(s.substr(0, s.find('=')));
     for (const Config::KeyInfo& k : Config::keys()) EXPECT_TRUE(covered.count(k.name)) << "no case shows that '" << k.name << "' is read";
-    for (const std::string preset : {"mobile", "paper", "desktop"}) {
+    // Under the sanitizers, `paper` alone (the preset with the most of the model switched on).
+    const std::vector<std::string> presets = rtu::test::kSanitized ? std::vector<std::string>{"paper"}
+                                                                   : std::vector<std::string>{"mobile", "paper", "desktop"};
+    for (const std::string& preset : presets) {
         const nlohmann::ordered_json values = Config::load(preset).to_json();
         std::map<std::string, std::pair<int, nlohmann::json>> baselines;  // by `extra`
         int n = 0;
@@ -2091,11 +2106,13 @@ TEST(Rtsim, SignalsStopTheRunAndKeepWhatItSimulated) {
         int signal, status;
         std::vector<std::string> size;
     };
+    // Under the sanitizers a quarter of the frame still outlasts the progress line many times.
+    const std::string side = rtu::test::kSanitized ? "512" : "1024";
     const std::vector<Case> cases = {
-        {"at", "cycle ", SIGINT, 130, {"--width", "1024", "--height", "1024"}},
-        {"interval", "cycle ", SIGTERM, 143, {"--width", "1024", "--height", "1024"}},
-        {"functional", "traced ", SIGINT, 130, {"--width", "1024", "--height", "1024"}},
-        {"lt", "cycle ", SIGHUP, 129, {"--width", "1024", "--height", "1024"}},  // a dropped SSH session
+        {"at", "cycle ", SIGINT, 130, {"--width", side, "--height", side}},
+        {"interval", "cycle ", SIGTERM, 143, {"--width", side, "--height", side}},
+        {"functional", "traced ", SIGINT, 130, {"--width", side, "--height", side}},
+        {"lt", "cycle ", SIGHUP, 129, {"--width", side, "--height", side}},  // a dropped SSH session
     };
     for (const Case& c : cases) {
         SCOPED_TRACE(c.fidelity);
@@ -2138,7 +2155,10 @@ TEST(Rtsim, SignalsStopTheRunAndKeepWhatItSimulated) {
 TEST(Rtsim, Sigusr1WritesTheStatisticsSoFarAndTheRunGoesOn) {
     TempDir dir;
     const std::string stats = dir.file("s.json"), err = dir.file("stderr.txt");
-    const pid_t pid = spawn_rtsim(err, {"--scene", "wknd", "--fidelity", "interval", "--width", "640", "--height", "640", "--stats", stats});
+    // The run must outlast its first progress line (2 s): 640x640 takes about 6 s in Release, and
+    // 256x256 (a sixth of it) about 30 s under the sanitizers, which run both runs of the test.
+    const std::string side = rtu::test::kSanitized ? "256" : "640";
+    const pid_t pid = spawn_rtsim(err, {"--scene", "wknd", "--fidelity", "interval", "--width", side, "--height", side, "--stats", stats});
     int status = 0;
     bool sent = false, snapshot_seen = false, exited = false;
     nlohmann::json snapshot;
@@ -2170,7 +2190,7 @@ TEST(Rtsim, Sigusr1WritesTheStatisticsSoFarAndTheRunGoesOn) {
     EXPECT_LT(snapshot["rays"].get<uint64_t>(), final_stats["rays"].get<uint64_t>());
     EXPECT_LT(snapshot["cycles"].get<uint64_t>(), final_stats["cycles"].get<uint64_t>());
     EXPECT_LE(snapshot["timing"]["l1"]["demand"]["accesses"].get<uint64_t>(), final_stats["timing"]["l1"]["demand"]["accesses"].get<uint64_t>());
-    const Result plain = rtsim(dir, "--scene wknd --fidelity interval --width 640 --height 640 -q --stats " + dir.file("plain.json"));
+    const Result plain = rtsim(dir, "--scene wknd --fidelity interval --width " + side + " --height " + side + " -q --stats " + dir.file("plain.json"));
     ASSERT_EQ(plain.status, 0) << plain.err;
     auto unobserved = nlohmann::json::parse(read_text(dir.file("plain.json")));
     for (auto* j : {&final_stats, &unobserved}) erase_host_keys(*j);

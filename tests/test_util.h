@@ -47,6 +47,14 @@ inline std::string read_text(const std::string& path) {
 
 inline std::string shared_dir() { return RTU_SHARED_DIR; }
 
+// Built with sanitizers (RTU_SANITIZE: scripts/test_sanitizers.sh), where rtsim runs 10-30 times
+// slower: the longest tests check a smaller frame or fewer of their cases there, each saying
+// which; the Release suite runs them all. CI has to stay within its budget (.ci/run).
+#ifndef RTU_SANITIZED
+#define RTU_SANITIZED 0
+#endif
+inline constexpr bool kSanitized = RTU_SANITIZED;
+
 // The real scenes of ../shared/scenes are optional: a test that needs them skips, saying so,
 // where they are absent (the built-in scenes need nothing).
 inline bool shared_scenes_present() { return std::filesystem::is_directory(shared_dir() + "/scenes/bunny"); }
