@@ -479,6 +479,26 @@ TEST(Treelets, PrefetcherPicksTheUnitsMostPopularTreeletOnce) {
     EXPECT_EQ(out.nodes, whole(target[1]));
 }
 
+namespace {
+// Ray i (of 2,000) of a fan from in front of the bunny, 50 x 40 directions over its middle.
+Ray bunny_fan_ray(int i) {
+    Ray r;
+    r.org = {278, 278, 800};
+    r.dir = glm::vec3(-0.3f + 0.6f * float(i % 50) / 49.0f, -0.3f + 0.6f * float(i / 50) / 39.0f, -1.0f);
+    return r;
+}
+// Treelet traversal over `t` finds DFS's closest hit for ray i; a hit is counted in `hits`.
+void expect_dfs_hit(const BvhImage& img, const Treelets& t, const Ray& r, int i, int& hits) {
+    const TraceResult a = trace_ray(img, r, TraversalOrder::DFS);
+    const TraceResult b = trace_ray(img, r, TraversalOrder::Treelet, &t);
+    EXPECT_EQ(a.hit.hit, b.hit.hit) << i;
+    if (a.hit.hit && b.hit.hit) {
+        EXPECT_EQ(a.hit.t, b.hit.t) << i;
+        ++hits;
+    }
+}
+}  // namespace
+
 // Treelet traversal finds the same closest hits as DFS, and finishes a treelet before it moves
 // on: no ray enters the same treelet twice (bunny has no BLAS instanced twice).
 TEST(Treelets, TraversalFindsTheDfsHitsAndFinishesATreeletBeforeLeaving) {
@@ -488,16 +508,8 @@ TEST(Treelets, TraversalFindsTheDfsHitsAndFinishesATreeletBeforeLeaving) {
     const Treelets t = form_treelets(img, 512);
     int hits = 0, switches = 0;
     for (int i = 0; i < 2000; ++i) {
-        Ray r;
-        r.org = {278, 278, 800};
-        r.dir = glm::vec3(-0.3f + 0.6f * float(i % 50) / 49.0f, -0.3f + 0.6f * float(i / 50) / 39.0f, -1.0f);
-        const TraceResult a = trace_ray(img, r, TraversalOrder::DFS);
-        const TraceResult b = trace_ray(img, r, TraversalOrder::Treelet, &t);
-        ASSERT_EQ(a.hit.hit, b.hit.hit) << i;
-        if (a.hit.hit) {
-            EXPECT_EQ(a.hit.t, b.hit.t) << i;
-            ++hits;
-        }
+        const Ray r = bunny_fan_ray(i);
+        expect_dfs_hit(img, t, r, i, hits);
         TraversalThread th;
         th.start(r, img.header(), TraversalOrder::Treelet, &t);
         std::set<uint32_t> entered = {th.current_treelet()};
@@ -546,16 +558,8 @@ TEST(Treelets, RootThenDfsWalksTheRootTreeletThenInDfsOrder) {
     };
     int hits = 0, reentries = 0, differ = 0;
     for (int i = 0; i < 2000; ++i) {
-        Ray r;
-        r.org = {278, 278, 800};
-        r.dir = glm::vec3(-0.3f + 0.6f * float(i % 50) / 49.0f, -0.3f + 0.6f * float(i / 50) / 39.0f, -1.0f);
-        const TraceResult a = trace_ray(img, r, TraversalOrder::DFS);
-        const TraceResult b = trace_ray(img, r, TraversalOrder::Treelet, &root);
-        ASSERT_EQ(a.hit.hit, b.hit.hit) << i;
-        if (a.hit.hit) {
-            EXPECT_EQ(a.hit.t, b.hit.t) << i;
-            ++hits;
-        }
+        const Ray r = bunny_fan_ray(i);
+        expect_dfs_hit(img, root, r, i, hits);
         size_t prefix_first = 0, prefix_root = 0;
         const std::vector<uint64_t> f = reads(r, first, root_id, prefix_first), d = reads(r, root, root_id, prefix_root);
         // The root treelet is walked alike, and never entered again once left.
