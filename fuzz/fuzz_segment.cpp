@@ -1,4 +1,4 @@
-// What the merge of a split sample reads (platforms/sample_segments.h): a segment's statistics
+// What the merge of a split sample reads (platforms/segment_file.h): a segment's statistics
 // (JSON, from rtsim --segment) when the input's first byte is even, a sample plan (binary, from
 // --sample-plan) when it is odd; the rest of the input is the file. Both carry a checksum, which
 // a mutated input almost never matches: with the first byte's second bit set, the harness seals
@@ -7,7 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "fuzz_util.h"
-#include "platforms/sample_segments.h"
+#include "platforms/segment_file.h"
 #include "sampling/plan.h"
 #include "workloads/input_error.h"
 
