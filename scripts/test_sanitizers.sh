@@ -2,13 +2,24 @@
 # Builds the project with AddressSanitizer and UndefinedBehaviorSanitizer in build-asan/ (beside
 # the Release build in build/) and runs the test suite there: a heap overflow, a use after free,
 # a leak, a signed overflow or an invalid shift fails the test that hits it. CI runs it after the
-# Release suite. Extra arguments go to ctest (e.g. -R Rtsim).
+# Release suite. Usage: scripts/test_sanitizers.sh [--all] [CTEST ARGUMENTS...] (e.g. -R Rtsim);
+# --all: also the tests left to the Release suite (below).
 #
-# Sweeps.* is left to the Release suite: it drives rtsim through the sweep shell scripts and runs
-# no rtsim code that other tests do not, and it is among the suite's longest groups; CI must stay
-# under 20 minutes. So is RtsimSampling.IntervalCoversTheFullRun,
-# the suite's longest test under ASan (about 100 s): a statistical check of sampled intervals
-# over many draws, whose code (sampled interval runs) the other RtsimSampling tests run here.
+# Left to the Release suite (CI must stay under 20 minutes; the sanitizers find faults in code that
+# runs, and each of these runs only code that tests kept here run too):
+# - Sweeps.*: rtsim driven through the sweep shell scripts;
+# - checks of accuracy or speed on whole frames, whose runs (AT, LT, interval, sampled interval,
+#   --check-error) other RtsimSampling, RtsimError and RtsimTiming tests run here:
+#   RtsimSampling.IntervalCoversTheFullRun (the suite's longest under ASan, about 100 s),
+#   RtsimSampling.IntervalCarriesTheDesignBias, RtsimSampling.IntervalFidelitySampledAsAt,
+#   RtsimTiming.IntervalIsWithinTheStatedBoundOfAt, RtsimPresets.TtpSpeedsUpPathTracingOnEveryPreset
+#   and RtsimError.EveryTimingRunStatesItsError (every timing run writes its error statement);
+# - checks that observing changes no statistic: RtsimTiming.TracingChangesNoStatistic and
+#   RtsimTiming.TimelineChangesNoStatistic (the VCD and timeline writers run here in
+#   RtsimTiming.VcdHasTheDocumentedSignals, RtsimTiming.TraceWindowSetsTheWaveformSamplingOnly and
+#   RtsimTiming.MergingReadsInFlightChangesNoHitInAnyFidelity).
+# Together about 400 of the suite's 1,350 test-seconds here. `scripts/test_sanitizers.sh --all`
+# runs them too.
 # The tests are built with RTU_SANITIZED=1 (tests/test_util.h kSanitized): the longest of the
 # rest check a smaller frame or fewer cases here, each saying which (SIGUSR1 and the stop signals,
 # segments, sample plans, every key of every preset, the sampled interval fidelity against AT).
@@ -17,10 +28,12 @@
 # there are cores: many of them wait on rtsim child processes or poll for a signal's answer.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+left='^(Sweeps\.|RtsimSampling\.(IntervalCoversTheFullRun|IntervalCarriesTheDesignBias|IntervalFidelitySampledAsAt)$|RtsimTiming\.(IntervalIsWithinTheStatedBoundOfAt|TracingChangesNoStatistic|TimelineChangesNoStatistic)$|RtsimPresets\.TtpSpeedsUpPathTracingOnEveryPreset$|RtsimError\.EveryTimingRunStatesItsError$)'
+if [ "${1:-}" = "--all" ]; then left='^$'; shift; fi
 scripts/setup.sh
 cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DRTU_SANITIZE=address,undefined >/dev/null
 cmake --build build-asan -j"$(nproc)"
 export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1:detect_stack_use_after_return=0}
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
 cd build-asan
-ctest --output-on-failure -j"$(($(nproc) + 1))" -E '^(Sweeps\.|RtsimSampling\.IntervalCoversTheFullRun$)' "$@"
+ctest --output-on-failure -j"$(($(nproc) + 1))" -E "$left" "$@"
