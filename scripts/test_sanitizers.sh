@@ -18,11 +18,12 @@
 #   RtsimTiming.TimelineChangesNoStatistic (the VCD and timeline writers run here in
 #   RtsimTiming.VcdHasTheDocumentedSignals, RtsimTiming.TraceWindowSetsTheWaveformSamplingOnly and
 #   RtsimTiming.MergingReadsInFlightChangesNoHitInAnyFidelity).
-# Together about 400 of the suite's 1,350 test-seconds here. `scripts/test_sanitizers.sh --all`
+# Together about a fifth of the suite's test-seconds here. `scripts/test_sanitizers.sh --all`
 # runs them too.
-# The tests are built with RTU_SANITIZED=1 (tests/test_util.h kSanitized): the longest of the
-# rest check a smaller frame or fewer cases here, each saying which (SIGUSR1 and the stop signals,
-# segments, sample plans, every key of every preset, the sampled interval fidelity against AT).
+# The tests are built with RTU_SANITIZED=1 (tests/test_util.h kSanitized): the longest of the rest
+# check a smaller frame, primary rays or fewer cases here, each saying which (SIGUSR1 and the stop
+# signals, segments, sample plans, every key of every preset, the sampled interval fidelity against
+# AT).
 # The build is -O1 -g1 (CMakeLists.txt: line tables for the reports, half the compile time).
 # (Package.* is not built here at all: tests/CMakeLists.txt.) Tests run one more at a time than
 # there are cores: many of them wait on rtsim child processes or poll for a signal's answer.
