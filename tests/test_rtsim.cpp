@@ -40,6 +40,10 @@ using rtu::test::write_text;
 
 namespace {
 
+// Under the sanitizers, the segment and sample-plan tests run primary rays (a third of cornell's
+// path-tracing rays): segments and plans are made, read and merged alike for every workload.
+const std::string kSanitizedWorkload = rtu::test::kSanitized ? "--workload primary " : "";
+
 struct Result {
     int status;
     std::string out, err;
@@ -1088,10 +1092,9 @@ TEST(RtsimSampling, SegmentsMergedEqualTheSingleProcessRun) {
                                                                       : std::vector<std::string>{"at", "interval"};
     for (const std::string& fidelity : fidelities) {
         SCOPED_TRACE(fidelity);
-        // 512x256 at 1 spp: 128 clusters, 64 simulated, 21-22 per segment (16 needed). Under the
-        // sanitizers, primary rays: segments are split and merged alike for every workload.
-        const std::string base = "--scene cornell --width 512 --height 256 --spp 1 --sample 0.5 --threads 1 " +
-                                 std::string(rtu::test::kSanitized ? "--workload primary " : "") + "--fidelity " + fidelity;
+        // 512x256 at 1 spp: 128 clusters, 64 simulated, 21-22 per segment (16 needed).
+        const std::string base = "--scene cornell --width 512 --height 256 --spp 1 --sample 0.5 --threads 1 " + kSanitizedWorkload +
+                                 "--fidelity " + fidelity;
         const std::string split = base + " --sample-segments 3";
         auto load = [&](const std::string& f) {
             auto j = nlohmann::json::parse(read_text(dir.file(f)));
@@ -1207,8 +1210,8 @@ TEST(RtsimSampling, SegmentsMergedEqualTheSingleProcessRun) {
         const auto c = load("continuous.json");
         EXPECT_EQ(c["timing"]["sampling"]["warps_simulated"].get<uint64_t>(), warps);
         EXPECT_EQ(c["rays"], m["rays"]);
-        ASSERT_EQ(rtsim(dir, std::string("--scene cornell --width 512 --height 256 --spp 1 ") + (rtu::test::kSanitized ? "--workload primary " : "") +
-                                 "--fidelity " + fidelity + " --stats " + dir.file("full.json")).status, 0);
+        ASSERT_EQ(rtsim(dir, "--scene cornell --width 512 --height 256 --spp 1 " + kSanitizedWorkload + "--fidelity " + fidelity + " --stats " +
+                                 dir.file("full.json")).status, 0);
         const double truth = load("full.json")["cycles"].get<double>();
         EXPECT_LE(s["cycles_ci95"][0].get<double>(), truth) << m["cycles"];
         EXPECT_GE(s["cycles_ci95"][1].get<double>(), truth) << m["cycles"];
@@ -1256,10 +1259,7 @@ TEST(RtsimSampling, SegmentsMergedEqualTheSingleProcessRun) {
 // next-node register, flattening) refuses it.
 TEST(RtsimSampling, APlanServesEveryRunOfTheFrameAndNoOther) {
     TempDir dir;
-    // Under the sanitizers, primary rays (a third of path tracing's rays here): plans are made and
-    // read alike for every workload.
-    const std::string workload = rtu::test::kSanitized ? "--workload primary " : "";
-    const std::string frame = "--scene cornell --width 512 --height 256 --spp 1 --sample 0.5 --threads 1 " + workload;
+    const std::string frame = "--scene cornell --width 512 --height 256 --spp 1 --sample 0.5 --threads 1 " + kSanitizedWorkload;
     const std::string plan = " --sample-plan " + dir.file("plan.bin");
     auto load = [&](const std::string& f) {
         auto j = nlohmann::json::parse(read_text(dir.file(f)));
@@ -1275,7 +1275,7 @@ TEST(RtsimSampling, APlanServesEveryRunOfTheFrameAndNoOther) {
     std::map<std::string, std::string> without_plan;  // case -> its statistics without the plan
     for (const std::string& other : others) {
         SCOPED_TRACE(other);
-        const std::string args = (other.find("--sample 0.75") != std::string::npos ? "--scene cornell --width 512 --height 256 --spp 1 --threads 1 " + workload : frame) + other;
+        const std::string args = (other.find("--sample 0.75") != std::string::npos ? "--scene cornell --width 512 --height 256 --spp 1 --threads 1 " + kSanitizedWorkload : frame) + other;
         const std::string without = "n" + std::to_string(i) + ".json", with = "y" + std::to_string(i) + ".json";
         without_plan[other] = without;
         ++i;
@@ -1325,7 +1325,7 @@ TEST(RtsimSampling, APlanServesEveryRunOfTheFrameAndNoOther) {
     // another configuration reads its plan (no third file) and equals the run without one.
     std::filesystem::create_directory(dir.file("plans"));
     const std::string folder = " --sample-plan " + dir.file("plans");
-    const std::string wknd = "--scene wknd --width 512 --height 256 --spp 1 --sample 0.5 --threads 1 --fidelity interval " + workload;
+    const std::string wknd = "--scene wknd --width 512 --height 256 --spp 1 --sample 0.5 --threads 1 --fidelity interval " + kSanitizedWorkload;
     ASSERT_EQ(rtsim(dir, frame + "--fidelity interval" + folder).status, 0);
     ASSERT_EQ(rtsim(dir, wknd + folder).status, 0);
     auto files = [&] {
