@@ -41,7 +41,8 @@ using rtu::test::write_text;
 namespace {
 
 // Under the sanitizers, the segment and sample-plan tests run primary rays (a third of cornell's
-// path-tracing rays): segments and plans are made, read and merged alike for every workload.
+// path-tracing rays): segments and plans are made, read and merged alike for every workload. So
+// do most cases of RtsimConfig.EveryKeyOfEveryPresetIsRead (a third of its time there).
 const std::string kSanitizedWorkload = rtu::test::kSanitized ? "--workload primary " : "";
 
 struct Result {
@@ -1751,6 +1752,8 @@ TEST(RtsimConfig, EveryKeyOfEveryPresetIsRead) {
         bool exit_status = false;       // the change shows in the exit status
     };
     const std::string ttp = "--prefetcher ttp", treelet = "--traversal treelet --prefetcher treelet";
+    // Path tracing where the sanitizers' runs take primary rays (below) and a key shows only there.
+    const std::string pt = " --workload pt";
     const std::vector<Case> cases = {
         {{"gpu.sms=2"}}, {{"gpu.core_clock_mhz=700"}}, {{"gpu.memory_clock_mhz=1000"}}, {{"rt.warp_size=8"}},
         {{"rt.warp_buffer=1"}, "--set gpu.sms=2"}, {{"rt.l1_hit_latency=30"}}, {{"rt.response_fifo=1"}}, {{"rt.next_node_register=flip"}}, {{"rt.leaf_descriptor_read=flip"}}, {{"rt.merge_in_flight=flip"}}, {{"rt.warp_scheduler=round_robin|oldest_first"}, "--set gpu.sms=2"},
@@ -1771,7 +1774,7 @@ TEST(RtsimConfig, EveryKeyOfEveryPresetIsRead) {
         {{"prefetch.treelet_stride=1024"}, treelet + " --set prefetch.treelet_layout=contiguous"},
         {{"prefetch.treelet_queue_limit=2"}, treelet}, {{"prefetch.treelet_vote_period=64"}, treelet},
         {{"prefetch.treelet_order=treelets|root-then-dfs"}, treelet + " --set prefetch.treelet_budget=512"},
-        {{"prefetch.ttp_depth_s1=4"}, ttp}, {{"prefetch.ttp_depth_s2=8"}, ttp}, {{"prefetch.ttp_depth_s3=2"}, ttp},
+        {{"prefetch.ttp_depth_s1=4"}, ttp}, {{"prefetch.ttp_depth_s2=8"}, ttp + pt}, {{"prefetch.ttp_depth_s3=2"}, ttp + pt},
         {{"prefetch.bfs_n=4"}, ttp + " --traversal bfs"}, {{"prefetch.bfs_policy=fixed|trend"}, ttp + " --traversal bfs"}, {{"prefetch.priority_after=5"}, ttp}, {{"prefetch.queue=1"}, ttp}, {{"prefetch.thread_window=2"}, ttp},
         {{"energy.l1_access_pj=40"}}, {{"energy.l2_access_pj=160"}}, {{"energy.dram_read_pj=1000"}},
         {{"energy.dram_activate_pj=2000"}}, {{"energy.static_w=10"}},
@@ -1828,9 +1831,11 @@ TEST(RtsimConfig, EveryKeyOfEveryPresetIsRead) {
         int n = 0;
         for (const Case& c : cases) {
             // The heightfields in AT, unless the case names another scene or fidelity.
+            // Under the sanitizers, primary rays (a third of the time), unless the case names a workload.
             const bool own_scene = c.extra.find("--scene") != std::string::npos, own_fidelity = c.extra.find("--fidelity") != std::string::npos;
+            const bool own_workload = c.extra.find("--workload") != std::string::npos;
             const std::string base = (own_scene ? "" : "--scene " + scene) + (own_fidelity ? "" : " --fidelity at") +
-                                     " --width 32 --height 32 --spp 1 --config " + preset + " " + c.extra;
+                                     " --width 32 --height 32 --spp 1 --config " + preset + " " + (own_workload ? "" : kSanitizedWorkload) + c.extra;
             auto run = [&](const std::string& args) {
                 const std::string stats = dir.file("s" + std::to_string(n++) + ".json");
                 const Result r = rtsim(dir, base + " " + args + " --stats " + stats);
@@ -2127,6 +2132,10 @@ TEST(Rtsim, SignalsStopTheRunAndKeepWhatItSimulated) {
         std::vector<std::string> args = {"--scene", "wknd", "--fidelity", c.fidelity, "--stats", stats, "--image", png};
         args.insert(args.end(), c.size.begin(), c.size.end());
         if (c.fidelity == "at") args.insert(args.end(), {"--vcd", vcd});
+        // AT and LT show progress and stop at the monitor's wake-ups, every min(sim.watchdog / 4,
+        // 100,000) cycles (docs/usage.md): 10,000 here, so that the first line shows and the stop
+        // lands within a second or two under the sanitizers too (the default took 15 s and 10 s).
+        if (c.fidelity == "at" || c.fidelity == "lt") args.insert(args.end(), {"--set", "sim.watchdog=40000"});
         const Stopped r = stop_rtsim(dir, args, c.marker, c.signal);
         ASSERT_NE(r.status, -2) << "the run finished before its progress line showed: make the frame larger\n" << r.err;
         ASSERT_EQ(r.status, c.status) << r.err;
@@ -2208,8 +2217,9 @@ TEST(Rtsim, Sigusr1WritesTheStatisticsSoFarAndTheRunGoesOn) {
 TEST(Rtsim, ASecondSignalEndsAtOnceAndLeavesNoCutVcd) {
     TempDir dir;
     std::filesystem::create_directory(dir.file("out"));
+    // The monitor every 10,000 cycles, as in SignalsStopTheRunAndKeepWhatItSimulated.
     const Stopped r = stop_rtsim(dir, {"--scene", "wknd", "--fidelity", "at", "--width", "1024", "--height", "1024", "--vcd", dir.file("out/w.vcd"),
-                                       "--stats", dir.file("out/s.json")}, "cycle ", SIGINT, 2);
+                                       "--stats", dir.file("out/s.json"), "--set", "sim.watchdog=40000"}, "cycle ", SIGINT, 2);
     ASSERT_NE(r.status, -2) << "the run finished before its progress line showed\n" << r.err;
     EXPECT_EQ(r.status, -1) << "not ended by the signal\n" << r.err;
     EXPECT_TRUE(std::filesystem::is_empty(dir.file("out")));
