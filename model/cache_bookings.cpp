@@ -94,6 +94,10 @@ void CacheBookings::fill(uint64_t addr, const Lookup& miss, uint64_t done, bool 
             ++it;
     }
     prune_above_ = 2 * sectors_.size();
+    // A prune walks the table's capacity, which erasing never gives back: after a burst of misses
+    // a table of a few live sectors in thousands of slots was walked every few dozen fills (party,
+    // interval: 10 % of the run in this function). Shrink it to what the live sectors need.
+    if (sectors_.capacity() > 8 * std::max<size_t>(prune_above_, 64)) sectors_.rehash(0);
 }
 
 }  // namespace rtu
