@@ -23,7 +23,7 @@
 # The tests are built with RTU_SANITIZED=1 (tests/test_util.h kSanitized): the longest of the rest
 # check a smaller frame, primary rays or fewer cases here, each saying which (SIGUSR1 and the stop
 # signals, segments, sample plans, every key of every preset (one preset, primary rays), the
-# sampled interval fidelity against AT).
+# full-frame sample (primary rays), the sampled interval fidelity against AT).
 # The build is -O1 -g1 (CMakeLists.txt: line tables for the reports, half the compile time).
 # (Package.* is not built here at all: tests/CMakeLists.txt.) Tests run one more at a time than
 # there are cores: many of them wait on rtsim child processes or poll for a signal's answer.
