@@ -229,7 +229,7 @@ def main():
     R.p("# The TTP paper's experiments, reproduced on rtunit")
     R.p()
     R.p(f"Generated {datetime.date.today()} by `scripts/paper.sh` from `{results.name}`: {len(d)} runs ({len(failed)} failed, "
-        f"{len(missing)} not run), {wall / 60:.1f} minutes of simulation summed. AT fidelity, `{preset}` "
+        f"{len(missing)} not run), {wall / 60:.1f} minutes of the runs' wall time summed (each run's own, with any time it was paused or waited for a core). AT fidelity, `{preset}` "
         f"preset unless stated, path tracing {size}, {meta['spp']} spp, DFS, seed 1. Scenes: {', '.join(scenes_run)}. "
         "Geometric means are over the paper's scenes among them (cornell is not one). Speed-up = baseline cycles / cycles.")
     R.p()
@@ -784,8 +784,9 @@ def main():
     tl_top = max(tl_bw, key=lambda t: t[2] or 0, default=None)
     gap(f"Treelet at {size}", t128, PAPER["treelet_128"], lambda x: times(x, 2),
         "rtunit's Treelet follows the code the paper ran (formation, traversal order, popularity vote, BVH layout), with the code's default "
-        "48 KB treelets, its prefetch-queue size check of 500 (which keeps treelets of more nodes than that from ever being "
-        "prefetched) and its vote every 32 cycles (the paper ran it unmodified, docs/paper-preset.md). The paper blames Treelet's loss at 128x128 on "
+        f"{pf['treelet_budget'] / 1024:g} KB treelets, its prefetch-queue size check of {pf['treelet_queue_limit']:,} (which keeps treelets "
+        f"of more nodes than that from ever being prefetched) and its vote every {pf['treelet_vote_period']} cycles (the `paper` preset's "
+        "keys; the paper ran the code unmodified, docs/paper-preset.md). The paper blames Treelet's loss at 128x128 on "
         "saturated DRAM bandwidth (spnza 58 % -> 80 %); ours peaks at " +
         (f"{pct(tl_top[1], 0)} -> {pct(tl_top[2], 0)} ({tl_top[0]})" if tl_top else "-") + " of the bus (measured)")
     gap("Park", g_park, PAPER["park"], lambda x: times(x, 2),
