@@ -23,7 +23,6 @@
 #include <algorithm>
 #include <cstdint>
 #include <functional>
-#include <map>
 #include <memory>
 #include <utility>
 #include <vector>
@@ -62,6 +61,9 @@ public:
         sensitive << wake_;
     }
     bool empty() const { return times_.empty(); }
+    // The kernel time (sc_time value): while the queue's process runs, the time it was woken at
+    // (the kernel's time cannot move inside a process), without a call into the kernel.
+    uint64_t now() const { return running_ ? now_ : sc_core::sc_time_stamp().value(); }
 
 private:
     friend class OrderedEvent;
@@ -100,8 +102,9 @@ private:
     // the last bucket used is kept at hand.
     Bucket& bucket(uint64_t at) {
         if (last_ && at == last_at_) return *last_;
-        auto it = times_.find(at);
-        if (it == times_.end()) {
+        // times_ is sorted latest first: the earliest time is at the back.
+        auto it = std::lower_bound(times_.begin(), times_.end(), at, [](const Time& t, uint64_t a) { return t.at > a; });
+        if (it == times_.end() || it->at != at) {
             Bucket* b;
             if (free_.empty()) {
                 buckets_.emplace_back(new Bucket);
@@ -110,10 +113,10 @@ private:
                 b = free_.back();
                 free_.pop_back();
             }
-            it = times_.emplace(at, b).first;
+            it = times_.insert(it, Time{at, b});
         }
         last_at_ = at;
-        last_ = it->second;
+        last_ = it->bucket;
         return *last_;
     }
     void push(OrderedEvent& e, uint64_t at) {
@@ -126,16 +129,16 @@ private:
     void arm() {
         if (times_.empty()) return;
         const uint64_t now = sc_core::sc_time_stamp().value();
-        const uint64_t at = times_.begin()->first;
+        const uint64_t at = times_.back().at;
         wake_.notify(at > now ? sc_core::sc_time::from_value(at - now) : sc_core::SC_ZERO_TIME);
     }
     void run() {
-        const uint64_t now = sc_core::sc_time_stamp().value();
+        now_ = sc_core::sc_time_stamp().value();
         running_ = true;
-        // Handlers of this time notified while it runs join its bucket, which stays in the map
-        // until it is empty.
-        while (!times_.empty() && times_.begin()->first <= now) {
-            Bucket* b = times_.begin()->second;
+        // Handlers of this time notified while it runs join its bucket, which stays in the list
+        // until it is empty (a later time's insertion never moves it: it is the earliest, at the back).
+        while (!times_.empty() && times_.back().at <= now_) {
+            Bucket* b = times_.back().bucket;
             while (const Entry* e = b->next()) {
                 OrderedEvent& ev = *e->event;
                 if (!ev.pending_ || ev.generation_ != e->generation) continue;  // replaced by an earlier notification
@@ -143,7 +146,7 @@ private:
                 ev.handler_();
             }
             if (last_ == b) last_ = nullptr;
-            times_.erase(times_.begin());
+            times_.pop_back();
             free_.push_back(b);
         }
         running_ = false;
@@ -151,16 +154,24 @@ private:
     }
 
     sc_core::sc_event wake_;
-    std::map<uint64_t, Bucket*> times_;  // kernel time -> its handlers
+    // The kernel times with handlers due, latest first, each with its handlers: a few dozen at
+    // most (the delays are a handful of clock periods and latencies), so a sorted vector, whose
+    // earliest entry leaves from the back, does without a tree's node per time.
+    struct Time {
+        uint64_t at;
+        Bucket* bucket;
+    };
+    std::vector<Time> times_;
     std::vector<std::unique_ptr<Bucket>> buckets_;
     std::vector<Bucket*> free_;
     uint64_t last_at_ = 0;
     Bucket* last_ = nullptr;
     bool running_ = false;
+    uint64_t now_ = 0;  // the time run() was woken at (valid while running_)
 };
 
 inline void OrderedEvent::notify(const sc_core::sc_time& delay) {
-    const uint64_t at = (sc_core::sc_time_stamp() + delay).value();
+    const uint64_t at = queue_.now() + delay.value();  // sc_time's sum is its values' sum
     if (pending_ && at_ <= at) return;  // an earlier (or the same) notification is pending
     pending_ = true;
     at_ = at;
