@@ -154,9 +154,10 @@ private:
     }
 
     sc_core::sc_event wake_;
-    // The kernel times with handlers due, latest first, each with its handlers: a few dozen at
-    // most (the delays are a handful of clock periods and latencies), so a sorted vector, whose
-    // earliest entry leaves from the back, does without a tree's node per time.
+    // The kernel times with handlers due, latest first, each with its handlers. They are few: an
+    // event has at most one notification pending (a replaced one's entry stays, skipped, until
+    // its time comes), and the complex has a handful of events per module. So a sorted vector,
+    // whose earliest entry leaves from the back, does without a tree's node per time.
     struct Time {
         uint64_t at;
         Bucket* bucket;
