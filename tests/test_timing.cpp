@@ -635,7 +635,7 @@ struct OrderBench : sc_core::sc_module {
               e.notify(sc_core::SC_ZERO_TIME);  // rank 0, now: before c (rank 1) and b (rank 2)
               a.notify(sc_core::sc_time(5, sc_core::SC_NS));
           }},
-        e{events, [this] { note("e"); }};
+        e{events, [this] { note("e"); }}, f{events, [this] { note("f"); }}, g{events, [this] { note("g"); }};
     int ticks = 0;
     SC_HAS_PROCESS(OrderBench);
     explicit OrderBench(sc_core::sc_module_name n) : sc_module(n) {
@@ -657,6 +657,8 @@ struct OrderBench : sc_core::sc_module {
         c.notify(sc_core::sc_time(20, SC_NS));  // later than pending: dropped
         d.notify(sc_core::sc_time(12, SC_NS));
         d.notify(sc_core::sc_time(10, SC_NS));  // earlier: replaces 12
+        f.notify(sc_core::sc_time(30, SC_NS));
+        g.notify(sc_core::sc_time(25, SC_NS));  // a time between two already due: runs in time order
     }
 };
 }  // namespace
@@ -666,10 +668,11 @@ TEST(OrderedEvents, SameTimeHandlersRunByRankThenNotification) {
     OrderBench bench("bench");
     sc_core::sc_start();
     // At 10: rank 0 in notification order (a, d), d's zero-delay e (rank 0) before c (rank 1) and
-    // b (rank 2); at 15: a again. Nothing at 12 or 20.
-    const std::vector<std::string> want{"a", "d", "e", "c", "b", "a"};
+    // b (rank 2); at 15: a again; g at 25 and f at 30, in time order though notified the other
+    // way. Nothing at 12 or 20.
+    const std::vector<std::string> want{"a", "d", "e", "c", "b", "a", "g", "f"};
     EXPECT_EQ(bench.log, want);
-    const std::vector<double> want_at{10, 10, 10, 10, 10, 15};
+    const std::vector<double> want_at{10, 10, 10, 10, 10, 15, 25, 30};
     ASSERT_EQ(bench.at.size(), want_at.size());
     for (size_t i = 0; i < want_at.size(); ++i) EXPECT_NEAR(bench.at[i], want_at[i], 1e-6) << i;
     EXPECT_TRUE(bench.events.empty());
