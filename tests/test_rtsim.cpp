@@ -2084,6 +2084,12 @@ pid_t spawn_rtsim(const std::string& err, std::vector<std::string> args) {
     return pid;
 }
 
+// AT and LT show progress and stop at the monitor's wake-ups, every min(sim.watchdog / 4,
+// 100,000) cycles (docs/usage.md). These arguments make it every 10,000, so that the first
+// progress line shows and a stop lands within a second or two under the sanitizers too (the
+// default took 15 s and 10 s there).
+const std::vector<std::string> kPromptMonitor = {"--set", "sim.watchdog=40000"};
+
 // Sends `signal` `times` times (20 ms apart) once `marker` shows in rtsim's messages.
 Stopped stop_rtsim(const TempDir& dir, std::vector<std::string> args, const std::string& marker, int signal, int times = 1) {
     const std::string err = dir.file("stderr.txt");
@@ -2134,10 +2140,7 @@ TEST(Rtsim, SignalsStopTheRunAndKeepWhatItSimulated) {
         std::vector<std::string> args = {"--scene", "wknd", "--fidelity", c.fidelity, "--stats", stats, "--image", png};
         args.insert(args.end(), c.size.begin(), c.size.end());
         if (c.fidelity == "at") args.insert(args.end(), {"--vcd", vcd});
-        // AT and LT show progress and stop at the monitor's wake-ups, every min(sim.watchdog / 4,
-        // 100,000) cycles (docs/usage.md): 10,000 here, so that the first line shows and the stop
-        // lands within a second or two under the sanitizers too (the default took 15 s and 10 s).
-        if (c.fidelity == "at" || c.fidelity == "lt") args.insert(args.end(), {"--set", "sim.watchdog=40000"});
+        if (c.fidelity == "at" || c.fidelity == "lt") args.insert(args.end(), kPromptMonitor.begin(), kPromptMonitor.end());
         const Stopped r = stop_rtsim(dir, args, c.marker, c.signal);
         ASSERT_NE(r.status, -2) << "the run finished before its progress line showed: make the frame larger\n" << r.err;
         ASSERT_EQ(r.status, c.status) << r.err;
@@ -2219,9 +2222,10 @@ TEST(Rtsim, Sigusr1WritesTheStatisticsSoFarAndTheRunGoesOn) {
 TEST(Rtsim, ASecondSignalEndsAtOnceAndLeavesNoCutVcd) {
     TempDir dir;
     std::filesystem::create_directory(dir.file("out"));
-    // The monitor every 10,000 cycles, as in SignalsStopTheRunAndKeepWhatItSimulated.
-    const Stopped r = stop_rtsim(dir, {"--scene", "wknd", "--fidelity", "at", "--width", "1024", "--height", "1024", "--vcd", dir.file("out/w.vcd"),
-                                       "--stats", dir.file("out/s.json"), "--set", "sim.watchdog=40000"}, "cycle ", SIGINT, 2);
+    std::vector<std::string> args = {"--scene", "wknd", "--fidelity", "at", "--width", "1024", "--height", "1024", "--vcd", dir.file("out/w.vcd"),
+                                     "--stats", dir.file("out/s.json")};
+    args.insert(args.end(), kPromptMonitor.begin(), kPromptMonitor.end());
+    const Stopped r = stop_rtsim(dir, args, "cycle ", SIGINT, 2);
     ASSERT_NE(r.status, -2) << "the run finished before its progress line showed\n" << r.err;
     EXPECT_EQ(r.status, -1) << "not ended by the signal\n" << r.err;
     EXPECT_TRUE(std::filesystem::is_empty(dir.file("out")));

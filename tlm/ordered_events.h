@@ -61,12 +61,12 @@ public:
         sensitive << wake_;
     }
     bool empty() const { return times_.empty(); }
-    // The kernel time (sc_time value): while the queue's process runs, the time it was woken at
-    // (the kernel's time cannot move inside a process), without a call into the kernel.
-    uint64_t now() const { return running_ ? now_ : sc_core::sc_time_stamp().value(); }
 
 private:
     friend class OrderedEvent;
+    // The kernel time (sc_time value): while the queue's process runs, the time it was woken at
+    // (the kernel's time cannot move inside a process), without a call into the kernel.
+    uint64_t now() const { return running_ ? now_ : sc_core::sc_time_stamp().value(); }
     struct Entry {
         OrderedEvent* event;
         uint64_t generation;
