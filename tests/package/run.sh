@@ -84,16 +84,17 @@ newer() {
 }
 check "find_package(rtunit 0.2) is refused by 0.1" newer
 # P6: the source tree as a subproject of a platform's own CMake project (add_subdirectory): its
-# paths are the project's, not the top level's; configured, and the model library (which reads
-# generated headers) built.
+# paths are the project's, not the top level's; configured, and the model library's one source
+# that reads a generated header (model/config.cpp: config_presets.h) compiled, which takes a
+# third of the time of the whole library. Makefiles, whose per-directory object targets name it.
 source=$(cd "$(dirname "$0")/../.." && pwd)
 super() {
   mkdir -p "$tmp/super" &&
     printf 'cmake_minimum_required(VERSION 3.20)\nproject(platform CXX)\nadd_subdirectory(%s rtunit)\n' "$source" > "$tmp/super/CMakeLists.txt" &&
-    cmake -S "$tmp/super" -B "$tmp/super/b" -DBUILD_TESTING=OFF > "$tmp/super.log" 2>&1 &&
-    cmake --build "$tmp/super/b" -j2 --target rtu_model >> "$tmp/super.log" 2>&1 || { tail -20 "$tmp/super.log"; return 1; }
+    cmake -S "$tmp/super" -B "$tmp/super/b" -G "Unix Makefiles" -DBUILD_TESTING=OFF > "$tmp/super.log" 2>&1 &&
+    make -C "$tmp/super/b/rtunit" model/config.cpp.o >> "$tmp/super.log" 2>&1 || { tail -20 "$tmp/super.log"; return 1; }
 }
-check "as a subproject (add_subdirectory): configures, and the model library builds" super
+check "as a subproject (add_subdirectory): configures, and the model's generated header is found" super
 # P7: the Debian package (cpack -G DEB): it depends on libsystemc-dev and the runtime libraries,
 # holds the same files under /usr, and the installed example builds against its contents alone.
 deb() {
