@@ -5,11 +5,23 @@
 namespace rtu {
 
 CacheBookings::CacheBookings(const CacheConfig& cfg, uint32_t hit_latency, bool own_port)
-    : cfg_(cfg), hit_latency_(hit_latency), own_port_(own_port), tags_(cfg) {}
+    : cfg_(cfg), hit_latency_(hit_latency), own_port_(own_port), tags_(cfg), on_fill_(cfg.allocate_on_fill) {}
+
+void CacheBookings::apply_fills(uint64_t cycle) {
+    while (!deferred_.empty() && deferred_.top().at <= cycle) {
+        const Deferred d = deferred_.top();
+        deferred_.pop();
+        const auto it = unfilled_.find(d.sector);
+        if (it == unfilled_.end() || it->second != d.seq) continue;  // entered at a read already
+        unfilled_.erase(it);
+        tags_.fill(d.sector);
+    }
+}
 
 void CacheBookings::advance(uint64_t floor) {
     if (floor <= floor_) return;
     floor_ = floor;
+    if (on_fill_) apply_fills(floor);
     // The port's ring is recycled every 1,024 cycles: bookings come at or after the floor anyway.
     if (own_port_ && floor >= port_floor_ + 1024) {
         port_floor_ = floor;
@@ -43,8 +55,26 @@ uint64_t CacheBookings::mshr_slot(uint64_t c, ReqKind kind) {
 CacheBookings::Lookup CacheBookings::lookup(uint64_t addr, uint64_t cycle, ReqKind kind) {
     const uint64_t c = own_port_ ? port_.book(cycle) : cycle;  // one lookup per cycle
     const uint64_t sector = tags_.sector_of(addr);
-    // The tags never hold a pending sector here (a miss is filled at once), so the tags answer
-    // a hit or a miss, never a reservation fail.
+    if (on_fill_) {
+        // Allocated at the fill, a miss holds the tags' MSHR until its data enters them, which may
+        // be later than the MSHR's end here (apply_fills): MSHRs are counted by time (mshr_slot),
+        // and the tags' own count is no limit. (AT, which uses these tags without lookup(), keeps it.)
+        if (!tags_limit_lifted_) tags_.lift_mshr_limit(), tags_limit_lifted_ = true;
+        apply_fills(c);
+        if (const auto u = unfilled_.find(sector); u != unfilled_.end()) {
+            // On its way and not in the tags: the read merges into its miss and touches no line
+            // (GPGPU-Sim's ON_FILL has no reserved line to hit, gpu-cache.cc l.346-375).
+            InFlightSector* r = in_flight(sector, c);
+            if (r && r->at > c + hit_latency_) {
+                tags_.count_read_of_unfilled(kind);
+                return merge(*r, c, kind);
+            }
+            unfilled_.erase(u);  // its data is there (its miss was taken over by an earlier read)
+            tags_.fill(sector);
+        }
+    }
+    // The tags hold no pending sector here (a miss is filled at once, or allocated at the fill
+    // and answered above until it is), so they answer a hit or a miss, never a reservation fail.
     if (tags_.read(addr, 0, kind) != CacheOutcome::Hit) {
         // Every MSHR busy: the miss waits for the first to free (a reservation fail), and the
         // requester's port with it, as AT withholds END_REQ until then.
@@ -58,22 +88,26 @@ CacheBookings::Lookup CacheBookings::lookup(uint64_t addr, uint64_t cycle, ReqKi
     }
     InFlightSector* r = in_flight(sector, c);
     if (!r || r->at <= c + hit_latency_) return {Lookup::Hit, c, c + hit_latency_};
-    if (r->merged + 1 >= cfg_.mshr_merge) {
+    return merge(*r, c, kind);
+}
+
+CacheBookings::Lookup CacheBookings::merge(InFlightSector& r, uint64_t c, ReqKind kind) {
+    if (r.merged + 1 >= cfg_.mshr_merge) {
         // The MSHR holds its limit of requests: a reservation fail. The read retries when the
         // sector arrives (then a hit), and the requester's port waits for it.
         tags_.count_reservation_fail(kind);
-        if (own_port_) port_.hold(c + 1, r->at);
-        Lookup l{Lookup::Retry, c, r->at + hit_latency_};
-        l.retry_at = r->at;
+        if (own_port_) port_.hold(c + 1, r.at);
+        Lookup l{Lookup::Retry, c, r.at + hit_latency_};
+        l.retry_at = r.at;
         return l;
     }
-    ++r->merged;
+    ++r.merged;
     tags_.count_as_mshr_hit(kind);
-    if (kind == ReqKind::Demand && r->prefetch) {
+    if (kind == ReqKind::Demand && r.prefetch) {
         tags_.count_late_prefetch();  // the demand found the prefetch still on its way
-        r->prefetch = false;
+        r.prefetch = false;
     }
-    return {Lookup::InFlight, c, r->at, r->dram};
+    return {Lookup::InFlight, c, r.at, r.dram};
 }
 
 // Sectors whose data arrived by the floor are plain hits for every later read: they are
@@ -84,7 +118,12 @@ CacheBookings::Lookup CacheBookings::lookup(uint64_t addr, uint64_t cycle, ReqKi
 void CacheBookings::fill(uint64_t addr, const Lookup& miss, uint64_t done, bool dram, ReqKind kind) {
     const uint64_t sector = tags_.sector_of(addr);
     mshr_free_.push(done);
-    tags_.fill(sector);
+    if (on_fill_) {
+        deferred_.push({done, ++deferred_seq_, sector});
+        unfilled_[sector] = deferred_seq_;
+    } else {
+        tags_.fill(sector);
+    }
     sectors_[sector] = {miss.cycle, done, dram, 0, kind == ReqKind::Prefetch};
     if (sectors_.size() <= std::max<size_t>(prune_above_, 64)) return;
     for (auto it = sectors_.begin(); it != sectors_.end();) {

@@ -12,6 +12,14 @@
 // - with its own port, one lookup per cycle (booked by timestamp);
 // - a demand read that finds a prefetch's sector still on its way counts a late prefetch.
 // The level below is the caller's: lookup() says when a miss leaves, fill() when its data came.
+// A cache that allocates its lines at the fill (`allocate_on_fill`, GPGPU-Sim's ON_FILL: the
+// presets' streaming L1) takes a missed sector into its tags only when its data arrives: until
+// then the line is absent (another sector's read of it is a line miss) and no victim has been
+// chosen, and the victim is the replacement policy's choice at the arrival, after the reads of
+// the cycles between, as in AT. The fills wait, in order of arrival, until a lookup (or the
+// floor) reaches their cycle. Reads come in timestamp order only roughly (above), so a fill is
+// applied at the first lookup at or after its cycle, whatever that lookup's order among reads of
+// earlier timestamps still to come.
 // Plain C++ (no SystemC).
 #pragma once
 #include <cstdint>
@@ -52,6 +60,7 @@ public:
     // Every line invalid (SectorCache::invalidate); misses still in flight are forgotten, so call
     // only when every booked miss has arrived.
     void invalidate() {
+        apply_fills(~0ull);
         tags_.invalidate();
         sectors_.clear();
     }
@@ -68,6 +77,10 @@ private:
     };
     InFlightSector* in_flight(uint64_t sector, uint64_t cycle);
     uint64_t mshr_slot(uint64_t cycle, ReqKind kind);
+    // Allocation at the fill: the fills that arrive by `cycle` enter the tags, in order of arrival.
+    void apply_fills(uint64_t cycle);
+    // The answer to a read of a sector still on its way (InFlight, or Retry past the merge limit).
+    Lookup merge(InFlightSector& r, uint64_t c, ReqKind kind);
 
     CacheConfig cfg_;
     uint32_t hit_latency_;
@@ -79,6 +92,17 @@ private:
     // Cycles the MSHRs in use free up.
     std::priority_queue<uint64_t, std::vector<uint64_t>, std::greater<uint64_t>> mshr_free_;
     uint64_t floor_ = 0, port_floor_ = 0;
+    // Allocation at the fill: the misses whose data has not entered the tags, by arrival (cycle,
+    // then order of booking) and as a set. A miss taken over by an earlier read arrives earlier
+    // than its place in the queue; a read that finds its data there enters it at once.
+    struct Deferred {
+        uint64_t at, seq, sector;
+        bool operator>(const Deferred& o) const { return at != o.at ? at > o.at : seq > o.seq; }
+    };
+    bool on_fill_, tags_limit_lifted_ = false;
+    std::priority_queue<Deferred, std::vector<Deferred>, std::greater<Deferred>> deferred_;
+    absl::flat_hash_map<uint64_t, uint64_t> unfilled_;  // sector -> its miss's booking order
+    uint64_t deferred_seq_ = 0;
 };
 
 }  // namespace rtu

@@ -112,6 +112,16 @@ public:
     void invalidate();
 
     size_t mshrs_in_use() const { return mshr_.size(); }
+    // LT and interval (CacheBookings) count MSHRs by time; with the allocation at the fill their
+    // misses stay in these tags until their data enters them, which is no limit of the cache's.
+    void lift_mshr_limit() { mshrs_ = ~0u; }
+    // LT and interval (CacheBookings), a cache allocated at the fill: a read of a sector on its
+    // way that the tags do not hold yet, counted as a read the tags answered with a hit (which
+    // the caller then recounts: count_as_mshr_hit, count_reservation_fail), touching no line.
+    void count_read_of_unfilled(ReqKind k) {
+        ++counts_.of(k).accesses;
+        ++counts_.of(k).hits;
+    }
     // LT bookkeeping: a read found valid in the tags whose data was still in flight at its
     // timestamp counts as an MSHR hit; a read that had to wait for a free MSHR counts one
     // reservation fail (as the retried access would in AT).

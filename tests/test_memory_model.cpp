@@ -819,6 +819,52 @@ TEST(CacheBookings, HandWorkedSequence) {
     EXPECT_EQ(pf.late, 1u);
 }
 
+// CacheBookings of a cache allocated at the fill (GPGPU-Sim's ON_FILL, the presets' L1), as AT's
+// tags see it: a missed line takes its way when its data arrives, the LRU victim at that moment;
+// until then the line is absent (another sector's read is a line miss) and its ways untouched.
+// Fully associative, 2 lines of 128 B, 4 MSHRs, LRU, hit latency 5.
+TEST(CacheBookings, AllocationAtTheFillChoosesTheVictimWhenTheDataArrives) {
+    CacheConfig cfg{256, 0, 128, 32, 4, 3, 0};
+    cfg.allocate_on_fill = true;
+    CacheBookings c(cfg, 5, true);
+    using L = CacheBookings::Lookup;
+    auto read = [&](uint64_t addr, uint64_t cycle) { return c.lookup(addr, cycle, ReqKind::Demand); };
+    const uint64_t X = 0x000, Y = 0x080, Z = 0x100;  // three lines
+    c.fill(X, read(X, 10), 50, true, ReqKind::Demand);
+    c.fill(Y, read(Y, 11), 60, true, ReqKind::Demand);
+    EXPECT_EQ(read(X, 70).outcome, L::Hit);  // Y is now the least recently used
+    const L z = read(Z, 80);                 // Z's data comes at 200; no victim yet
+    EXPECT_EQ(z.outcome, L::Miss);
+    c.fill(Z, z, 200, true, ReqKind::Demand);
+    // Y is still there at 100 (allocated at the miss, Z would have evicted it at 80), and the
+    // read makes X the least recently used.
+    EXPECT_EQ(read(Y, 100).outcome, L::Hit);
+    // A read of Z's sector at 120 merges into its miss; another sector of Z's line at 150 finds
+    // no line: a line miss (allocated at the miss: a sector miss).
+    EXPECT_EQ(read(Z, 120).outcome, L::InFlight);
+    const L z2 = read(Z + 0x20, 150);
+    EXPECT_EQ(z2.outcome, L::Miss);
+    c.fill(Z + 0x20, z2, 250, true, ReqKind::Demand);
+    // Z's data came at 200 and took X's way, the victim then: X misses at 210; Y still hits.
+    const L x = read(X, 210);
+    EXPECT_EQ(x.outcome, L::Miss);
+    c.fill(X, x, 400, true, ReqKind::Demand);
+    EXPECT_EQ(read(Y, 220).outcome, L::Hit);
+    // At 300 Z's second sector is in (its line's way already Z's); X's data is still on its way,
+    // so nothing was evicted for it: Y and both of Z's sectors hit.
+    EXPECT_EQ(read(Z + 0x20, 300).outcome, L::Hit);
+    EXPECT_EQ(read(Z, 301).outcome, L::Hit);
+    EXPECT_EQ(read(Y, 302).outcome, L::Hit);
+
+    const CacheAccessCounts s = c.tags().stats(ReqKind::Demand);
+    EXPECT_EQ(s.line_misses, 5u);  // X, Y, Z at their first reads, Z's second sector, X again
+    EXPECT_EQ(s.sector_misses, 0u);
+    EXPECT_EQ(s.mshr_hits, 1u);
+    EXPECT_EQ(s.hits, 6u);
+    EXPECT_EQ(s.evictions, 1u);  // X, by Z's fill
+    EXPECT_EQ(s.accesses, s.hits + s.mshr_hits + s.sector_misses + s.line_misses + s.reservation_fails);
+}
+
 // Memory policies (docs/timing.md, "Memory policies"): a new replacement policy or DRAM scheduler
 // is one class and one registration. Each test below writes one that no preset has, registers it
 // and checks it by hand where the cache or the DRAM uses it.
