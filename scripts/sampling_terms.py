@@ -1,0 +1,64 @@
+#!/usr/bin/env python3
+"""Where a sampled run's interval comes from (docs/sampling.md, "The interval"): per sampled run of
+one or more folders of scripts/bench_sampling_grid.py, its error against the full run of the same
+cell and the five terms of its 95 % half-width h, each as rtsim computed it:
+  se  the work's sampling error times Student's t (what is left of h^2 by the other four),
+  m   the schedule model's error, 1.96 x sqrt(2) x the root mean square of the per-SM misfits,
+  g   the extrapolation gap (1.96 x it), f the first reads' gap, b the design's bias bound;
+and, for the model term, the per-SM misfits' mean (a part common to every SM) and their standard
+deviation. Then each term's mean share of h^2, the median h and the mean absolute error.
+Usage: scripts/sampling_terms.py DIR...   (prints Markdown)"""
+import glob
+import json
+import math
+import os
+import statistics
+import sys
+
+
+def runs(folder):
+    """(name, error, terms) of every sampled run in `folder` whose cell has a full run."""
+    for path in sorted(glob.glob(os.path.join(folder, "*_0.*_*.json"))):
+        name = os.path.basename(path)[:-5]
+        full_path = os.path.join(folder, "_".join(name.split("_")[:-2]) + "_full.json")
+        if not os.path.exists(full_path):
+            continue
+        run = json.load(open(path))
+        s = run["timing"].get("sampling")
+        if not s or "cycles_ci95" not in s:
+            continue  # no interval (refused, or sampled without one)
+        est = run["cycles"]
+        h = (s["cycles_ci95"][1] - est) / est  # the high side: the low one may be cut
+        per_sm = s["schedule_model_misfit_per_sm"]
+        rms = math.sqrt(sum(x * x for x in per_sm) / len(per_sm)) if per_sm else s["schedule_model_misfit"]
+        t = {"m": 1.96 * math.sqrt(2) * rms,
+             "g": 1.96 * abs(s["work_estimate_residence_cycles"] / s["work_estimate_stratified_residence_cycles"] - 1),
+             "f": s["first_reads"]["gap"], "b": s["design_bias"]}
+        t["se"] = math.sqrt(max(0.0, h * h - sum(v * v for v in t.values())))
+        t["h"] = h
+        t["misfit_mean"] = statistics.mean(per_sm) if per_sm else 0.0
+        t["misfit_sd"] = statistics.pstdev(per_sm) if len(per_sm) > 1 else 0.0
+        yield name, est / json.load(open(full_path))["cycles"] - 1, t
+
+
+def main():
+    rows = [r for folder in sys.argv[1:] for r in runs(folder)]
+    if not rows:
+        sys.exit("sampling_terms.py: no sampled run with an interval and a full run in " + " ".join(sys.argv[1:]))
+    pct = lambda x: f"{100 * x:.1f}"
+    print("| run | error % | h % | se % | m % | misfit mean / sd | g % | f % | b % |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    for name, err, t in rows:
+        print(f"| {name} | {100 * err:+.1f} | {pct(t['h'])} | {pct(t['se'])} | {pct(t['m'])} | "
+              f"{t['misfit_mean']:+.3f} / {t['misfit_sd']:.3f} | {pct(t['g'])} | {pct(t['f'])} | {pct(t['b'])} |")
+    shares = {k: statistics.mean(t[k] ** 2 / t["h"] ** 2 for _, _, t in rows) for k in ("se", "m", "g", "f", "b")}
+    common = sum(abs(t["misfit_mean"]) > t["misfit_sd"] for _, _, t in rows)
+    print()
+    print(f"{len(rows)} runs: median h {pct(statistics.median(t['h'] for _, _, t in rows))} %, mean |error| "
+          f"{pct(statistics.mean(abs(e) for _, e, _ in rows))} %, worst {pct(max(abs(e) for _, e, _ in rows))} %; "
+          "mean share of h^2: " + ", ".join(f"{k} {100 * v:.0f} %" for k, v in shares.items()) +
+          f"; the per-SM misfits' mean exceeds their spread in {common} of {len(rows)} runs.")
+
+
+if __name__ == "__main__":
+    main()
