@@ -14,7 +14,10 @@ repository), ANALYSE_ONLY (1: no runs, tables from the runs already in OUTDIR), 
 commit RTSIM was built from; default: the repository's HEAD), EXTEND (a bounds file, e.g.
 platforms/configs/error_bounds.json: OUTDIR/error_bounds.json is then that file with this grid's
 frame sizes added, each size's entry naming its own scenes and commit; the configurations must be
-the file's, and a size it already has is refused)."""
+the file's, and a size it already has is refused), WIDEN (a bounds file of the whole grid, e.g.
+platforms/configs/error_bounds.json: this grid reruns some of its configurations after a change
+that leaves the others bit-identical; OUTDIR/error_bounds.json is then that file with each frame
+size's worst raised to this grid's where larger, and its commit naming the rerun)."""
 import concurrent.futures as cf
 import datetime
 import itertools
@@ -113,6 +116,27 @@ def extend(base, new):
     return base
 
 
+def widen(base, new):
+    """`base` (the whole grid's bounds) with each frame size's worst raised to `new`'s where larger:
+    `new` reruns some of the grid's configurations after a change that leaves the others
+    bit-identical. The replaced runs stay in `base`'s worst, so a bound is at least each grid's
+    worst (never below either); runs and means stay `base`'s."""
+    if not set(new["grid"]["configs"]) <= set(base["grid"]["configs"]) or new["grid"]["scenes"] != base["grid"]["scenes"]:
+        sys.exit(f"WIDEN: scenes {new['grid']['scenes']} and configurations {new['grid']['configs']} are not the file's")
+    for wl in ("primary", "pt"):
+        if new["grid"][f"{wl}_sizes"] != base["grid"][f"{wl}_sizes"]:
+            sys.exit(f"WIDEN: {wl} at {new['grid'][f'{wl}_sizes']}, the file at {base['grid'][f'{wl}_sizes']}")
+    for fid, wls in new["bounds"].items():
+        for wl, b in wls.items():
+            into = base["bounds"][fid][wl]
+            for n, cell in b["by_size"].items():
+                into["by_size"][n]["worst"] = max(into["by_size"][n]["worst"], cell["worst"])
+            into["worst"] = max(c["worst"] for c in into["by_size"].values())
+    base["measured_on"] += f"; {', '.join(new['grid']['configs'])} rerun at {new['measured_on']}, the larger worst"
+    base.setdefault("widened", []).append({k: new[k] for k in ("measured_on", "date", "command")} | {"configs": new["grid"]["configs"]})
+    return base
+
+
 def command():
     """How to make this grid again: the settings that shape it, and the scenes; RTSIM and OUTDIR
     as placeholders (the paths of one machine say nothing elsewhere)."""
@@ -138,6 +162,8 @@ for fid in ("lt", "interval"):
         bounds["bounds"][fid][wl] = b
 if os.environ.get("EXTEND"):
     bounds = extend(json.load(open(os.environ["EXTEND"])), bounds)
+if os.environ.get("WIDEN"):
+    bounds = widen(json.load(open(os.environ["WIDEN"])), bounds)
 with open(f"{out}/error_bounds.json", "w") as f:
     json.dump(bounds, f, indent=2)
     f.write("\n")
