@@ -11,9 +11,9 @@ void CacheBookings::apply_fills(uint64_t cycle) {
     while (!deferred_.empty() && deferred_.top().at <= cycle) {
         const Deferred d = deferred_.top();
         deferred_.pop();
-        const auto it = unfilled_.find(d.sector);
-        if (it == unfilled_.end() || it->second != d.seq) continue;  // entered at a read already
-        unfilled_.erase(it);
+        const auto f = sectors_.find(d.sector);
+        if (f == sectors_.end() || f->second.unfilled != d.seq) continue;  // entered at a read already
+        f->second.unfilled = 0;
         tags_.fill(d.sector);
     }
 }
@@ -33,8 +33,11 @@ void CacheBookings::advance(uint64_t floor) {
 // timestamped before the miss left takes the miss over.
 CacheBookings::InFlightSector* CacheBookings::in_flight(uint64_t sector, uint64_t cycle) {
     auto f = sectors_.find(sector);
-    if (f == sectors_.end() || f->second.at <= cycle) return nullptr;
-    InFlightSector& r = f->second;
+    return f == sectors_.end() ? nullptr : in_flight(f->second, cycle);
+}
+
+CacheBookings::InFlightSector* CacheBookings::in_flight(InFlightSector& r, uint64_t cycle) {
+    if (r.at <= cycle) return nullptr;
     if (cycle < r.sent) {
         r.at = cycle + (r.at - r.sent);
         r.sent = cycle;
@@ -61,15 +64,15 @@ CacheBookings::Lookup CacheBookings::lookup(uint64_t addr, uint64_t cycle, ReqKi
         // and the tags' own count is no limit. (AT, which uses these tags without lookup(), keeps it.)
         if (!tags_limit_lifted_) tags_.lift_mshr_limit(), tags_limit_lifted_ = true;
         apply_fills(c);
-        if (const auto u = unfilled_.find(sector); u != unfilled_.end()) {
+        if (const auto f = sectors_.find(sector); f != sectors_.end() && f->second.unfilled) {
             // On its way and not in the tags: the read merges into its miss and touches no line
             // (GPGPU-Sim's ON_FILL has no reserved line to hit, gpu-cache.cc l.346-375).
-            InFlightSector* r = in_flight(sector, c);
+            InFlightSector* r = in_flight(f->second, c);
             if (r && r->at > c + hit_latency_) {
                 tags_.count_read_of_unfilled(kind);
                 return merge(*r, c, kind);
             }
-            unfilled_.erase(u);  // its data is there (its miss was taken over by an earlier read)
+            f->second.unfilled = 0;  // its data is there (its miss was taken over by an earlier read)
             tags_.fill(sector);
         }
     }
@@ -118,16 +121,14 @@ CacheBookings::Lookup CacheBookings::merge(InFlightSector& r, uint64_t c, ReqKin
 void CacheBookings::fill(uint64_t addr, const Lookup& miss, uint64_t done, bool dram, ReqKind kind) {
     const uint64_t sector = tags_.sector_of(addr);
     mshr_free_.push(done);
-    if (on_fill_) {
+    if (on_fill_)
         deferred_.push({done, ++deferred_seq_, sector});
-        unfilled_[sector] = deferred_seq_;
-    } else {
+    else
         tags_.fill(sector);
-    }
-    sectors_[sector] = {miss.cycle, done, dram, 0, kind == ReqKind::Prefetch};
+    sectors_[sector] = {miss.cycle, done, dram, 0, kind == ReqKind::Prefetch, on_fill_ ? deferred_seq_ : 0};
     if (sectors_.size() <= std::max<size_t>(prune_above_, 64)) return;
     for (auto it = sectors_.begin(); it != sectors_.end();) {
-        if (it->second.at <= floor_)
+        if (it->second.at <= floor_ && !it->second.unfilled)  // (an unfilled one waits for its fill)
             sectors_.erase(it++);
         else
             ++it;

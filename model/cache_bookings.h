@@ -74,8 +74,10 @@ private:
         bool dram;
         uint32_t merged = 0;    // reads merged into the miss while in flight
         bool prefetch = false;  // the miss is a prefetch's (until a demand read merges)
+        uint64_t unfilled = 0;  // allocation at the fill: its place in the fills' queue until its data enters the tags
     };
     InFlightSector* in_flight(uint64_t sector, uint64_t cycle);
+    InFlightSector* in_flight(InFlightSector& r, uint64_t cycle);
     uint64_t mshr_slot(uint64_t cycle, ReqKind kind);
     // Allocation at the fill: the fills that arrive by `cycle` enter the tags, in order of arrival.
     void apply_fills(uint64_t cycle);
@@ -93,15 +95,15 @@ private:
     std::priority_queue<uint64_t, std::vector<uint64_t>, std::greater<uint64_t>> mshr_free_;
     uint64_t floor_ = 0, port_floor_ = 0;
     // Allocation at the fill: the misses whose data has not entered the tags, by arrival (cycle,
-    // then order of booking) and as a set. A miss taken over by an earlier read arrives earlier
-    // than its place in the queue; a read that finds its data there enters it at once.
+    // then order of booking; InFlightSector::unfilled names the entry). A miss taken over by an
+    // earlier read arrives earlier than its place in the queue; a read that finds its data there
+    // enters it at once.
     struct Deferred {
         uint64_t at, seq, sector;
         bool operator>(const Deferred& o) const { return at != o.at ? at > o.at : seq > o.seq; }
     };
     bool on_fill_, tags_limit_lifted_ = false;
     std::priority_queue<Deferred, std::vector<Deferred>, std::greater<Deferred>> deferred_;
-    absl::flat_hash_map<uint64_t, uint64_t> unfilled_;  // sector -> its miss's booking order
     uint64_t deferred_seq_ = 0;
 };
 
