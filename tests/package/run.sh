@@ -85,8 +85,8 @@ newer() {
 check "find_package(rtunit 0.2) is refused by 0.1" newer
 # P6: the source tree as a subproject of a platform's own CMake project (add_subdirectory): its
 # paths are the project's, not the top level's; configured, and the model library's one source
-# that reads a generated header (model/config.cpp: config_presets.h) compiled, which takes a
-# third of the time of the whole library. Makefiles, whose per-directory object targets name it.
+# that reads a generated header (model/config.cpp: config_presets.h) compiled, which takes less
+# than half the time of the whole library. Makefiles, whose per-directory object targets name it.
 source=$(cd "$(dirname "$0")/../.." && pwd)
 super() {
   mkdir -p "$tmp/super" &&
