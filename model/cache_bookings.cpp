@@ -58,13 +58,11 @@ uint64_t CacheBookings::mshr_slot(uint64_t c, ReqKind kind) {
 CacheBookings::Lookup CacheBookings::lookup(uint64_t addr, uint64_t cycle, ReqKind kind) {
     const uint64_t c = own_port_ ? port_.book(cycle) : cycle;  // one lookup per cycle
     const uint64_t sector = tags_.sector_of(addr);
+    auto f = sectors_.end();  // allocation at the fill: the sector's entry, looked up once per read
     if (on_fill_) {
-        // Allocated at the fill, a miss holds the tags' MSHR until its data enters them, which may
-        // be later than the MSHR's end here (apply_fills): MSHRs are counted by time (mshr_slot),
-        // and the tags' own count is no limit. (AT, which uses these tags without lookup(), keeps it.)
-        if (!tags_limit_lifted_) tags_.lift_mshr_limit(), tags_limit_lifted_ = true;
         apply_fills(c);
-        if (const auto f = sectors_.find(sector); f != sectors_.end() && f->second.unfilled) {
+        f = sectors_.find(sector);
+        if (f != sectors_.end() && f->second.unfilled) {
             // On its way and not in the tags: the read merges into its miss and touches no line
             // (GPGPU-Sim's ON_FILL has no reserved line to hit, gpu-cache.cc l.346-375).
             InFlightSector* r = in_flight(f->second, c);
@@ -89,7 +87,7 @@ CacheBookings::Lookup CacheBookings::lookup(uint64_t addr, uint64_t cycle, ReqKi
         }
         return l;
     }
-    InFlightSector* r = in_flight(sector, c);
+    InFlightSector* r = !on_fill_ ? in_flight(sector, c) : f == sectors_.end() ? nullptr : in_flight(f->second, c);
     if (!r || r->at <= c + hit_latency_) return {Lookup::Hit, c, c + hit_latency_};
     return merge(*r, c, kind);
 }
@@ -121,10 +119,15 @@ CacheBookings::Lookup CacheBookings::merge(InFlightSector& r, uint64_t c, ReqKin
 void CacheBookings::fill(uint64_t addr, const Lookup& miss, uint64_t done, bool dram, ReqKind kind) {
     const uint64_t sector = tags_.sector_of(addr);
     mshr_free_.push(done);
-    if (on_fill_)
+    if (on_fill_) {
+        // The miss holds the tags' MSHR until its data enters them, which may be later than its
+        // MSHR's end here (apply_fills): MSHRs are counted by time (mshr_slot), and the tags' own
+        // count is no limit. (AT uses these tags without lookup() or fill(), and keeps it.)
+        tags_.lift_mshr_limit();
         deferred_.push({done, ++deferred_seq_, sector});
-    else
+    } else {
         tags_.fill(sector);
+    }
     sectors_[sector] = {miss.cycle, done, dram, 0, kind == ReqKind::Prefetch, on_fill_ ? deferred_seq_ : 0};
     if (sectors_.size() <= std::max<size_t>(prune_above_, 64)) return;
     for (auto it = sectors_.begin(); it != sectors_.end();) {

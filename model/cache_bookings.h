@@ -102,7 +102,7 @@ private:
         uint64_t at, seq, sector;
         bool operator>(const Deferred& o) const { return at != o.at ? at > o.at : seq > o.seq; }
     };
-    bool on_fill_, tags_limit_lifted_ = false;
+    bool on_fill_;
     std::priority_queue<Deferred, std::vector<Deferred>, std::greater<Deferred>> deferred_;
     uint64_t deferred_seq_ = 0;
 };
