@@ -1,7 +1,9 @@
 """What the benchmark scripts that run rtsim on the shared scenes share (bench_error_grid.py,
-bench_sensitivity.py, bench_sampling_grid.py): the scenes' arguments, a preset with its
-prefetcher, and one resumable run."""
+bench_sensitivity.py, bench_sampling_grid.py) and the scripts that read their folders: the
+scenes' arguments, a preset with its prefetcher, one resumable run, and a sampling grid's runs."""
+import glob
 import os
+import re
 import subprocess
 
 SCENES_DIR = os.environ.get("SHARED", os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "shared", "scenes"))
@@ -32,3 +34,17 @@ def run_stats(rtsim, path, args, skip=False):
     if p.returncode == 0:
         os.rename(path + ".tmp", path)
     return p.returncode, p.stderr.strip()[-300:]
+
+
+def sampling_grid_runs(folder):
+    """The sampled runs of a folder of bench_sampling_grid.py whose cell has its full run, in name
+    order: (sampled run's path, full run's path, (name, size, preset, rate)) each, `name` the
+    scene, with -WORKLOAD where the workload is not path tracing."""
+    for path in sorted(glob.glob(os.path.join(folder, "*.json"))):
+        m = re.match(r"(.+)_(\d+)_([\w+]+)_([0-9.]+)_(\d+)$", os.path.basename(path)[:-5])
+        if not m:
+            continue
+        name, size, preset, rate, _ = m.groups()
+        full = os.path.join(folder, f"{name}_{size}_{preset}_full.json")
+        if os.path.exists(full):
+            yield path, full, (name, size, preset, rate)

@@ -12,6 +12,8 @@ speed_error folder of an older rtsim whose other scenes' statistics have changed
 every cell with a bias, largest first."""
 import datetime, glob, json, os, re, statistics, subprocess, sys
 
+from bench_util import sampling_grid_runs
+
 # Student's t, two-sided 95 %, by degrees of freedom (draws - 1); beyond 10: 2.2 (conservative to 30).
 T95 = {1: 12.706, 2: 4.303, 3: 3.182, 4: 2.776, 5: 2.571, 6: 2.447, 7: 2.365, 8: 2.306, 9: 2.262, 10: 2.228}
 
@@ -54,13 +56,9 @@ def runs_of(d, only=None):
         return out
     with open(f"{d}/summary.json") as f:  # scripts/bench_sampling_grid.py
         fid = json.load(f)["grid"]["fidelity"]
-    for f in glob.glob(f"{d}/*.json"):
-        m = re.match(r"(.+)_(\d+)_([\w+]+)_([0-9.]+)_(\d+)$", os.path.basename(f)[:-5])
-        if not m:
-            continue
-        name, size, preset, rate, _ = m.groups()
+    for f, full, (name, size, preset, rate) in sampling_grid_runs(d):
         scene, _, wl = name.partition("-")
-        est, truth = cycles(f), cycles(f"{d}/{name}_{size}_{preset}_full.json")
+        est, truth = cycles(f), cycles(full)
         if est and truth and (only is None or scene in only):
             out.append(((scene, wl or "pt", size, preset, fid, f"{float(rate):g}"), est / truth - 1))
     return out

@@ -8,21 +8,19 @@ cell and the five terms of its 95 % half-width h, each as rtsim computed it:
 and, for the model term, the per-SM misfits' mean (a part common to every SM) and their standard
 deviation. Then each term's mean share of h^2, the median h and the mean absolute error.
 Usage: scripts/sampling_terms.py DIR...   (prints Markdown)"""
-import glob
 import json
 import math
 import os
 import statistics
 import sys
 
+from bench_util import sampling_grid_runs
+
 
 def runs(folder):
     """(name, error, terms) of every sampled run in `folder` whose cell has a full run."""
-    for path in sorted(glob.glob(os.path.join(folder, "*_0.*_*.json"))):
+    for path, full_path, _ in sampling_grid_runs(folder):
         name = os.path.basename(path)[:-5]
-        full_path = os.path.join(folder, "_".join(name.split("_")[:-2]) + "_full.json")
-        if not os.path.exists(full_path):
-            continue
         run = json.load(open(path))
         s = run["timing"].get("sampling")
         if not s or "cycles_ci95" not in s:
