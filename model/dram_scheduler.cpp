@@ -34,7 +34,7 @@ public:
     size_t pick(size_t, const bool*) const override { return 0; }
 };
 
-NamedRegistry<DramSchedulerKind>& registry() {
+NamedRegistry<DramSchedulerKind>& schedulers() {
     static NamedRegistry<DramSchedulerKind> r("DRAM scheduler");
     static const bool built_in = [] {
         auto add = [](const char* name, const char* what, auto make) { r.add({name, what, make}); };
@@ -51,12 +51,12 @@ NamedRegistry<DramSchedulerKind>& registry() {
 }  // namespace
 
 bool register_dram_scheduler(DramSchedulerKind kind) {
-    registry().add(std::move(kind));
+    schedulers().add(std::move(kind));
     return true;
 }
 
-const DramSchedulerKind& dram_scheduler_kind(const std::string& name) { return registry().at(name); }
+const DramSchedulerKind& dram_scheduler_kind(const std::string& name) { return schedulers().at(name); }
 
-std::vector<std::string> dram_scheduler_names() { return registry().names(); }
+std::vector<std::string> dram_scheduler_names() { return schedulers().names(); }
 
 }  // namespace rtu

@@ -58,7 +58,7 @@ private:
     Lru lru_;  // its list, ordered by insertion instead of use
 };
 
-NamedRegistry<ReplacementKind>& registry() {
+NamedRegistry<ReplacementKind>& policies() {
     static NamedRegistry<ReplacementKind> r("replacement policy");
     static const bool built_in = [] {
         r.add({"lru", "least recently used (GPGPU-Sim's; the paper's Table 2)", uint32_t(sizeof(uint32_t) * 2), uint32_t(sizeof(uint32_t) * 2),
@@ -74,12 +74,12 @@ NamedRegistry<ReplacementKind>& registry() {
 }  // namespace
 
 bool register_replacement(ReplacementKind kind) {
-    registry().add(std::move(kind));
+    policies().add(std::move(kind));
     return true;
 }
 
-const ReplacementKind& replacement_kind(const std::string& name) { return registry().at(name); }
+const ReplacementKind& replacement_kind(const std::string& name) { return policies().at(name); }
 
-std::vector<std::string> replacement_names() { return registry().names(); }
+std::vector<std::string> replacement_names() { return policies().names(); }
 
 }  // namespace rtu

@@ -14,13 +14,6 @@
 namespace rtu {
 namespace {
 
-std::string percent(double v) {
-    std::ostringstream s;
-    s.precision(v < 0.1 ? 2 : 3);
-    s << 100.0 * v << " %";
-    return s.str();
-}
-
 std::string join(const std::vector<std::string>& v) {
     std::string s;
     for (const std::string& x : v) s += (s.empty() ? "" : ", ") + x;
@@ -199,8 +192,8 @@ ErrorEstimate estimate_error(const RunSpec& spec, const TimingResult& t, const s
     const std::optional<std::string> outside = outside_regime(spec, bounds);
     std::string measured;
     if (check)
-        measured = "measured against AT on " + std::to_string(check->clusters) + " clusters (" + percent(check->share) +
-                   " of the frame's warps): " + (check->difference() >= 0 ? "+" : "") + percent(check->difference());
+        measured = "measured against AT on " + std::to_string(check->clusters) + " clusters (" + percent_text(check->share) +
+                   " of the frame's warps): " + (check->difference() >= 0 ? "+" : "") + percent_text(check->difference());
     if (!outside) {
         const ErrorBounds::Bound b = *bounds.bound(fid, spec.workload, bounds.side(spec));
         const std::string bound_basis = "worst |cycles error| against AT in the " + std::to_string(b.runs) + " runs of " + fid + " on " +
@@ -212,7 +205,7 @@ ErrorEstimate estimate_error(const RunSpec& spec, const TimingResult& t, const s
         if (check && std::abs(check->difference()) > b.worst) {
             e.value = sampling + std::abs(check->difference());
             e.kind = plus + "measured";
-            e.basis = add_sampling(measured + ", beyond the " + percent(b.worst) + " " + bound_basis);
+            e.basis = add_sampling(measured + ", beyond the " + percent_text(b.worst) + " " + bound_basis);
         } else {
             e.value = sampling + b.worst;
             e.kind = plus + "validated bound";
@@ -236,13 +229,13 @@ std::string error_line(const nlohmann::ordered_json& s) {
     if (s["value"].is_null())
         line += "none (" + s["basis"].get<std::string>() + ")";
     else
-        line += "+-" + percent(s["value"].get<double>()) + " (" + s["kind"].get<std::string>() + ": " + s["basis"].get<std::string>() + ")";
+        line += "+-" + percent_text(s["value"].get<double>()) + " (" + s["kind"].get<std::string>() + ": " + s["basis"].get<std::string>() + ")";
     if (s.contains("check") && !s["check"].is_null()) {
         const auto& c = s["check"];
         line += "\nchecked against AT on " + std::to_string(c["clusters"].get<uint64_t>()) + " clusters (" +
-                percent(c["share"].get<double>()) + " of the frame): " + std::to_string(c["fidelity_cycles"].get<uint64_t>()) +
+                percent_text(c["share"].get<double>()) + " of the frame): " + std::to_string(c["fidelity_cycles"].get<uint64_t>()) +
                 " cycles against AT's " + std::to_string(c["at_cycles"].get<uint64_t>()) + ", " +
-                (c["difference"].get<double>() >= 0 ? "+" : "") + percent(c["difference"].get<double>());
+                (c["difference"].get<double>() >= 0 ? "+" : "") + percent_text(c["difference"].get<double>());
         char took[64];
         std::snprintf(took, sizeof took, "; AT took %.1f s, this fidelity %.1f s", c["at_s"].get<double>(), c["fidelity_s"].get<double>());
         line += took;

@@ -12,7 +12,6 @@
 namespace rtu {
 namespace {
 using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 // Embree gets the same power-of-two-scaled ray as our traversal (an exact change of units), so
 // tiny and huge directions stay within what Debian's Embree accepts (|component| <= 1.8e18).

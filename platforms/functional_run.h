@@ -3,6 +3,7 @@
 // ray by ray against Embree. Rays are traced on FunctionalOptions::threads threads; the rays,
 // hits and counts are the same for every thread count.
 #pragma once
+#include <chrono>
 #include <cstdint>
 #include <functional>
 #include <optional>
@@ -16,6 +17,11 @@
 #include "workloads/verify.h"
 
 namespace rtu {
+
+// Wall seconds from `t` to now: the runs' host times.
+inline double seconds_since(std::chrono::steady_clock::time_point t) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+}
 
 struct FunctionalResult;
 

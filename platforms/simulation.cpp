@@ -49,7 +49,6 @@ std::vector<rtu_ray> ray_records(Workload& w) {
 }
 
 using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 std::vector<TracedRay> traced_from(const FunctionalResult& r) {
     std::vector<TracedRay> v(r.rays.size());

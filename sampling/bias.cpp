@@ -7,14 +7,15 @@
 #include "sampling_bias.h"
 
 namespace rtu {
-namespace {
 
-std::string percent(double v) {
+std::string percent_text(double v) {
     std::ostringstream s;
     s.precision(v < 0.1 ? 2 : 3);
     s << 100.0 * v << " %";
     return s.str();
 }
+
+namespace {
 
 }  // namespace
 
@@ -46,7 +47,7 @@ const SamplingBias::Kind& SamplingBias::of(const std::string& workload) const {
 std::string SamplingBias::basis(const std::string& workload) const {
     const Kind& k = of(workload);
     const bool p = &k == &primary;
-    std::string s = "the sample design's bias bound " + percent(k.value) + ", the largest bias beyond the draws' noise among " +
+    std::string s = "the sample design's bias bound " + percent_text(k.value) + ", the largest bias beyond the draws' noise among " +
                     std::to_string(k.cells) + " cells of the sampling grids (" + std::to_string(k.runs) + " runs of " +
                     (p ? "primary rays" : "path tracing") + ", rtsim " + measured_on + "; " + k.cell + ")";
     if (workload != "primary" && workload != "pt") s += ", taken for " + (workload.empty() ? std::string("a ray file") : workload) + " (not measured)";

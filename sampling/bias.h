@@ -8,6 +8,10 @@
 
 namespace rtu {
 
+// A fraction as a percentage for messages: 0.0352 -> "3.5 %", 0.25 -> "25 %" (two significant
+// digits below 10 %, three above).
+std::string percent_text(double fraction);
+
 struct SamplingBias {
     struct Kind {
         double value = 0;   // relative

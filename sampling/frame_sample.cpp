@@ -11,7 +11,7 @@
 namespace rtu {
 namespace {
 
-std::string percent(double x) {
+std::string percent_digits(double x) {
     char b[32];
     std::snprintf(b, sizeof b, "%.3g", 100.0 * x);
     return b;
@@ -28,11 +28,11 @@ void check_sample_size(const SampleDesign& planned, uint64_t warps, uint64_t clu
     // whole); the 0.5 is llround's. Before the pre-pass no cluster is known to be empty.
     const double need = double(1 + kMinStrata) - 0.5;
     const double rate = rate_for_strata(clusters, clusters - 1, kMinStrata).value_or(1.0);
-    std::string msg = "--sample " + percent(o.rate) + " % of this frame's " + std::to_string(clusters) + " clusters of " +
+    std::string msg = "--sample " + percent_digits(o.rate) + " % of this frame's " + std::to_string(clusters) + " clusters of " +
                       std::to_string(cluster) + " shader warps (" + std::to_string(warps) + " warps) draws " +
                       std::to_string(planned.strata()) + " strata beside the first wave (simulated whole); a 95 % interval needs at least " +
                       std::to_string(kMinStrata) + " strata: ";
-    if (rate < 1.0) msg += "use --sample " + percent(rate) + " % or more (--sample " + std::to_string(rate).substr(0, 5) + "), ";
+    if (rate < 1.0) msg += "use --sample " + percent_digits(rate) + " % or more (--sample " + std::to_string(rate).substr(0, 5) + "), ";
     msg += "a frame of at least " + std::to_string(uint64_t(std::ceil(need / std::max(o.rate, 1e-9))) * cluster) +
            " shader warps at this rate, or --sample-unchecked for an estimate without an interval";
     throw InputError(msg);
@@ -42,7 +42,7 @@ void check_sample_size(const SampleDesign& planned, uint64_t warps, uint64_t clu
 // no stratum cannot extrapolate, checked or not.
 void check_draws_a_stratum(const SampleDesign& design, uint64_t cluster, const SamplingOptions& o) {
     if (design.strata() > 0 || design.census()) return;
-    throw InputError("--sample " + percent(o.rate) + " % of this frame's " + std::to_string(design.clusters()) + " clusters of " +
+    throw InputError("--sample " + percent_digits(o.rate) + " % of this frame's " + std::to_string(design.clusters()) + " clusters of " +
                      std::to_string(cluster) + " shader warps draws no cluster beside the first wave, so " +
                      "nothing stands for the rest of the frame's work; sample more (--sample " +
                      std::to_string(std::ceil(1000.0 * 1.5 / double(design.clusters())) / 1000.0).substr(0, 5) + " or more)");
