@@ -1262,7 +1262,10 @@ TEST(RtsimSampling, SegmentsMergedEqualTheSingleProcessRun) {
 // next-node register, flattening) refuses it.
 TEST(RtsimSampling, APlanServesEveryRunOfTheFrameAndNoOther) {
     TempDir dir;
-    const std::string frame = "--scene cornell --width 512 --height 256 --spp 1 --sample 0.5 --threads 1 " + kSanitizedWorkload;
+    // Under the sanitizers, 256x128 (32 clusters: 16 simulated, the first wave and 15 strata):
+    // a plan is read alike whatever the frame's size, and the runs take a third of 512x256's time.
+    const std::string size = rtu::test::kSanitized ? "--width 256 --height 128 " : "--width 512 --height 256 ";
+    const std::string frame = "--scene cornell " + size + "--spp 1 --sample 0.5 --threads 1 " + kSanitizedWorkload;
     const std::string plan = " --sample-plan " + dir.file("plan.bin");
     auto load = [&](const std::string& f) {
         auto j = nlohmann::json::parse(read_text(dir.file(f)));
@@ -1278,7 +1281,7 @@ TEST(RtsimSampling, APlanServesEveryRunOfTheFrameAndNoOther) {
     std::map<std::string, std::string> without_plan;  // case -> its statistics without the plan
     for (const std::string& other : others) {
         SCOPED_TRACE(other);
-        const std::string args = (other.find("--sample 0.75") != std::string::npos ? "--scene cornell --width 512 --height 256 --spp 1 --threads 1 " + kSanitizedWorkload : frame) + other;
+        const std::string args = (other.find("--sample 0.75") != std::string::npos ? "--scene cornell " + size + "--spp 1 --threads 1 " + kSanitizedWorkload : frame) + other;
         const std::string without = "n" + std::to_string(i) + ".json", with = "y" + std::to_string(i) + ".json";
         without_plan[other] = without;
         ++i;
@@ -1297,7 +1300,7 @@ TEST(RtsimSampling, APlanServesEveryRunOfTheFrameAndNoOther) {
     // The BVH is part of the frame: the same mesh file rewritten with other geometry (or a
     // LumiBench scene's name with other assets) is another frame.
     write_text(dir.file("m.obj"), "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nf 1 2 3\nf 1 3 4\n");
-    const std::string mesh = "--scene " + dir.file("m.obj") + " --workload primary --width 512 --height 256 --spp 1 --sample 0.5 --threads 1 --fidelity interval";
+    const std::string mesh = "--scene " + dir.file("m.obj") + " --workload primary " + size + "--spp 1 --sample 0.5 --threads 1 --fidelity interval";
     const std::string mplan = " --sample-plan " + dir.file("mesh-plan.bin");
     const Result m1 = rtsim(dir, mesh + mplan);
     ASSERT_EQ(m1.status, 0) << m1.err;
@@ -1328,7 +1331,7 @@ TEST(RtsimSampling, APlanServesEveryRunOfTheFrameAndNoOther) {
     // another configuration reads its plan (no third file) and equals the run without one.
     std::filesystem::create_directory(dir.file("plans"));
     const std::string folder = " --sample-plan " + dir.file("plans");
-    const std::string wknd = "--scene wknd --width 512 --height 256 --spp 1 --sample 0.5 --threads 1 --fidelity interval " + kSanitizedWorkload;
+    const std::string wknd = "--scene wknd " + size + "--spp 1 --sample 0.5 --threads 1 --fidelity interval " + kSanitizedWorkload;
     ASSERT_EQ(rtsim(dir, frame + "--fidelity interval" + folder).status, 0);
     ASSERT_EQ(rtsim(dir, wknd + folder).status, 0);
     auto files = [&] {
