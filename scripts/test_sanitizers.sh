@@ -29,9 +29,9 @@
 # (scripts/fuzz.sh, clang, every UBSan check): vptr (dynamic types), alignment and null. They made
 # GCC's instrumented build 1.3x as long (474 s against 362 s from scratch here, file by file;
 # platforms/segment_file.cpp 31-36 s against 18-20 s; with the unity build too, 302 s), and where
-# they matter most, in the
-# readers of untrusted files and memory (misaligned records, casts of what a file claims), the
-# fuzz harnesses run them; a null dereference is still a fault under AddressSanitizer (SEGV).
+# they matter most, in the readers of untrusted files and memory (misaligned records, casts of
+# what a file claims), the fuzz harnesses run them; a null dereference is still a fault under
+# AddressSanitizer (SEGV).
 # (Package.* is not built here at all: tests/CMakeLists.txt.) Tests run one more at a time than
 # there are cores: many of them wait on rtsim child processes or poll for a signal's answer.
 set -euo pipefail
