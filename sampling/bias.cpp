@@ -15,10 +15,6 @@ std::string percent_text(double v) {
     return s.str();
 }
 
-namespace {
-
-}  // namespace
-
 SamplingBias SamplingBias::parse(const std::string& text) {
     const nlohmann::json j = nlohmann::json::parse(text);
     SamplingBias b;
