@@ -72,8 +72,7 @@ PrepassWorkloads::PrepassWorkloads(const SamplingOptions& opt) : opt_(opt), made
 Workload& PrepassWorkloads::of_thread(unsigned t) {
     if (!made_.at(t)) {
         made_[t] = opt_.make_workload();
-        std::vector<WorkRay> ignored;
-        made_[t]->begin(ignored);
+        made_[t]->begin_for_restarts();  // WarpTracer::trace restarts every path it traces
     }
     return *made_[t];
 }

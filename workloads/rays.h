@@ -56,6 +56,13 @@ public:
     virtual void begin(std::vector<WorkRay>& out) = 0;
     // Consumes the hit of a traced ray and appends the rays it causes.
     virtual void complete(const WorkRay& r, const Hit& hit, std::vector<WorkRay>& out) = 0;
+    // Sets the workload up for a caller that restart()s every path before tracing it (the
+    // sampling pre-pass's own copies of the workload): as begin(), without the first rays where
+    // the workload can leave them out.
+    virtual void begin_for_restarts() {
+        std::vector<WorkRay> dropped;
+        begin(dropped);
+    }
     // Puts path `path` back as begin() left it (its first ray emitted), so that it can be traced
     // again from that ray with the same results: the sampling pre-pass and the caches' warming
     // trace a shader warp more than once, on workloads that other warps have advanced.
