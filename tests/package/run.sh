@@ -58,12 +58,14 @@ headers_alone() {
 }
 check "each public header compiles alone, without glm, absl or nlohmann" headers_alone
 
-# P2: the installed example, out of tree, with only CMAKE_PREFIX_PATH.
+# P2: the installed example, out of tree, with only CMAKE_PREFIX_PATH. Every build of it here, as
+# its CMakeLists.txt documents, takes no build type: unoptimised, 4.4 s a compile against 7.8 s at
+# -O2 (the simulation runs in the library, which is optimised).
 cp -r "$prefix/share/rtunit/examples/soc_vp" "$tmp/vp"
 consumer() {  # consumer STD [EXTRA CMAKE ARGS]
   local std=$1; shift
   local b="$tmp/vp-build-$std"
-  cmake -S "$tmp/vp" -B "$b" -DCMAKE_PREFIX_PATH="$prefix" -DCMAKE_CXX_STANDARD="$std" -DCMAKE_BUILD_TYPE=Release "$@" > "$b.log" 2>&1 &&
+  cmake -S "$tmp/vp" -B "$b" -DCMAKE_PREFIX_PATH="$prefix" -DCMAKE_CXX_STANDARD="$std" "$@" > "$b.log" 2>&1 &&
     cmake --build "$b" -j2 >> "$b.log" 2>&1 && "$b/soc_vp" | tee -a "$b.log" | grep -q ' passed, 0 failed' || { tail -20 "$b.log"; return 1; }
 }
 check "out-of-tree example, C++17" consumer 17
@@ -72,7 +74,7 @@ check "out-of-tree example, C++20 (SC_CPLUSPLUS from the package)" consumer 20 \
 check "out-of-tree example, C++14 (raised to 17 by the package)" consumer 14
 # P3: pkg-config, as a Makefile-built platform would.
 pkgconf() {
-  g++ -std=c++17 -O1 -o "$tmp/vp-pc" "$tmp/vp/soc_vp.cpp" -DRTU_SOC_VP_DATA="\"$prefix/share/rtunit/data/cornell\"" \
+  g++ -std=c++17 -o "$tmp/vp-pc" "$tmp/vp/soc_vp.cpp" -DRTU_SOC_VP_DATA="\"$prefix/share/rtunit/data/cornell\"" \
       $(PKG_CONFIG_PATH="$prefix/$lib/pkgconfig" pkg-config --cflags --libs rtunit) &&
     LD_LIBRARY_PATH="$prefix/$lib" "$tmp/vp-pc" --fidelity at --data "$prefix/share/rtunit/data/wknd" | grep -q ' passed, 0 failed'
 }
@@ -110,7 +112,7 @@ deb() {
   done
   local b="$tmp/vp-build-deb"
   cp -r "$tmp/debroot/usr/share/rtunit/examples/soc_vp" "$tmp/vp-deb" &&
-    cmake -S "$tmp/vp-deb" -B "$b" -DCMAKE_PREFIX_PATH="$tmp/debroot/usr" -DCMAKE_BUILD_TYPE=Release > "$b.log" 2>&1 &&
+    cmake -S "$tmp/vp-deb" -B "$b" -DCMAKE_PREFIX_PATH="$tmp/debroot/usr" > "$b.log" 2>&1 &&
     cmake --build "$b" -j2 >> "$b.log" 2>&1 && LD_LIBRARY_PATH="$tmp/debroot/usr/$lib" "$b/soc_vp" | tee -a "$b.log" | grep -q ' passed, 0 failed' ||
     { tail -20 "$b.log"; return 1; }
 }
