@@ -46,7 +46,11 @@ std::vector<glm::vec3> rtunit_corners(const std::string& path) {
 // quads. A polygon tinyobjloader gives up on loses its triangles on both sides (9,845 on PARTY).
 TEST(Tinyobj, SharedScenesTriangulateAsLumiBenchsLoader) {
     RTU_NEED_SHARED_SCENES();
-    for (const std::string scene : {"party", "bath", "sprng", "ship", "bunny"}) {
+    // Under the sanitizers, the two smallest (3 of the 137 MB; 26 s there otherwise): every file
+    // goes through the same reader, and fuzz_mesh feeds it malformed ones.
+    const std::vector<std::string> scenes = rtu::test::kSanitized ? std::vector<std::string>{"ship", "bunny"}
+                                                                  : std::vector<std::string>{"party", "bath", "sprng", "ship", "bunny"};
+    for (const std::string& scene : scenes) {
         std::vector<std::string> files;
         for (const auto& e : fs::directory_iterator(rtu::test::shared_dir() + "/scenes/" + scene))
             if (e.path().extension() == ".obj") files.push_back(e.path().string());
