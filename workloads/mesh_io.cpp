@@ -79,6 +79,10 @@ void check_finite(const std::string& file, size_t line, std::string_view tok, fl
         throw input_error(file, line, "vertex coordinate '" + std::string(tok) + "' is not finite (NaN or infinity)");
 }
 
+// std::isspace in the "C" locale, which rtsim never leaves: space, \t, \n, \v, \f and \r (9-13).
+// Inline: the library call per character took a fifth of the OBJ reader's time (party, 68 MB).
+constexpr bool is_space(unsigned char c) { return c == ' ' || (c >= '\t' && c <= '\r'); }
+
 // Whitespace-separated tokens of `s`, as views into it, into `out` (reused: no allocation per
 // line once it has grown; string streams, then a vector of strings, dominated load times).
 void split(std::string_view s, std::vector<std::string_view>& out) {
@@ -86,9 +90,9 @@ void split(std::string_view s, std::vector<std::string_view>& out) {
     const size_t n = s.size();
     size_t i = 0;
     while (i < n) {
-        while (i < n && std::isspace(static_cast<unsigned char>(s[i]))) ++i;
+        while (i < n && is_space(static_cast<unsigned char>(s[i]))) ++i;
         size_t j = i;
-        while (j < n && !std::isspace(static_cast<unsigned char>(s[j]))) ++j;
+        while (j < n && !is_space(static_cast<unsigned char>(s[j]))) ++j;
         if (j > i) out.push_back(s.substr(i, j - i));
         i = j;
     }
