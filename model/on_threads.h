@@ -1,8 +1,11 @@
-// Runs work on several host threads (the functional pass, the sampling pre-pass): body(t) for t in
+// Runs work on several host threads (the functional pass, the sampling pre-pass, --verify): body(t) for t in
 // [0, threads), t = 0 on the calling thread; all are joined, then the first exception any of them
 // threw (by thread index) is rethrown. What the threads compute must not depend on how many there
 // are: each writes only its own results. Plain C++.
 #pragma once
+#include <algorithm>
+#include <atomic>
+#include <cstddef>
 #include <exception>
 #include <functional>
 #include <thread>
@@ -29,6 +32,24 @@ inline void on_threads(unsigned threads, const std::function<void(unsigned)>& bo
     for (std::thread& th : pool) th.join();
     for (const std::exception_ptr& e : failed)
         if (e) std::rethrow_exception(e);
+}
+
+// Runs body(i) for every i in [0, n) on `threads` threads, in blocks of 64 taken in turn; a
+// thread that throws makes the others stop at their next block. Each i must write only its own
+// slots, so that the results do not depend on the thread count.
+inline void for_each_index(unsigned threads, size_t n, const std::function<void(size_t)>& body) {
+    constexpr size_t kBlock = 64;
+    std::atomic<size_t> next{0};
+    const unsigned used = unsigned(std::max<size_t>(1, std::min<size_t>(threads, (n + kBlock - 1) / kBlock)));
+    on_threads(used, [&](unsigned) {
+        try {
+            for (size_t b; (b = next.fetch_add(kBlock)) < n;)
+                for (size_t i = b; i < std::min(n, b + kBlock); ++i) body(i);
+        } catch (...) {
+            next = n;
+            throw;
+        }
+    });
 }
 
 }  // namespace rtu

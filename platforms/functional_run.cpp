@@ -1,10 +1,8 @@
 #include "functional_run.h"
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <cmath>
-#include <functional>
 #include <iostream>
 
 #include "model/on_threads.h"
@@ -41,28 +39,6 @@ std::optional<Agreement> verify_ray(const Scene& scene, const EmbreeReference& r
     if (ray.query == Query::Any && ref.hit != hit.hit) ref_closest = embree_trace_scaled(reference, ray, Query::Closest);
     return classify(scene, ray, hit, ref, ref_closest);
 }
-
-namespace {
-
-// Runs body(i) for every i in [0, n) on `threads` threads (model/on_threads.h), in blocks of 64
-// taken in turn; a thread that throws makes the others stop at their next block. Each i writes
-// only its own slots, so the results do not depend on the thread count.
-void for_each_index(unsigned threads, size_t n, const std::function<void(size_t)>& body) {
-    constexpr size_t kBlock = 64;
-    std::atomic<size_t> next{0};
-    const unsigned used = unsigned(std::max<size_t>(1, std::min<size_t>(threads, (n + kBlock - 1) / kBlock)));
-    on_threads(used, [&](unsigned) {
-        try {
-            for (size_t b; (b = next.fetch_add(kBlock)) < n;)
-                for (size_t i = b; i < std::min(n, b + kBlock); ++i) body(i);
-        } catch (...) {
-            next = n;
-            throw;
-        }
-    });
-}
-
-}  // namespace
 
 FunctionalResult run_functional(const Scene& scene, const BvhImage& image, Workload& workload, const FunctionalOptions& opt,
                                 const EmbreeReference* reference) {

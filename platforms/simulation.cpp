@@ -6,6 +6,7 @@
 #include <chrono>
 #include <memory>
 #include <iostream>
+#include <optional>
 
 #include <sys/resource.h>
 
@@ -13,6 +14,7 @@
 #include "functional_run.h"
 #include "host_memory.h"
 #include "model/memory_estimate.h"
+#include "model/on_threads.h"
 #include "model/stats.h"
 #include "model/treelet.h"
 #include "run_record.h"
@@ -365,11 +367,16 @@ void timing_stage(const WorkloadStage& w, const BvhImage& image, Ran& ran, RunRe
     record_timing(rec, t, spec);
 }
 
-// A timing run's rays against Embree (--verify).
-void verify_stage(const Scene& scene, const EmbreeReference& reference, const std::vector<TracedRay>& rays, Ran& ran) {
+// A timing run's rays against Embree (--verify): classified on `threads` threads, each ray into
+// its own slot, then counted in ray order (the same counts and list for any thread count).
+void verify_stage(const Scene& scene, const EmbreeReference& reference, const std::vector<TracedRay>& rays, unsigned threads, Ran& ran) {
+    std::vector<std::optional<Agreement>> classes(rays.size());
+    for_each_index(std::max(1u, threads), rays.size(), [&](size_t i) {
+        if (rays[i].valid) classes[i] = verify_ray(scene, reference, rays[i].ray, rays[i].hit);
+    });
     for (size_t i = 0; i < rays.size(); ++i) {
         if (!rays[i].valid) continue;
-        const auto cls = verify_ray(scene, reference, rays[i].ray, rays[i].hit);
+        const std::optional<Agreement>& cls = classes[i];
         if (!cls) {
             ++ran.verify.skipped;
             continue;
@@ -477,7 +484,7 @@ RunResult run_simulation(const RunSpec& spec, std::ostream* log) {
         timing_stage(w, image, ran, rec);
         out.rays = std::move(ran.timing.rays);
         if (!spec.timeline.empty()) out.files.emplace_back(spec.timeline, std::move(ran.timing.timeline));
-        if (reference) verify_stage(scene, *reference, out.rays, ran);
+        if (reference) verify_stage(scene, *reference, out.rays, spec.run.threads, ran);
     }
     rec.run_s = seconds_since(t0);
     if (timing) error_stage(spec, ran.timing, rec);

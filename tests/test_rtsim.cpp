@@ -468,7 +468,7 @@ TEST(Rtsim, SameSeedSameStatistics) {
 }
 
 // The functional pass and --verify trace on --threads threads: the statistics and the hits are
-// the same for 1 and 3 threads. 160x128 at 2 spp is 40,960 camera rays, three of the pass's
+// the same for 1 and 3 threads, and so are a timing run's with --verify. 160x128 at 2 spp is 40,960 camera rays, three of the pass's
 // batches of 16,384, so batch ends fall inside a wave.
 TEST(Rtsim, FunctionalThreadsChangeNoResult) {
     TempDir dir;
@@ -487,6 +487,19 @@ TEST(Rtsim, FunctionalThreadsChangeNoResult) {
     EXPECT_EQ(stats[0]["verify"]["mismatches"], 0);
     EXPECT_EQ(stats[0], stats[1]);
     EXPECT_EQ(hits[0], hits[1]);
+    // A timing run's --verify checks its rays on the threads too, each into its own slot.
+    std::vector<nlohmann::json> timed;
+    for (const char* threads : {"1", "3"}) {
+        const Result r = rtsim(dir, std::string("--scene wknd --width 64 --height 64 --spp 2 --fidelity interval --verify --threads ") +
+                                        threads + " --stats " + dir.file("t.json"));
+        ASSERT_EQ(r.status, 0) << r.err;
+        timed.push_back(nlohmann::json::parse(read_text(dir.file("t.json"))));
+        erase_host_keys(timed.back());
+    }
+    EXPECT_GT(timed[0]["verify"]["rays"].get<uint64_t>(), 8192u);  // every ray of the frame, bounces too
+    EXPECT_EQ(timed[0]["verify"]["rays"], timed[0]["rays"]);
+    EXPECT_EQ(timed[0]["verify"]["mismatches"], 0);
+    EXPECT_EQ(timed[0], timed[1]);
 }
 
 // A triangle of vertices at +-1e15: rays near it hit as Embree's do; a ray from 1e8 away meets
