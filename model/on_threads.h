@@ -1,7 +1,7 @@
-// Runs work on several host threads (the functional pass, the sampling pre-pass, --verify): body(t) for t in
-// [0, threads), t = 0 on the calling thread; all are joined, then the first exception any of them
-// threw (by thread index) is rethrown. What the threads compute must not depend on how many there
-// are: each writes only its own results. Plain C++.
+// Runs work on several host threads (the functional pass, the sampling pre-pass, --verify):
+// body(t) for t in [0, threads), t = 0 on the calling thread; all are joined, then the first
+// exception any of them threw (by thread index) is rethrown. What the threads compute must not
+// depend on how many there are: each writes only its own results. Plain C++.
 #pragma once
 #include <algorithm>
 #include <atomic>

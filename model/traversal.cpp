@@ -318,8 +318,9 @@ TraceResult trace_ray(const BvhImage& image, const Ray& ray, TraversalOrder orde
     if (!is_valid_ray(ray)) return r;
     Ray scaled = ray;
     const int k = scale_direction(scaled);
-    // One traversal state per host thread, reused: start() resets all of it, and a new one
-    // allocated its two stacks (std::deque) for every ray, a tenth of a sampling pre-pass's time.
+    // One traversal state per host thread, reused: start() resets all of it, whereas a new one
+    // per ray allocated its two stacks (std::deque) for every ray (the sampling pre-pass traces
+    // the whole frame this way).
     thread_local TraversalThread th;
     th.start(scaled, image.header(), order, treelets, next_node_register);
     while (!th.done()) {

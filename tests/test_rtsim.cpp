@@ -468,8 +468,8 @@ TEST(Rtsim, SameSeedSameStatistics) {
 }
 
 // The functional pass and --verify trace on --threads threads: the statistics and the hits are
-// the same for 1 and 3 threads, and so are a timing run's with --verify. 160x128 at 2 spp is 40,960 camera rays, three of the pass's
-// batches of 16,384, so batch ends fall inside a wave.
+// the same for 1 and 3 threads, and so are a timing run's with --verify. 160x128 at 2 spp is
+// 40,960 camera rays, three of the pass's batches of 16,384, so batch ends fall inside a wave.
 TEST(Rtsim, FunctionalThreadsChangeNoResult) {
     TempDir dir;
     std::vector<nlohmann::json> stats;

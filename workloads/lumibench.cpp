@@ -219,7 +219,7 @@ public:
 
     // The state begin() left; its first ray is already in the caller's hands, so it is not made
     // again (the sampling pre-pass restarts every path it traces: a camera ray and a vector here
-    // took a tenth of a sampled run).
+    // were about a tenth of a sampled primary-ray run's samples in perf).
     void restart(uint32_t path) override {
         pixels_.at(path) = first_state(path);
         draw_sample(path);
