@@ -12,6 +12,8 @@
 #   --check-error) other RtsimSampling, RtsimError and RtsimTiming tests run here:
 #   RtsimSampling.IntervalCoversTheFullRun (the suite's longest under ASan, about 100 s),
 #   RtsimSampling.IntervalCarriesTheDesignBias, RtsimSampling.IntervalFidelitySampledAsAt,
+#   RtsimSampling.PrimaryRaysOfASparseFrame (37-48 s under ASan; the per-SM warming it checks
+#   the estimate of runs here in SampleWarming.EachSmIsWarmedWhenItStartsTheCluster),
 #   RtsimTiming.IntervalIsWithinTheStatedBoundOfAt, RtsimPresets.TtpSpeedsUpPathTracingOnEveryPreset
 #   and RtsimError.EveryTimingRunStatesItsError (every timing run writes its error statement);
 # - checks that observing changes no statistic: RtsimTiming.TracingChangesNoStatistic and
@@ -36,7 +38,7 @@
 # there are cores: many of them wait on rtsim child processes or poll for a signal's answer.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-left='^(Sweeps\.|RtsimSampling\.(IntervalCoversTheFullRun|IntervalCarriesTheDesignBias|IntervalFidelitySampledAsAt)$|RtsimTiming\.(IntervalIsWithinTheStatedBoundOfAt|TracingChangesNoStatistic|TimelineChangesNoStatistic)$|RtsimPresets\.TtpSpeedsUpPathTracingOnEveryPreset$|RtsimError\.EveryTimingRunStatesItsError$)'
+left='^(Sweeps\.|RtsimSampling\.(IntervalCoversTheFullRun|IntervalCarriesTheDesignBias|IntervalFidelitySampledAsAt|PrimaryRaysOfASparseFrame)$|RtsimTiming\.(IntervalIsWithinTheStatedBoundOfAt|TracingChangesNoStatistic|TimelineChangesNoStatistic)$|RtsimPresets\.TtpSpeedsUpPathTracingOnEveryPreset$|RtsimError\.EveryTimingRunStatesItsError$)'
 if [ "${1:-}" = "--all" ]; then left='^$'; shift; fi
 scripts/setup.sh
 cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_UNITY_BUILD=ON -DRTU_SANITIZE=address,undefined \
