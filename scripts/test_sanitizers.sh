@@ -14,7 +14,9 @@
 #   RtsimSampling.IntervalCarriesTheDesignBias, RtsimSampling.IntervalFidelitySampledAsAt,
 #   RtsimSampling.PrimaryRaysOfASparseFrame (37-48 s under ASan; the per-SM warming it checks
 #   the estimate of runs here in SampleWarming.EachSmIsWarmedWhenItStartsTheCluster),
-#   RtsimTiming.IntervalIsWithinTheStatedBoundOfAt, RtsimPresets.TtpSpeedsUpPathTracingOnEveryPreset
+#   RtsimTiming.IntervalIsWithinTheStatedBoundOfAt, RtsimTiming.IntervalShaderReadsKeepAtsPace (the
+#   shaders' reads in every fidelity run here in RtsimTiming.ShaderReadsGoThroughL1L2AndDram),
+#   RtsimPresets.TtpSpeedsUpPathTracingOnEveryPreset
 #   and RtsimError.EveryTimingRunStatesItsError (every timing run writes its error statement);
 # - checks that observing changes no statistic: RtsimTiming.TracingChangesNoStatistic and
 #   RtsimTiming.TimelineChangesNoStatistic (the VCD and timeline writers run here in
@@ -38,7 +40,7 @@
 # there are cores: many of them wait on rtsim child processes or poll for a signal's answer.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-left='^(Sweeps\.|RtsimSampling\.(IntervalCoversTheFullRun|IntervalCarriesTheDesignBias|IntervalFidelitySampledAsAt|PrimaryRaysOfASparseFrame)$|RtsimTiming\.(IntervalIsWithinTheStatedBoundOfAt|TracingChangesNoStatistic|TimelineChangesNoStatistic)$|RtsimPresets\.TtpSpeedsUpPathTracingOnEveryPreset$|RtsimError\.EveryTimingRunStatesItsError$)'
+left='^(Sweeps\.|RtsimSampling\.(IntervalCoversTheFullRun|IntervalCarriesTheDesignBias|IntervalFidelitySampledAsAt|PrimaryRaysOfASparseFrame)$|RtsimTiming\.(IntervalIsWithinTheStatedBoundOfAt|IntervalShaderReadsKeepAtsPace|TracingChangesNoStatistic|TimelineChangesNoStatistic)$|RtsimPresets\.TtpSpeedsUpPathTracingOnEveryPreset$|RtsimError\.EveryTimingRunStatesItsError$)'
 if [ "${1:-}" = "--all" ]; then left='^$'; shift; fi
 scripts/setup.sh
 cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_UNITY_BUILD=ON -DRTU_SANITIZE=address,undefined \
