@@ -34,9 +34,10 @@ inline void on_threads(unsigned threads, const std::function<void(unsigned)>& bo
         if (e) std::rethrow_exception(e);
 }
 
-// Runs body(i) for every i in [0, n) on `threads` threads, in blocks of 64 taken in turn; a
-// thread that throws makes the others stop at their next block. Each i must write only its own
-// slots, so that the results do not depend on the thread count.
+// Runs body(i) for every i in [0, n) on `threads` threads (0 counts as 1; never more threads than
+// blocks), in blocks of 64 taken in turn; a thread that throws makes the others stop at their
+// next block. Each i must write only its own slots, so that the results do not depend on the
+// thread count.
 inline void for_each_index(unsigned threads, size_t n, const std::function<void(size_t)>& body) {
     constexpr size_t kBlock = 64;
     std::atomic<size_t> next{0};

@@ -67,7 +67,7 @@ FunctionalResult run_functional(const Scene& scene, const BvhImage& image, Workl
             const size_t n = std::min(kBatch, wave.size() - b);
             traced.assign(n, TraceResult{});
             agreed.assign(n, std::nullopt);
-            for_each_index(std::max(1u, opt.threads), n, [&](size_t i) {
+            for_each_index(opt.threads, n, [&](size_t i) {
                 const Ray& ray = wave[b + i].ray;
                 traced[i] = trace_ray(image, ray, opt.order, opt.treelets);
                 if (reference && is_valid_ray(ray)) agreed[i] = verify_ray(scene, *reference, ray, traced[i].hit);

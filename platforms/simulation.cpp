@@ -371,7 +371,7 @@ void timing_stage(const WorkloadStage& w, const BvhImage& image, Ran& ran, RunRe
 // its own slot, then counted in ray order (the same counts and list for any thread count).
 void verify_stage(const Scene& scene, const EmbreeReference& reference, const std::vector<TracedRay>& rays, unsigned threads, Ran& ran) {
     std::vector<std::optional<Agreement>> classes(rays.size());
-    for_each_index(std::max(1u, threads), rays.size(), [&](size_t i) {
+    for_each_index(threads, rays.size(), [&](size_t i) {
         if (rays[i].valid) classes[i] = verify_ray(scene, reference, rays[i].ray, rays[i].hit);
     });
     for (size_t i = 0; i < rays.size(); ++i) {
