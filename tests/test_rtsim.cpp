@@ -1757,7 +1757,8 @@ TEST(RtsimConfig, PaperPresetTableMatchesTheJson) {
 }
 
 // Every configuration key of every preset is read. Changed alone (or with the keys it must agree
-// with), each changes the statistics of a small AT run, or (the watchdog) its exit status. The
+// with), each changes the statistics of a small AT run (16x16; 32x32 for the keys that show
+// only under that frame's load), or (the watchdog) its exit status. The
 // DRAM's write timing and write energy change no run, because the modelled RT unit only reads:
 // they are shown read by the DRAM model and the energy figures directly.
 TEST(RtsimConfig, EveryKeyOfEveryPresetIsRead) {
@@ -1772,14 +1773,16 @@ TEST(RtsimConfig, EveryKeyOfEveryPresetIsRead) {
     const std::string ttp = "--prefetcher ttp", treelet = "--traversal treelet --prefetcher treelet";
     // Path tracing where the sanitizers' runs take primary rays (below) and a key shows only there.
     const std::string pt = " --workload pt";
+    // The runs are 16x16; a key that shows only under a 32x32 frame's load of the memory system says so.
+    const std::string big = "--width 32 --height 32 ";
     const std::vector<Case> cases = {
         {{"gpu.sms=2"}}, {{"gpu.core_clock_mhz=700"}}, {{"gpu.memory_clock_mhz=1000"}}, {{"rt.warp_size=8"}},
-        {{"rt.warp_buffer=1"}, "--set gpu.sms=2"}, {{"rt.l1_hit_latency=30"}}, {{"rt.response_fifo=1"}}, {{"rt.next_node_register=flip"}}, {{"rt.leaf_descriptor_read=flip"}}, {{"rt.merge_in_flight=flip"}}, {{"rt.warp_scheduler=round_robin|oldest_first"}, "--set gpu.sms=2"},
+        {{"rt.warp_buffer=1"}, "--set gpu.sms=2"}, {{"rt.l1_hit_latency=30"}}, {{"rt.response_fifo=1"}}, {{"rt.next_node_register=flip"}}, {{"rt.leaf_descriptor_read=flip"}}, {{"rt.merge_in_flight=flip"}, big}, {{"rt.warp_scheduler=round_robin|oldest_first"}, "--set gpu.sms=2"},
         {{"rt.latency.structure=40"}}, {{"rt.latency.ray_box=40"}}, {{"rt.latency.transform=40"}},
         {{"rt.latency.leaf_descriptor=40"}}, {{"rt.latency.ray_triangle=40"}}, {{"rt.latency.triangle_hit=40"}},
         {{"rt.latency.procedural=40"}, "--scene wknd"}, {{"workload.shade_latency=5000"}}, {{"workload.launch_latency=3000"}}, {{"workload.shader_reads=3"}}, {{"workload.shader_lines_per_read=0.25"}, "--set workload.shader_reads=3"}, {{"workload.resident_warps=1"}, "--set gpu.sms=2"},
-        {{"l1.size_kb=2"}}, {{"l1.assoc=4"}}, {{"l1.replacement=fifo"}, "--set l1.size_kb=2"}, {{"l2.replacement=fifo"}, "--set l2.slice_kb=4 --set l2.assoc=4 --set l2.set_index=linear"}, {{"l1.line=64", "l2.line=64", "l2.set_index=linear"}}, {{"l1.sector=64", "l2.sector=64"}},
-        {{"l1.mshrs=2", "l1.mshr_merge=2"}}, {{"l1.mshr_merge=1"}}, {{"l1.miss_queue=2"}, "--scene wknd --set workload.shader_reads=8 --set l2.mshrs=2 --set l2.mshr_merge=2"}, {{"l2.miss_queue=2"}},
+        {{"l1.size_kb=2"}}, {{"l1.assoc=4"}}, {{"l1.replacement=fifo"}, "--set l1.size_kb=2"}, {{"l2.replacement=fifo"}, big + "--set l2.slice_kb=4 --set l2.assoc=4 --set l2.set_index=linear"}, {{"l1.line=64", "l2.line=64", "l2.set_index=linear"}}, {{"l1.sector=64", "l2.sector=64"}},
+        {{"l1.mshrs=2", "l1.mshr_merge=2"}}, {{"l1.mshr_merge=1"}, big}, {{"l1.miss_queue=2"}, big + "--scene wknd --set workload.shader_reads=8 --set l2.mshrs=2 --set l2.mshr_merge=2"}, {{"l2.miss_queue=2"}, big},
         {{"l1.allocation=miss|fill"}, "--set l1.size_kb=2"}, {{"l2.allocation=miss|fill"}, "--set l2.slice_kb=4 --set l2.assoc=4 --set l2.set_index=linear"},
         {{"l2.slices=1", "dram.address_map=line"}}, {{"l2.slice_kb=4", "l2.set_index=linear"}}, {{"l2.assoc=1"}, "--set l2.slice_kb=4 --set l2.set_index=linear"}, {{"l2.mshrs=2", "l2.mshr_merge=2"}}, {{"l2.mshr_merge=1"}},
         {{"l2.latency=20"}}, {{"l2.set_index=ipoly", "l2.slice_kb=16", "l2.assoc=2"}}, {{"xbar.latency=30"}},
@@ -1793,7 +1796,7 @@ TEST(RtsimConfig, EveryKeyOfEveryPresetIsRead) {
         {{"prefetch.treelet_queue_limit=2"}, treelet}, {{"prefetch.treelet_vote_period=64"}, treelet},
         {{"prefetch.treelet_order=treelets|root-then-dfs"}, treelet + " --set prefetch.treelet_budget=512"},
         {{"prefetch.ttp_depth_s1=4"}, ttp}, {{"prefetch.ttp_depth_s2=8"}, ttp + pt}, {{"prefetch.ttp_depth_s3=2"}, ttp + pt},
-        {{"prefetch.bfs_n=4"}, ttp + " --traversal bfs"}, {{"prefetch.bfs_policy=fixed|trend"}, ttp + " --traversal bfs"}, {{"prefetch.priority_after=5"}, ttp}, {{"prefetch.queue=1"}, ttp}, {{"prefetch.thread_window=2"}, ttp},
+        {{"prefetch.bfs_n=4"}, ttp + " --traversal bfs"}, {{"prefetch.bfs_policy=fixed|trend"}, ttp + " --traversal bfs"}, {{"prefetch.priority_after=5"}, ttp}, {{"prefetch.queue=1"}, ttp}, {{"prefetch.thread_window=2"}, big + ttp},
         {{"energy.l1_access_pj=40"}}, {{"energy.l2_access_pj=160"}}, {{"energy.dram_read_pj=1000"}},
         {{"energy.dram_activate_pj=2000"}}, {{"energy.static_w=10"}},
         {{"sim.watchdog=1000"}, "--set workload.shade_latency=200000", true},
@@ -1851,9 +1854,9 @@ TEST(RtsimConfig, EveryKeyOfEveryPresetIsRead) {
             // The heightfields in AT, unless the case names another scene or fidelity.
             // Under the sanitizers, primary rays (kSanitizedWorkload), unless the case names a workload.
             const bool own_scene = c.extra.find("--scene") != std::string::npos, own_fidelity = c.extra.find("--fidelity") != std::string::npos;
-            const bool own_workload = c.extra.find("--workload") != std::string::npos;
+            const bool own_workload = c.extra.find("--workload") != std::string::npos, own_size = c.extra.find("--width") != std::string::npos;
             const std::string base = (own_scene ? "" : "--scene " + scene) + (own_fidelity ? "" : " --fidelity at") +
-                                     " --width 32 --height 32 --spp 1 --config " + preset + " " + (own_workload ? "" : kSanitizedWorkload) + c.extra;
+                                     (own_size ? "" : " --width 16 --height 16") + " --spp 1 --config " + preset + " " + (own_workload ? "" : kSanitizedWorkload) + c.extra;
             auto run = [&](const std::string& args) {
                 const std::string stats = dir.file("s" + std::to_string(n++) + ".json");
                 const Result r = rtsim(dir, base + " " + args + " --stats " + stats);
