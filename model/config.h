@@ -80,6 +80,7 @@ struct HwConfig {
     bool merge_in_flight;       // a read joins its warp's queued or in-flight read of the same chunk
     RtLatency lat;
     uint32_t shade_latency;
+    uint32_t intersection_latency = 0;  // per iteration of a warp's intersection loop after a trace
     uint32_t launch_latency;
     double shader_reads;      // sectors per ray the shader code reads after a trace (workload.shader_reads)
     double shader_lines_per_read;  // L1 lines those reads open per read (workload.shader_lines_per_read)

@@ -162,6 +162,7 @@ void IntervalGpu::finish(uint32_t id, std::vector<Finished>& finished) {
         loads.owe(tr.threads.size());
         if (port_idle && loads.owed()) events_.push({std::max(tr.end, shader_free_[tr.sm]), next_seq_++, tr.sm, kShader});
     }
+    rt_[tr.sm].intersection_loop_iterations += RtThread::loop_of(tr.threads);
     Finished f{tr.sm, tr.end, {}};
     for (const Thread& t : tr.threads) {
         rt_[tr.sm].thread_cycles[ThreadStatus::Idle] += tr.end - (t.rt.trav.nodes_visited() ? t.ready : tr.start);

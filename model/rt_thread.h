@@ -6,6 +6,7 @@
 // - complete_fetch, when the node has arrived whole: where its bytes came from, the node's tests
 //   (a traversal step), and after a push a new pop streak. Plain C++.
 #pragma once
+#include <algorithm>
 #include <cstdint>
 
 #include "bvh_image.h"
@@ -68,6 +69,7 @@ struct RtThread {
             dram_nodes += dram;
         }
         const StepInfo info = trav.step(image);
+        st.intersection_candidates += info.type == NodeType::Procedural;
         if (info.pushed > 0) {
             streak.push();
             if (prefetcher.hooks() & Prefetcher::OnPop) prefetcher.on_push(prefetch, trav.stack().size());
@@ -75,7 +77,16 @@ struct RtThread {
         return info;
     }
 
-    RetiredRay retired() const { return {key, trav.hit(), trav.nodes_visited(), l1_miss_nodes, dram_nodes}; }
+    // A finished trace's intersection loop: the most candidates of one of its threads (each with
+    // an RtThread `rt`).
+    template <class Threads>
+    static uint32_t loop_of(const Threads& threads) {
+        uint32_t loop = 0;
+        for (const auto& t : threads) loop = std::max(loop, t.rt.trav.candidates());
+        return loop;
+    }
+
+    RetiredRay retired() const { return {key, trav.hit(), trav.nodes_visited(), l1_miss_nodes, dram_nodes, trav.candidates()}; }
 };
 
 }  // namespace rtu

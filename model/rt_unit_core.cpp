@@ -270,6 +270,7 @@ void RtUnitCore::finish_math(uint64_t now) {
         if (t.rt.trav.done()) {
             set_status(t, ThreadStatus::Idle, now);
             if (--w.live == 0) {
+                stats_.intersection_loop_iterations += RtThread::loop_of(w.threads);
                 for (Thread& x : w.threads) {
                     set_status(x, ThreadStatus::Idle, now);
                     retired_.push_back(x.rt.retired());

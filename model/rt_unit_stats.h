@@ -74,6 +74,7 @@ struct RtUnitStats {
     uint64_t l1_misses_with_next_queued = 0;
     uint64_t header_fetches = 0, header_l1_misses = 0;
     uint64_t shader_reads = 0;
+    uint64_t intersection_candidates = 0, intersection_loop_iterations = 0;
     ThreadCycles thread_cycles;
     PrefetchQueueCounts prefetch_queue;
     PopStreakStats pop_streak;
@@ -90,6 +91,10 @@ struct RtUnitStats {
         {"merged_in_flight", &RtUnitStats::merged_in_flight, "chunks", "32 B chunks of node reads not requested because the warp had the same chunk queued or in flight (rt.merge_in_flight)"},
         {"responses", &RtUnitStats::responses, "responses", "demand responses drained from the response FIFO"},
         {"shader_reads", &RtUnitStats::shader_reads, "sectors", "32 B sectors the SM's shader code read after this unit's traces (workload.shader_reads), through the L1's shader port"},
+        {"intersection_candidates", &RtUnitStats::intersection_candidates, "leaves",
+         "procedural leaves the rays reached: each an intersection shader call after the trace (RetiredRay::candidates)"},
+        {"intersection_loop_iterations", &RtUnitStats::intersection_loop_iterations, "iterations",
+         "the traces' intersection loops: per trace, the candidates of its ray with the most (workload.intersection_latency cycles each)"},
         {"limit_study_hits", &RtUnitStats::limit_study_hits, "requests", "32 B demand requests answered as L1 hits by a perfect-up/down limit study"},
         {"l1_misses_with_next_queued", &RtUnitStats::l1_misses_with_next_queued, "node reads",
          "pops whose node read missed L1 while the thread's stack (BFS: queue) still held a node after the pop: with BFS an accurate prefetch could follow (paper Figure 'bfs_trend')"},

@@ -24,6 +24,10 @@ struct RetiredRay {
     Hit hit;  // t in the rescaled units (the trace source undoes the scaling)
     uint32_t nodes_visited;
     uint32_t l1_miss_nodes = 0, dram_nodes = 0;  // of its node fetches: not served by L1 / served by DRAM
+    // Procedural leaves it reached: the candidates its shader code tests after the trace, one
+    // intersection shader call each (the TTP authors' simulator records one intersection-table
+    // entry per procedural leaf, vulkan_ray_tracing.cc l.2198-2199, and never culls by them).
+    uint32_t candidates = 0;
 };
 
 class TraceSource {

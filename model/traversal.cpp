@@ -73,7 +73,7 @@ void TraversalThread::start(const Ray& ray, const ImageHeader& header, Traversal
     stack_.clear();
     deferred_.clear();
     has_next_ = false;
-    nodes_visited_ = 0;
+    nodes_visited_ = candidates_ = 0;
     space_inst_ = kNoId;
     org_ = ray.org;
     dir_ = ray.dir;
@@ -295,6 +295,7 @@ StepInfo TraversalThread::step(const BvhImage& image) {
         case NodeType::Procedural: {
             // Recorded for the intersection shader, which runs after the traversal: its hit is
             // taken if it is the closest, but culls nothing (see the file comment).
+            ++candidates_;
             const SphereLeaf s = decode_sphere(bytes);
             float th;
             float app_t = 0.0f;
@@ -335,6 +336,7 @@ TraceResult trace_ray(const BvhImage& image, const Ray& ray, TraversalOrder orde
         r.hit.app_t = std::ldexp(r.hit.app_t, -k);
     }
     r.nodes_visited = th.nodes_visited();
+    r.candidates = th.candidates();
     return r;
 }
 

@@ -94,6 +94,9 @@ public:
     const Hit& hit() const { return hit_; }
     const Ray& ray() const { return ray_; }
     uint32_t nodes_visited() const { return nodes_visited_; }
+    // Procedural leaves read so far: the candidates the shader code tests after the trace
+    // (RetiredRay::candidates).
+    uint32_t candidates() const { return candidates_; }
     const std::deque<StackEntry>& stack() const { return stack_; }
 
 private:
@@ -126,7 +129,7 @@ private:
     bool headers_ = false;   // the image's headers are read (ImageHeader::has_headers)
     Aabb root_box_;          // with headers: the image header's, tested when it is read
     uint64_t root_ = 0;
-    uint32_t nodes_visited_ = 0;
+    uint32_t nodes_visited_ = 0, candidates_ = 0;
 
     // Ray in the space of the node being processed (world, or an instance's object space).
     uint32_t space_inst_ = kNoId;
@@ -142,6 +145,7 @@ unsigned child_hits(const BoxTestRay& r, const InternalNode& n, float tmin, floa
 struct TraceResult {
     Hit hit;
     uint32_t nodes_visited = 0;
+    uint32_t candidates = 0;  // procedural leaves read (TraversalThread::candidates)
 };
 // `fetched`, when given, receives every node the traversal reads, in order. More than
 // `max_nodes` node visits throw std::length_error: an image from untrusted memory (an SoC

@@ -10,6 +10,14 @@
 namespace rtu {
 
 SamplingOptions sampling_options(const HwConfig& c, const BvhImage& img, const TimingOptions& o, const Treelets* treelets) {
+    // The sample's schedule model (sampling/schedule_model.h) puts a constant of shader code
+    // between a warp's traces; the intersection loops that follow traces through procedural
+    // leaves are not in it, so it cannot estimate such a frame.
+    if (c.intersection_latency > 0 && img.stats.procedural_leaves > 0)
+        throw InputError("--sample: this scene has " + std::to_string(img.stats.procedural_leaves) +
+                         " procedural leaves, and a sample's schedule model leaves out the shaders' intersection loops "
+                         "(workload.intersection_latency " + std::to_string(c.intersection_latency) +
+                         "): run the frame whole, or with --set workload.intersection_latency=0");
     SamplingOptions s;
     s.rate = o.sample_rate;
     s.seed = o.sample_seed;

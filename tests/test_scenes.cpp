@@ -83,6 +83,43 @@ TEST(Scenes, WkndTreesAreOneBlasPerSphereUnderOneTlas) {
     EXPECT_NEAR(double(img.size()) / 0.2e6, 1.0, 0.25);  // within 25 % of the paper's 0.2 MB
 }
 
+// A ray's candidates are the procedural leaves it reads (the TTP authors' simulator records one
+// intersection-table entry per procedural leaf and culls by none, vulkan_ray_tracing.cc
+// l.2198-2199, l.2092): three unit spheres, each a model (a BLAS) of its own, centred at x = 0, 4
+// and 8. A ray along the x axis reads all three leaves although it hits the first; one down
+// through the middle sphere reads its leaf alone; one that leaves them behind reads none. The
+// count is the procedural nodes among the fetches, and a triangle scene has none.
+TEST(Scenes, ARaysCandidatesAreTheProceduralLeavesItReads) {
+    Scene s;
+    s.materials.push_back(Material{});
+    for (float x : {0.0f, 4.0f, 8.0f}) {
+        Mesh m;
+        m.name = "sphere";
+        m.spheres.push_back({glm::vec3(x, 0.0f, 0.0f), 1.0f});
+        m.material.push_back(0);
+        m.file_materials = m.material;
+        s.meshes.push_back(std::move(m));
+    }
+    add_identity_instances(s);
+    const BvhImage img = build_bvh_image(s);
+    ASSERT_EQ(img.stats.procedural_leaves, 3u);
+    auto candidates = [&](glm::vec3 org, glm::vec3 dir, const BvhImage& image) {
+        Ray r;
+        r.org = org;
+        r.dir = dir;
+        std::vector<StackEntry> fetched;
+        const TraceResult t = trace_ray(image, r, TraversalOrder::DFS, nullptr, &fetched);
+        const auto procedural = std::count_if(fetched.begin(), fetched.end(), [](const StackEntry& e) { return e.type == NodeType::Procedural; });
+        EXPECT_EQ(t.candidates, uint32_t(procedural));
+        return std::make_pair(t.candidates, t.hit.hit);
+    };
+    EXPECT_EQ(candidates({-5, 0, 0}, {1, 0, 0}, img), std::make_pair(3u, true));
+    EXPECT_EQ(candidates({4, 10, 0}, {0, -1, 0}, img), std::make_pair(1u, true));
+    EXPECT_EQ(candidates({-5, 0, 0}, {-1, 0, 0}, img), std::make_pair(0u, false));
+    const BvhImage cornell = build_bvh_image(make_cornell());
+    EXPECT_EQ(candidates({278, 278, -100}, {0, 0, -1}, cornell), std::make_pair(0u, true));
+}
+
 TEST(Scenes, CornellBoxFollowsTheDocumentedNumbering) {
     const Scene s = make_cornell();
     ASSERT_EQ(s.meshes.size(), 1u);

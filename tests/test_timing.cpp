@@ -932,6 +932,44 @@ struct EdgeTicker : sc_core::sc_module {
 };
 }  // namespace
 
+// After a trace, a shader warp runs its intersection loop before its next trace: one iteration
+// (workload.intersection_latency cycles) per procedural candidate of the trace's ray with the
+// most, the others masked off as SIMT threads are, then its shader code (workload.shade_latency).
+// Hand-worked on a cornell path-tracing warp on one SM: shade 100, 7 cycles an iteration; the
+// first trace is ready at 100 (no launch latency); its 32 rays retire at cycle 150 with 0..4
+// candidates (the ray number modulo 5), so the warp's bounces (of the rays that hit the box) are
+// ready at 150 + 4 x 7 + 100 = 278; without the loop (0 cycles an iteration) at 250.
+TEST(ShaderTiming, AWarpsNextTraceWaitsForItsIntersectionLoop) {
+    const Scene scene = make_cornell();
+    const BvhImage img = build_bvh_image(scene);
+    WorkloadParams p;
+    p.width = 8;
+    p.height = 4;  // 32 pixels: one warp
+    p.spp = 1;
+    for (const uint32_t iteration : {7u, 0u}) {
+        const std::unique_ptr<Workload> workload = make_scene_workload(WorkloadKind::PathTrace, scene, p);
+        ShaderTiming timing;
+        timing.shade = 100;
+        timing.intersection = iteration;
+        WorkloadDriver driver(*workload, 1, 32, timing);
+        EXPECT_EQ(driver.earliest_ready(0), 100u);
+        EXPECT_FALSE(driver.next_trace(0, 99));
+        const auto trace = driver.next_trace(0, 100);
+        ASSERT_TRUE(trace);
+        ASSERT_EQ(trace->size(), 32u);
+        std::vector<RetiredRay> done;
+        uint32_t i = 0;
+        for (const WarpRay& w : *trace) {
+            const TraceResult r = trace_ray(img, w.ray, TraversalOrder::DFS);
+            RetiredRay rr{w.key, r.hit, r.nodes_visited};
+            rr.candidates = i++ % 5;
+            done.push_back(rr);
+        }
+        driver.retire(0, done, 150);
+        EXPECT_EQ(driver.earliest_ready(0), 150u + 4u * iteration + 100u) << iteration << " cycles an iteration";
+    }
+}
+
 TEST(RtComplex, SeveralInOneSimulationShareNothing) {
     FsResolution resolution;
     struct Unit {

@@ -13,12 +13,14 @@
 namespace rtu {
 
 // How shader warps take their time outside the RT unit (workload.* keys): each runs `shade`
-// cycles of shader code before each of its traces; the first warps start `launch` cycles into
-// the frame (the kernel launch); an SM holds `resident` warps at once (0: all of them). A
-// workload whose rays are given (a ray file) runs no shader code: `first` is then 0, the delay
-// before a warp's first trace (else launch + shade).
+// cycles of shader code before each of its traces, and after a trace first `intersection` cycles
+// per iteration of its intersection loop (RetiredRay::candidates: as many iterations as the
+// trace's ray with the most); the first warps start `launch` cycles into the frame (the kernel
+// launch); an SM holds `resident` warps at once (0: all of them). A workload whose rays are given
+// (a ray file) runs no shader code: `first` is then 0, the delay before a warp's first trace
+// (else launch + shade).
 struct ShaderTiming {
-    uint32_t shade = 0, launch = 0, resident = 0;
+    uint32_t shade = 0, launch = 0, resident = 0, intersection = 0;
     bool shaders = true;
     uint64_t first() const { return shaders ? uint64_t(launch) + shade : 0; }
 };

@@ -30,7 +30,13 @@ private:
 };
 
 ShaderTiming shader_timing(const HwConfig& hw, const Workload& workload) {
-    return {hw.shade_latency, hw.launch_latency, hw.resident_warps, workload.runs_shaders()};
+    ShaderTiming t;
+    t.shade = hw.shade_latency;
+    t.launch = hw.launch_latency;
+    t.resident = hw.resident_warps;
+    t.intersection = hw.intersection_latency;
+    t.shaders = workload.runs_shaders();
+    return t;
 }
 
 WorkloadDriver::WorkloadDriver(Workload& workload, uint32_t sms, uint32_t warp_size, const ShaderTiming& timing, WarpSelection* selection)
@@ -150,6 +156,7 @@ void WorkloadDriver::retire(uint32_t sm, const std::vector<RetiredRay>& rays, ui
         summary_.dram_nodes += rr.dram_nodes;
         summary_.max_nodes = std::max(summary_.max_nodes, rr.nodes_visited);
         ShaderWarp& sw = warps_[rec.warp];
+        sw.loop = std::max(sw.loop, rr.candidates);
         if (selection_) selection_->ray_retired(rec.warp, rr);
         last_progress_ = now;
         follow.clear();
@@ -163,8 +170,10 @@ void WorkloadDriver::retire(uint32_t sm, const std::vector<RetiredRay>& rays, ui
             ++sw.traces_done;
             if (selection_) selection_->trace_done(rec.warp, sw.sm, now, now - sw.issued_at);
             const bool more = std::any_of(sw.threads.begin(), sw.threads.end(), [](const Thread& t) { return !t.pending.empty(); });
+            const uint32_t loop = sw.loop;
+            sw.loop = 0;
             if (more) {
-                enqueue(rec.warp, now + timing_.shade);
+                enqueue(rec.warp, now + uint64_t(timing_.intersection) * loop + timing_.shade);
             } else {
                 --live_warps_;
                 if (selection_) selection_->warp_finished(live_warps_, now);

@@ -82,6 +82,7 @@ private:
         uint32_t in_flight = 0;  // rays of the current trace not yet retired
         uint64_t issued_at = 0;
         uint32_t traces_done = 0;
+        uint32_t loop = 0;  // the current trace's most candidates of one ray: its intersection loop's iterations
     };
     struct Record {
         TracedRay r;

@@ -238,7 +238,8 @@ def main():
         "(two-step leaf read, 100-cycle DRAM front end, 16 resident warps per SM, their address mapping and set hashing, "
         "their streaming L1 (4,096 MSHRs, lines allocated at the fill, a 16-entry miss queue) and the L2's 32-entry miss queue, "
         "oldest-first RT warp scheduling, a 16-entry per-thread prefetch window, node reads merged into their warp's reads in "
-        "flight, the kernel launch, the shader time and the shaders' reads that reach L2 measured on their simulator, "
+        "flight, the kernel launch, the shader time (with the intersection loops after traces through procedural leaves) "
+        "and the shaders' reads that reach L2 measured on their simulator, "
         "Treelet's default treelet size, queue check, vote period and the code's traversal order); the difference between the two columns is what those details "
         "weigh. The paper's figures are over its 16 LumiBench scenes; ours are over the scenes of `../shared/scenes`, built "
         "and cast as LumiBench does (docs/lumibench.md; some assets are stand-ins or partial, see the gap table at the end).")
@@ -805,7 +806,9 @@ def main():
             "the L1 filled when the RT unit drains its response FIFO rather than when the data arrives (shader.cc "
             "l.3025-3030): this changes how long a prefetched line waits to be useful;",
             "the shader code between trace calls, its time and its loads and stores through the L1 and L2: rtunit charges "
-            "a constant measured on the authors' simulator (docs/paper-preset.md, `workload.shade_latency`); the loads that "
+            "a constant measured on the authors' simulator (docs/paper-preset.md, `workload.shade_latency`), and after a trace "
+            "through procedural leaves a constant per iteration of the warp's intersection loop (`workload.intersection_latency`, "
+            "measured on wknd's 64x64 frame: the reference's loop is cheaper on a GPU with fewer warps per SM); the loads that "
             "reach L2 are `workload.shader_reads` (5.5 sectors per ray of fresh data in the preset; the reads that hit L1 "
             "are not modelled); the stores are not modelled (10-14 sectors per ray reach the authors' L2);",
             "the DRAM's read-to-precharge time (RTPL=4) and write-to-read turn (CDLR=9); reads alone do not reach the "

@@ -175,7 +175,9 @@ def ours(j):
             "dram_reads": t["dram"]["reads"],
             "l1_reads": l1["accesses"], "l2_reads": l2["accesses"],
             "image_bytes": j["bvh"]["image_bytes"], "depth": j["bvh"]["depth"],
-            "limit_hits": t["rt_unit"]["limit_study_hits"]}
+            "limit_hits": t["rt_unit"]["limit_study_hits"],
+            # The traces' intersection loops: iterations per trace (workload.intersection_latency each).
+            "loop": t["rt_unit"]["intersection_loop_iterations"] / max(1, t["rt_unit"]["warps"])}
 
 
 def theirs(r):
@@ -422,8 +424,10 @@ def main():
 
     # --- where the reference's cycles go
     if traces:
-        shade_updated = json.loads((HERE / "configs" / "updated-mobile.json").read_text())["workload"]["shade_latency"]
-        shade_preset = json.loads((ROOT / "platforms" / "configs" / "paper.json").read_text())["workload"]["shade_latency"]
+        updated = json.loads((HERE / "configs" / "updated-mobile.json").read_text())["workload"]
+        preset = json.loads((ROOT / "platforms" / "configs" / "paper.json").read_text())["workload"]
+        shade_updated, shade_preset = updated["shade_latency"], preset["shade_latency"]
+        loop_updated, loop_preset = updated["intersection_latency"], preset["intersection_latency"]
         g64 = sorted(float(t["shader_gap_mean"]) for k, t in traces.items() if k[1] == 64 and k[2] == 64 and k[4] == "dfs")
         gap_median = g64[len(g64) // 2] if g64 else float("nan")
         md.p("## Where the reference's cycles go")
@@ -432,10 +436,16 @@ def main():
              "(arrival at the RT unit to completion) and the shader code between them (completion to the next arrival: "
              "closest-hit, miss, intersection and ray-generation shaders on the SIMT cores). rtunit stands for that code with "
              f"`workload.shade_latency` cycles before each trace: {shade_updated:,} in `configs/updated-mobile.json`, the median "
-             f"of the 64x64 DFS runs' mean gaps below ({gap_median:,.0f}), and {shade_preset:,} in rtunit's `paper` preset.")
+             f"of the 64x64 DFS runs' mean gaps below ({gap_median:,.0f}), and {shade_preset:,} in rtunit's `paper` preset; "
+             "after a trace whose rays reached procedural leaves, the warp's intersection loop comes first (one intersection "
+             "shader call per leaf, as many iterations as its ray with the most: rtunit's `intersection loop` column, per trace), "
+             f"`workload.intersection_latency` cycles an iteration: {loop_updated:,} in `configs/updated-mobile.json`, "
+             f"{loop_preset:,} in the `paper` preset. The `implied` column is what an iteration costs in the reference if the "
+             "rest of the gap is that constant: the gap less `workload.shade_latency`, over the loop's iterations (the "
+             "updated configuration's runs, where that constant was measured).")
         md.p()
         rows = []
-        shares, gaps = [], []
+        shares, gaps, implied_rows = [], [], []
         for k in keys:
             tr = traces.get(k)
             if not tr or CONFIGS[k[4]][2] != "none":
@@ -443,10 +453,19 @@ def main():
             g = float(tr["shader_gap_mean"]) if tr["shader_gap_mean"] else None
             gaps.append(g)
             shares.append(float(tr["rt_share"]))
+            loop = got[k]["loop"] if k in got else 0.0
+            # Only where workload.shade_latency was measured: the updated configuration. (The
+            # paper's configuration's gaps hold the shaders' waits on memory, which rtunit's
+            # shader reads do not make: every scene's are 2-10x longer there.)
+            updated_cfg = CONFIGS[k[4]][0] == "updated"
+            implied = (g - shade_updated) / loop if g and loop > 0 and updated_cfg else None
+            if implied is not None:
+                implied_rows.append((k, implied))
             rows.append([k[0], f"{k[1]}x{k[2]}", k[4], f"{float(tr['gpu_sim_cycle']):,.0f}", tr["traces"], tr["first_trace"],
-                         f"{float(tr['rt_residence_mean']):,.0f}", f"{g:,.0f}" if g else "—", f"{float(tr['rt_share']):.2f}"])
+                         f"{float(tr['rt_residence_mean']):,.0f}", f"{g:,.0f}" if g else "—", f"{float(tr['rt_share']):.2f}",
+                         f"{loop:.2f}" if loop > 0 else "—", f"{implied:,.0f}" if implied is not None else "—"])
         md.table(["scene", "frame", "config", "cycles", "traces", "first trace at", "mean RT residence", "mean shader gap",
-                  "RT share of a warp's time"], rows)
+                  "RT share of a warp's time", "intersection loop (rtunit)", "implied cycles an iteration"], rows)
         gs = [g for g in gaps if g]
         lead = sorted(int(traces[k]["first_trace"]) - int(traces[k]["cta_first_issue"]) for k in traces)
         issue = sorted({int(traces[k]["cta_first_issue"]) for k in traces})
@@ -456,6 +475,17 @@ def main():
              f"arrives {lead[0]:,} to {lead[-1]:,} cycles after the first CTA is issued, which itself comes "
              f"{', '.join(f'{c:,}' for c in issue)} cycles into the kernel.")
         md.p()
+        if implied_rows:
+            parts = ", ".join(f"{k[0]} {k[1]}x{k[2]} {k[4]} {v:,.0f}" for k, v in implied_rows)
+            lo, hi = min(implied_rows, key=lambda kv: kv[1]), max(implied_rows, key=lambda kv: kv[1])
+            small = [float(traces[k]["shader_gap_mean"]) for k in traces if k[1] == 32 and k[4] == "dfs" and traces[k]["shader_gap_mean"]]
+            below = sum(g < shade_updated for g in small)
+            md.p(f"An intersection loop's iteration, implied by the reference's gaps: {parts} cycles (the configuration's "
+                 f"{loop_updated:,}); least on {lo[0][0]} {lo[0][1]}x{lo[0][2]} ({lo[1]:,.0f}), most on {hi[0][0]} {hi[0][1]}x{hi[0][2]} "
+                 f"({hi[1]:,.0f}). "
+                 f"A constant cannot follow that: on the 32x32 frames an SM holds 4 warps (16 from 64x64 on), and there "
+                 f"{below} of {len(small)} DFS runs' gaps lie below `workload.shade_latency` too.")
+            md.p()
 
     # --- TTP speed-up
     md.p("## The TTP speed-up")
