@@ -75,6 +75,14 @@ void erase_host_keys(nlohmann::json& j) {
     for (const char* k : {"time_s", "simulation_rate", "memory_mb", "provenance"}) j.erase(k);
 }
 
+// The statistics of a run without what measures the machine or echoes the configuration.
+nlohmann::json model_stats(const std::string& path) {
+    auto j = nlohmann::json::parse(read_text(path));
+    erase_host_keys(j);
+    j.erase("config");
+    return j;
+}
+
 }  // namespace
 
 // Cornell box: a ray from the camera straight down -z meets the back wall z = -555 at
@@ -750,13 +758,7 @@ TEST(RtsimTiming, IntersectionLoopsFollowProceduralTracesOnly) {
     const std::string cornell = "--scene cornell --width 32 --height 32 --config paper --fidelity interval --stats ";
     ASSERT_EQ(rtsim(dir, cornell + dir.file("c0.json")).status, 0);
     ASSERT_EQ(rtsim(dir, cornell + dir.file("c1.json") + " --set workload.intersection_latency=3000").status, 0);
-    auto model = [&](const std::string& f) {  // what the model computed: not the host's figures, not the configuration
-        auto j = nlohmann::json::parse(read_text(dir.file(f)));
-        erase_host_keys(j);
-        j.erase("config");
-        return j;
-    };
-    EXPECT_EQ(model("c0.json"), model("c1.json"));
+    EXPECT_EQ(model_stats(dir.file("c0.json")), model_stats(dir.file("c1.json")));
     const Result sampled = rtsim(dir, "--scene wknd --width 96 --height 96 --fidelity interval --sample 0.5 --sample-unchecked "
                                       "--set workload.intersection_latency=3000 --stats " + dir.file("s.json"));
     EXPECT_EQ(sampled.status, 2) << sampled.err;
@@ -1697,13 +1699,6 @@ std::string two_heightfields(const TempDir& dir) {
     return dir.file("fields");
 }
 
-// The statistics of a run without what measures the machine or echoes the configuration.
-nlohmann::json model_stats(const std::string& path) {
-    auto j = nlohmann::json::parse(read_text(path));
-    erase_host_keys(j);
-    j.erase("config");
-    return j;
-}
 }  // namespace
 
 // Every preset: TTP speeds a small AT path-tracing run of the bunny up (its direction, not its
