@@ -44,6 +44,7 @@ const Key kSchema[] = {
     {"workload.resident_warps", "shader warps", Type::Int, 0, 1 << 20, false, "shader warps an SM holds at once (CTAs of one warp); a finished warp's place goes to the next warp of the frame (0: every warp at once)"},
     {"workload.shade_latency", "core cycles", Type::Int, 0, 1e7, false, "cycles of shader code a shader warp runs before each of its traces (ray generation before the first; hit, miss and ray generation code before the others)"},
     {"workload.intersection_latency", "core cycles", Type::Int, 0, 1e7, false, "cycles of shader code per iteration of a shader warp's intersection loop, run after each trace and before the next: one intersection shader call per procedural leaf a ray reached, as many iterations as the warp's ray that reached the most, the others masked off (0: not modelled; triangle scenes have none)"},
+    {"workload.shader_contention", "per warp", Type::Real, 0, 10, false, "how much the shader code of one warp slows for each other warp of its SM in shader code when it begins (the SIMT core's issue slots and pipelines shared): workload.shade_latency and the intersection loop's cycles grow by this fraction per such warp, counted at the moment the warp enters its shader code (0: a warp's shader code takes the same time whatever its SM runs)"},
     {"workload.shader_reads", "sectors per ray", Type::Real, 0, 1e4, false, "32 B sectors of data no cache holds that the shader code reads after each trace, per ray of the trace: issued from the trace's end, one per cycle, through the SM's L1 (a port of their own), L2 and DRAM, waited for by nobody (0: none; given rays, rtsim --rays and the peripheral's jobs, run no shader code and read none)"},
     {"workload.shader_lines_per_read", "lines per read", Type::Real, 0, 1, false, "L1 lines the shader code's reads (workload.shader_reads) open, per read: a read opens a line of its own or takes the next sector of the line the last one opened (1: every read its own line; 0.25: four sectors a line, the fewest a 128 B line allows)"},
     {"workload.launch_latency", "core cycles", Type::Int, 0, 1e7, false, "cycles from the frame's kernel launch to its first shader warp's start"},
@@ -312,6 +313,7 @@ HwConfig Config::resolve() const {
     h.shade_latency = u32("workload.shade_latency");
     h.intersection_latency = u32("workload.intersection_latency");
     h.launch_latency = u32("workload.launch_latency");
+    h.shader_contention = num("workload.shader_contention");
     h.shader_reads = num("workload.shader_reads");
     h.shader_lines_per_read = num("workload.shader_lines_per_read");
     h.resident_warps = u32("workload.resident_warps");

@@ -82,6 +82,7 @@ struct HwConfig {
     uint32_t shade_latency;
     uint32_t intersection_latency = 0;  // per iteration of a warp's intersection loop after a trace
     uint32_t launch_latency;
+    double shader_contention = 0;  // the shader code's growth per other warp of the SM in shader code
     double shader_reads;      // sectors per ray the shader code reads after a trace (workload.shader_reads)
     double shader_lines_per_read;  // L1 lines those reads open per read (workload.shader_lines_per_read)
     uint32_t resident_warps;  // shader warps per SM at once (0: all)

@@ -18,6 +18,11 @@ SamplingOptions sampling_options(const HwConfig& c, const BvhImage& img, const T
                          " procedural leaves, and a sample's schedule model leaves out the shaders' intersection loops "
                          "(workload.intersection_latency " + std::to_string(c.intersection_latency) +
                          "): run the frame whole, or with --set workload.intersection_latency=0");
+    // Without a limit of resident warps every warp of the frame is on its SM at once, and the
+    // schedule model does not count which of them are in shader code.
+    if (c.shader_contention > 0 && c.resident_warps == 0)
+        throw InputError("--sample: workload.shader_contention > 0 needs a limit of resident warps (workload.resident_warps is 0), which a sample's schedule model "
+                         "counts the warps in shader code by: set workload.resident_warps, or run the frame whole");
     SamplingOptions s;
     s.rate = o.sample_rate;
     s.seed = o.sample_seed;

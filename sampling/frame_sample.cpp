@@ -74,7 +74,7 @@ bool check_segments(const SampleDesign& design, const SamplingOptions& o) {
 FrameSample::FrameSample(const SamplingOptions& opt, uint32_t sms, const ShaderTiming& timing)
     : opt_(opt), sms_(sms), resident_(timing.resident),
       estimator_({sms, std::max<uint32_t>(1, opt.capacity / std::max<uint32_t>(1, sms)), timing.shade, timing.resident, timing.first(),
-                  timing.shaders ? timing.shade : 0},
+                  timing.shaders ? timing.shade : 0, timing.contention},
                  opt.capacity) {}
 
 std::vector<uint64_t> FrameSample::select(const FrameWarps& frame) {

@@ -26,11 +26,32 @@ std::vector<double> schedule_resident(const std::vector<std::vector<double>>& tr
     std::vector<uint32_t> free_slots(shape.sms, shape.slots);
     std::vector<size_t> next(traces.size(), 0);
     size_t launched = 0;
-    auto launch = [&](uint32_t sm, double at) {
-        while (launched < traces.size() && traces[launched].empty()) ++launched;  // a warp without traces needs no place
-        if (launched < traces.size()) events.push({at, 1, sm, launched++});
+    auto more = [&] {  // skips the warps without traces (they need no place): is there a next warp?
+        while (launched < traces.size() && traces[launched].empty()) ++launched;
+        return launched < traces.size();
     };
-    for (uint64_t k = 0; k < uint64_t(shape.sms) * shape.resident; ++k) launch(uint32_t(k % shape.sms), double(shape.first));
+    auto launch = [&](uint32_t sm, double at) { events.push({at, 1, sm, launched++}); };
+    // With contention, per SM the cycles at which its warps' shader code ends (as the workload
+    // driver counts them: the warps whose code ends after a warp begins its own).
+    std::vector<std::priority_queue<double, std::vector<double>, std::greater<double>>> shading(shape.contention > 0 ? shape.sms : 0);
+    auto shade = [&](uint32_t sm, double now, double cycles) {
+        if (shading.empty() || cycles <= 0) return now + cycles;
+        auto& ends = shading[sm];
+        while (!ends.empty() && ends.top() <= now) ends.pop();
+        const double at = now + cycles * (1.0 + shape.contention * double(ends.size()));
+        ends.push(at);
+        return at;
+    };
+    // The first warps: those with traces, in order, round robin; an SM's begin their code together.
+    const uint64_t with_traces = uint64_t(std::count_if(traces.begin(), traces.end(), [](const auto& t) { return !t.empty(); }));
+    const uint64_t first_warps = std::min(with_traces, uint64_t(shape.sms) * shape.resident);
+    for (uint64_t k = 0; k < first_warps && more(); ++k) {
+        const uint32_t sm = uint32_t(k % shape.sms);
+        const uint64_t others = first_warps / shape.sms + (sm < first_warps % shape.sms) - 1;
+        const double at = double(shape.first) + double(shape.lead) * shape.contention * double(others);
+        if (!shading.empty() && shape.lead > 0) shading[sm].push(at);
+        launch(sm, at);
+    }
     std::vector<double> end(shape.sms, 0.0);
     while (!events.empty()) {
         const Event e = events.top();
@@ -38,9 +59,9 @@ std::vector<double> schedule_resident(const std::vector<std::vector<double>>& tr
         if (e.kind == 0) {
             ++free_slots[e.sm];
             if (next[e.warp] < traces[e.warp].size())
-                events.push({e.at + double(shape.shade), 1, e.sm, e.warp});
-            else
-                launch(e.sm, e.at + double(shape.lead));
+                events.push({shade(e.sm, e.at, double(shape.shade)), 1, e.sm, e.warp});
+            else if (more())
+                launch(e.sm, shade(e.sm, e.at, double(shape.lead)));
         } else {
             ready[e.sm].push({e.at, e.warp});
         }
@@ -62,6 +83,7 @@ std::vector<double> schedule_resident(const std::vector<std::vector<double>>& tr
 std::vector<double> schedule_sm_ends(const std::vector<std::vector<double>>& traces, const ScheduleShape& shape) {
     if (shape.sms == 0 || shape.slots == 0) throw std::invalid_argument("schedule_cycles: no RT unit or no slot");
     if (shape.resident > 0) return schedule_resident(traces, shape);
+    if (shape.contention > 0) throw std::invalid_argument("schedule_cycles: shader contention needs a limit of resident warps");
     std::vector<double> end(shape.sms, 0.0);
     using Ready = std::pair<double, size_t>;  // (ready cycle, warp)
     for (uint32_t sm = 0; sm < shape.sms; ++sm) {

@@ -21,6 +21,10 @@ struct ScheduleShape {
     uint32_t resident = 0;        // shader warps an SM holds at once (0: all of them from the start)
     uint64_t first = 0;           // the cycle the frame's first warps' first traces are ready
     uint64_t lead = 0;            // cycles a later warp (with `resident`) takes before its first trace
+    // With `resident` only: shader code (`shade`, `lead`, and the `lead` in `first`) takes 1 +
+    // contention x n times as long, n the other warps of the SM in shader code when it begins
+    // (ShaderTiming::contended).
+    double contention = 0;
 };
 
 // `traces[w]`: the durations, in cycles, of shader warp w's traces in order. Returns the cycle

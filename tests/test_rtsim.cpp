@@ -766,6 +766,27 @@ TEST(RtsimTiming, IntersectionLoopsFollowProceduralTracesOnly) {
     EXPECT_FALSE(exists(dir.file("s.json")));
 }
 
+// workload.shader_contention in every timing fidelity: the warps of an SM in shader code together
+// slow each other, so the frame takes longer with the same rays, hits and nodes. A sample's
+// schedule model counts the warps in shader code among an SM's resident warps: without a limit
+// of them (mobile's 0) a sampled run is refused; with one it runs.
+TEST(RtsimTiming, ShaderContentionSlowsTheWarpsOfAnSm) {
+    TempDir dir;
+    for (const std::string fidelity : {"at", "lt", "interval"}) {
+        const auto [a, b] = wknd_without_and_with(dir, fidelity, "workload.shader_contention=0", "workload.shader_contention=0.3");
+        EXPECT_GT(b["cycles"].get<uint64_t>(), a["cycles"].get<uint64_t>()) << fidelity;
+        for (const char* k : {"rays", "hits", "nodes_visited", "max_nodes_per_ray"}) EXPECT_EQ(a[k], b[k]) << fidelity << " " << k;
+    }
+    const std::string sample = "--scene cornell --width 96 --height 96 --config mobile --fidelity interval --sample 0.5 --sample-unchecked "
+                               "--set workload.shader_contention=0.3 --stats ";
+    const Result refused = rtsim(dir, sample + dir.file("s.json"));
+    EXPECT_EQ(refused.status, 2) << refused.err;
+    EXPECT_NE(refused.err.find("resident warps"), std::string::npos) << refused.err;
+    EXPECT_FALSE(exists(dir.file("s.json")));
+    const Result resident = rtsim(dir, sample + dir.file("r.json") + " --set workload.resident_warps=4");
+    EXPECT_EQ(resident.status, 0) << resident.err;
+}
+
 TEST(RtsimTiming, MergingReadsInFlightChangesNoHitInAnyFidelity) {
     TempDir dir;
     for (const std::string fidelity : {"at", "lt", "interval"}) {
@@ -1807,7 +1828,7 @@ TEST(RtsimConfig, EveryKeyOfEveryPresetIsRead) {
         {{"rt.warp_buffer=1"}, "--set gpu.sms=2"}, {{"rt.l1_hit_latency=30"}}, {{"rt.response_fifo=1"}}, {{"rt.next_node_register=flip"}}, {{"rt.leaf_descriptor_read=flip"}}, {{"rt.merge_in_flight=flip"}, big}, {{"rt.warp_scheduler=round_robin|oldest_first"}, "--set gpu.sms=2"},
         {{"rt.latency.structure=40"}}, {{"rt.latency.ray_box=40"}}, {{"rt.latency.transform=40"}},
         {{"rt.latency.leaf_descriptor=40"}}, {{"rt.latency.ray_triangle=40"}}, {{"rt.latency.triangle_hit=40"}},
-        {{"rt.latency.procedural=40"}, "--scene wknd"}, {{"workload.shade_latency=5000"}}, {{"workload.intersection_latency=2000"}, "--scene wknd" + pt}, {{"workload.launch_latency=3000"}}, {{"workload.shader_reads=3"}}, {{"workload.shader_lines_per_read=0.25"}, "--set workload.shader_reads=3"}, {{"workload.resident_warps=1"}, "--set gpu.sms=2"},
+        {{"rt.latency.procedural=40"}, "--scene wknd"}, {{"workload.shade_latency=5000"}}, {{"workload.intersection_latency=2000"}, "--scene wknd" + pt}, {{"workload.launch_latency=3000"}}, {{"workload.shader_reads=3"}}, {{"workload.shader_lines_per_read=0.25"}, "--set workload.shader_reads=3"}, {{"workload.resident_warps=1"}, "--set gpu.sms=2"}, {{"workload.shader_contention=0.5"}, "--set gpu.sms=2"},
         {{"l1.size_kb=2"}}, {{"l1.assoc=4"}}, {{"l1.replacement=fifo"}, "--set l1.size_kb=2"}, {{"l2.replacement=fifo"}, big + "--set l2.slice_kb=4 --set l2.assoc=4 --set l2.set_index=linear"}, {{"l1.line=64", "l2.line=64", "l2.set_index=linear"}}, {{"l1.sector=64", "l2.sector=64"}},
         {{"l1.mshrs=2", "l1.mshr_merge=2"}}, {{"l1.mshr_merge=1"}, big}, {{"l1.miss_queue=2"}, big + "--scene wknd --set workload.shader_reads=8 --set l2.mshrs=2 --set l2.mshr_merge=2"}, {{"l2.miss_queue=2"}, big},
         {{"l1.allocation=miss|fill"}, "--set l1.size_kb=2"}, {{"l2.allocation=miss|fill"}, "--set l2.slice_kb=4 --set l2.assoc=4 --set l2.set_index=linear"},

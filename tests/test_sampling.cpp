@@ -60,6 +60,22 @@ TEST(ScheduleModel, ResidentWarpsHandWorked) {
     EXPECT_DOUBLE_EQ(schedule_cycles({{10}, {4}, {6}}, {2, 1, 0, 0}), 16.0);
 }
 
+// With shader contention (ShaderTiming::contended), a warp's shader code takes 1 + contention x n
+// times as long, n the other warps of its SM in shader code when it begins.
+//   1 SM x 1 slot, 2 resident warps of two 10-cycle traces, shading 100, first 100, contention
+//   0.5: both begin their ray generation together (n = 1): ready at 100 + 100 x 0.5 = 150. w0
+//   150..160, then shades alone (w1 waits for the slot, not in shader code): ready at 260; w1
+//   160..170, then shades beside w0 (n = 1): 170 + 150 = 320. w0 260..270, w1 320..330.
+//   Without contention: w0 100..110, w1 110..120, w0 210..220, w1 220..230.
+TEST(ScheduleModel, ShaderContentionHandWorked) {
+    ScheduleShape shape{1, 1, 100, 2, 100, 100, 0.5};
+    EXPECT_DOUBLE_EQ(schedule_cycles({{10, 10}, {10, 10}}, shape), 330.0);
+    shape.contention = 0;
+    EXPECT_DOUBLE_EQ(schedule_cycles({{10, 10}, {10, 10}}, shape), 230.0);
+    // Without a limit of resident warps the model does not count warps in shader code.
+    EXPECT_THROW(schedule_cycles({{10}}, {1, 1, 100, 0, 100, 100, 0.5}), std::invalid_argument);
+}
+
 // Per RT unit, the cycle its last trace leaves; the frame's end is the latest of them.
 //   2 SMs x 1 slot, shading 10: SM 0 holds w0 and w2 (round robin): w0 0..5, w2 5..11, w0's
 //   second trace ready at 15: 15..20. SM 1 holds w1: 0..3.

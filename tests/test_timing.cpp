@@ -970,6 +970,58 @@ TEST(ShaderTiming, AWarpsNextTraceWaitsForItsIntersectionLoop) {
     }
 }
 
+// With contention (workload.shader_contention) a warp's shader code takes 1 + contention x n times
+// as long, n the other warps of its SM in shader code when it begins. Hand-worked on cornell path
+// tracing, 4 warps, shade 100, contention 0.25, no launch latency:
+// - on 1 SM the 4 begin their ray generation together (n = 3): ready at 100 x 1.75 = 175; on
+//   2 SMs, 2 each (n = 1): 125;
+// - on 1 SM, the 4 traces taken at 175; warp 0's retires at 200 while the others are in the RT
+//   unit (n = 0): ready at 300; warp 1's at 250, beside warp 0's code (n = 1): 375; warp 2's at
+//   320, when warp 0's code has ended and warp 1's has not (n = 1): 445.
+TEST(ShaderTiming, AWarpsShaderCodeSlowsBesideItsSmsOthers) {
+    const Scene scene = make_cornell();
+    const BvhImage img = build_bvh_image(scene);
+    WorkloadParams p;
+    p.width = 16;
+    p.height = 8;  // 128 pixels: 4 warps
+    p.spp = 1;
+    ShaderTiming timing;
+    timing.shade = 100;
+    timing.contention = 0.25;
+    {
+        const std::unique_ptr<Workload> workload = make_scene_workload(WorkloadKind::PathTrace, scene, p);
+        WorkloadDriver driver(*workload, 2, 32, timing);
+        EXPECT_EQ(driver.earliest_ready(0), 125u);
+        EXPECT_EQ(driver.earliest_ready(1), 125u);
+    }
+    const std::unique_ptr<Workload> workload = make_scene_workload(WorkloadKind::PathTrace, scene, p);
+    WorkloadDriver driver(*workload, 1, 32, timing);
+    EXPECT_EQ(driver.earliest_ready(0), 175u);
+    EXPECT_FALSE(driver.next_trace(0, 174));
+    std::vector<std::vector<WarpRay>> traces;
+    for (int w = 0; w < 4; ++w) {
+        auto t = driver.next_trace(0, 175);
+        ASSERT_TRUE(t);
+        traces.push_back(*t);
+    }
+    auto retire = [&](const std::vector<WarpRay>& trace, uint64_t now) {
+        std::vector<RetiredRay> done;
+        for (const WarpRay& w : trace) {
+            const TraceResult r = trace_ray(img, w.ray, TraversalOrder::DFS);
+            done.push_back(RetiredRay{w.key, r.hit, r.nodes_visited});
+        }
+        driver.retire(0, done, now);
+    };
+    retire(traces[0], 200);
+    EXPECT_EQ(driver.earliest_ready(0), 300u);
+    retire(traces[1], 250);
+    ASSERT_TRUE(driver.next_trace(0, 300));  // warp 0's second trace: warp 1's is next
+    EXPECT_EQ(driver.earliest_ready(0), 375u);
+    retire(traces[2], 320);
+    ASSERT_TRUE(driver.next_trace(0, 375));  // warp 1's second trace: warp 2's is next
+    EXPECT_EQ(driver.earliest_ready(0), 445u);
+}
+
 TEST(RtComplex, SeveralInOneSimulationShareNothing) {
     FsResolution resolution;
     struct Unit {

@@ -3,6 +3,7 @@
 // of them starts a trace, retires a ray, ends a trace and finishes. The driver itself knows
 // nothing of strata, estimates or warming. Plain C++ (no SystemC).
 #pragma once
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -18,11 +19,24 @@ namespace rtu {
 // trace's ray with the most); the first warps start `launch` cycles into the frame (the kernel
 // launch); an SM holds `resident` warps at once (0: all of them). A workload whose rays are given
 // (a ray file) runs no shader code: `first` is then 0, the delay before a warp's first trace
-// (else launch + shade).
+// (else launch + shade). With `contention`, a warp's shader code (its shade and its loop) takes
+// 1 + contention x n times as long, n being the other warps of its SM in shader code when it
+// begins (the first warps of an SM begin together: n is their number less one).
 struct ShaderTiming {
     uint32_t shade = 0, launch = 0, resident = 0, intersection = 0;
+    double contention = 0;
     bool shaders = true;
-    uint64_t first() const { return shaders ? uint64_t(launch) + shade : 0; }
+    // `cycles` of shader code begun beside `others` warps in theirs, rounded to the nearest cycle.
+    // Floating point: the factor is one multiply-add on small values (others < 2^32, contention
+    // <= 10), and cycles x factor stays far below 2^53, so the product is within a few ulps of the
+    // exact value; a last-bit difference (a fused multiply-add on another target) could change the
+    // result only at an exact half-cycle tie.
+    uint64_t contended(uint64_t cycles, uint32_t others) const {
+        if (contention <= 0 || others == 0) return cycles;
+        const double factor = 1.0 + contention * double(others);
+        return uint64_t(std::llround(double(cycles) * factor));
+    }
+    uint64_t first(uint32_t others = 0) const { return shaders ? uint64_t(launch) + contended(shade, others) : 0; }
 };
 
 // The frame's shader warps, as the driver packed them, in frame order.

@@ -35,6 +35,7 @@ ShaderTiming shader_timing(const HwConfig& hw, const Workload& workload) {
     t.launch = hw.launch_latency;
     t.resident = hw.resident_warps;
     t.intersection = hw.intersection_latency;
+    t.contention = hw.shader_contention;
     t.shaders = workload.runs_shaders();
     return t;
 }
@@ -78,11 +79,32 @@ WorkloadDriver::WorkloadDriver(Workload& workload, uint32_t sms, uint32_t warp_s
             for (const Thread& t : warps_[i].threads) path_warp_[t.path] = i;
     }
     launched_ = timing_.resident ? std::min<size_t>(warps_.size(), size_t(sms) * timing_.resident) : warps_.size();
-    for (uint32_t i = 0; i < launched_; ++i) enqueue(i, timing_.first());
+    // The first warps of an SM begin their shader code together, each beside all the others.
+    std::vector<uint32_t> on_sm(sms, 0);
+    for (uint32_t i = 0; i < launched_; ++i) ++on_sm[warps_[i].sm];
+    if (timing_.contention > 0 && timing_.shaders) shading_.resize(sms);
+    for (uint32_t i = 0; i < launched_; ++i) {
+        const uint64_t at = timing_.first(on_sm[warps_[i].sm] - 1);
+        if (!shading_.empty()) shading_[warps_[i].sm].push(at);
+        enqueue(i, at);
+    }
     live_warps_ = warps_.size();
 }
 
 void WorkloadDriver::enqueue(uint32_t warp, uint64_t ready_at) { ready_[warps_[warp].sm].insert({ready_at, warp}); }
+
+void WorkloadDriver::shade(uint32_t warp, uint64_t now, uint64_t cycles) {
+    if (shading_.empty()) {  // no contention (or no shader code): the code takes its own time
+        enqueue(warp, now + cycles);
+        return;
+    }
+    // The warps of the SM in shader code at `now`: those whose code ends later.
+    auto& ends = shading_[warps_[warp].sm];
+    while (!ends.empty() && ends.top() <= now) ends.pop();
+    const uint64_t at = now + timing_.contended(cycles, uint32_t(ends.size()));
+    ends.push(at);
+    enqueue(warp, at);
+}
 
 uint64_t WorkloadDriver::earliest_ready(uint32_t sm) const { return ready_[sm].empty() ? ~0ull : ready_[sm].begin()->first; }
 
@@ -173,13 +195,13 @@ void WorkloadDriver::retire(uint32_t sm, const std::vector<RetiredRay>& rays, ui
             const uint32_t loop = sw.loop;
             sw.loop = 0;
             if (more) {
-                enqueue(rec.warp, now + uint64_t(timing_.intersection) * loop + timing_.shade);
+                shade(rec.warp, now, uint64_t(timing_.intersection) * loop + timing_.shade);
             } else {
                 --live_warps_;
                 if (selection_) selection_->warp_finished(live_warps_, now);
                 if (launched_ < warps_.size()) {  // its place goes to the next warp of the frame, which shades first
                     warps_[launched_].sm = sw.sm;
-                    enqueue(uint32_t(launched_++), now + (timing_.shaders ? timing_.shade : 0));
+                    shade(uint32_t(launched_++), now, timing_.shaders ? timing_.shade : 0);
                 }
             }
         }

@@ -1,8 +1,9 @@
 // The workload driver: the shader side of the GPU, the design's "workload module making rays".
 // Paths are packed into shader warps of 32 neighbouring pixels, each warp bound to one SM; a warp
 // issues one trace (one ray per thread that has one) to its SM's RT unit, waits for it, shades for
-// a fixed latency, and issues the next bounce / AO / shadow rays. RT units pull traces when they
-// have a free warp-buffer slot (TraceSource), which keeps their warp buffers full. A sampled run
+// a latency (ShaderTiming: longer beside the SM's other warps in shader code), and issues the next
+// bounce / AO / shadow rays. RT units pull traces when they have a free warp-buffer slot
+// (TraceSource), which keeps their warp buffers full. A sampled run
 // keeps only the warps its selection picks (workloads/warp_selection.h, sampling/frame_sample.h).
 // Plain C++ with cycle numbers: it serves AT, LT and interval alike.
 #pragma once
@@ -10,6 +11,7 @@
 #include <functional>
 #include <memory>
 #include <optional>
+#include <queue>
 #include <set>
 #include <string>
 #include <vector>
@@ -92,12 +94,18 @@ private:
     };
     class Frame;  // the warps as a selection reads them
     void enqueue(uint32_t warp, uint64_t ready_at);
+    // The warp begins `cycles` of shader code (alone) at `now`: with contention it takes longer
+    // (ShaderTiming::contended); its next trace is ready when the code ends.
+    void shade(uint32_t warp, uint64_t now, uint64_t cycles);
 
     Workload& workload_;
     ShaderTiming timing_;
     std::vector<ShaderWarp> warps_;
     std::vector<uint32_t> path_warp_;  // path -> shader warp
     std::vector<std::set<std::pair<uint64_t, uint32_t>>> ready_;  // per SM: (ready cycle, warp)
+    // Per SM, with contention: the cycles at which its warps' shader code ends, those still to come
+    // and some past ones not yet dropped (empty without contention).
+    std::vector<std::priority_queue<uint64_t, std::vector<uint64_t>, std::greater<uint64_t>>> shading_;
     std::vector<Record> records_;
     std::vector<uint64_t> free_records_;
     bool keep_rays_ = true;

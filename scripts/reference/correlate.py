@@ -10,8 +10,9 @@ per ray, cycles, the TTP speed-up, the RT unit's L1 and L2 miss rates, prefetche
 reference_traces.csv (trace_stats.py) says where the reference's cycles go. Every sentence of the
 report is computed from these figures.
 
-rtunit's runs are kept in OUT/runs/ under the rtsim binary's hash, so a second report with the
-same binary runs nothing again.
+rtunit's runs are kept in OUT/runs/ under the hash of the rtsim binary and of
+configs/updated-mobile.json (which rtsim reads at run time), so a second report with the same
+binary and configuration runs nothing again.
 Usage: correlate.py [--rtsim build/rtsim] [--scenes ../shared/scenes] [--data reports/correlation]
                     [--jobs 2]"""
 import argparse
@@ -259,6 +260,114 @@ def limit_section(md, ref, got, limit_keys):
     md.p()
 
 
+def warps_per_sm(k, workload, sms):
+    """Shader warps an SM holds at once in frame k: 32-pixel warps round robin, at most resident."""
+    warps = math.ceil(k[1] * k[2] / 32)
+    return min(workload["resident_warps"], math.ceil(warps / sms)) if workload["resident_warps"] else math.ceil(warps / sms)
+
+
+def fit_shader_code(samples):
+    """Least squares of the relative error of gap = (W + L x loop) x (1 + k x n) over samples
+    (gap, loop, n): for each k on a grid of 0.0005 the best W and L are linear, so the fit is exact
+    to the grid. Returns (W, L, k, rms relative error), and the same with k = 0."""
+    def solve(k):
+        # Rows (1 + k n) / gap and loop (1 + k n) / gap against 1: the normal equations of 2 unknowns.
+        a = [((1 + k * n) / g, loop * (1 + k * n) / g) for g, loop, n in samples]
+        s11 = sum(x * x for x, _ in a)
+        s12 = sum(x * y for x, y in a)
+        s22 = sum(y * y for _, y in a)
+        b1, b2 = sum(x for x, _ in a), sum(y for _, y in a)
+        det = s11 * s22 - s12 * s12
+        w, l_ = (b1 * s22 - b2 * s12) / det, (s11 * b2 - s12 * b1) / det
+        rms = math.sqrt(sum((w * x + l_ * y - 1) ** 2 for x, y in a) / len(a))
+        return w, l_, k, rms
+    best = min((solve(i * 0.0005) for i in range(1001)), key=lambda r: r[3])
+    return best, solve(0.0)
+
+
+def shader_code_section(md, traces, got, keys):
+    """The reference's shader code between traces against rtunit's model of it (ShaderTiming):
+    the fit that the configurations' workload.shade_latency, intersection_latency and
+    shader_contention come from, each run's gap beside it, and the first trace as a check the fit
+    did not use."""
+    cfg = json.loads((HERE / "configs" / "updated-mobile.json").read_text())
+    updated, sms = cfg["workload"], cfg["gpu"]["sms"]
+    preset = json.loads((ROOT / "platforms" / "configs" / "paper.json").read_text())["workload"]
+    keys_of = ("shade_latency", "intersection_latency", "shader_contention")
+    # The fit: the updated configuration's frames, with and without TTP (which changes how long the
+    # warps spend in shader code at a fixed frame); not the limit studies. Its warp buffer holds
+    # every resident warp, so a warp's gap is its shader code alone; under the paper's
+    # configuration (4 slots) the logged gap also holds the wait for a slot (shader.cc l.2866).
+    samples, rows_of = [], {}
+    for k, tr in sorted(traces.items()):
+        if k[4] not in CONFIGS or CONFIGS[k[4]][0] != "updated" or k[4] in LIMIT_BASE or not tr["shader_gap_mean"]:
+            continue
+        loop = got[k]["loop"] if k in got else 0.0
+        n = (warps_per_sm(k, updated, sms) - 1) * (1 - float(tr["rt_share"]))
+        samples.append((float(tr["shader_gap_mean"]), loop, n))
+        rows_of[k] = samples[-1]
+    (W, L, K, rms), (W0, L0, _, rms0) = fit_shader_code(samples)
+    md.p("## Where the reference's cycles go")
+    md.p()
+    md.p("From the reference's log (`reference_traces.csv`, `scripts/reference/trace_stats.py`): each warp's traces "
+         "(arrival at the RT unit to completion) and the shader code between them (completion to the next arrival: "
+         "closest-hit, miss, intersection and ray-generation shaders on the SIMT cores). rtunit stands for that code with "
+         "`workload.shade_latency` cycles before each trace, after a trace whose rays reached procedural leaves first "
+         "`workload.intersection_latency` cycles per iteration of the warp's intersection loop (one intersection shader "
+         "call per leaf, as many iterations as its ray with the most: the `loop` column, rtunit's, per trace), and the "
+         "whole taking 1 + `workload.shader_contention` x n times as long, n the other warps of the SM in shader code when "
+         "it begins (the SIMT core's issue slots and pipelines are shared).")
+    md.p()
+    md.p(f"The three come from a fit to the reference's gaps: least squares of the relative error of gap = (W + L x loop) "
+         f"x (1 + k x n) over the {len(samples)} runs of the updated configuration (not the limit studies), n taken as the "
+         f"reference's own average, (warps per SM - 1) x (1 - RT share): W = {W:,.0f}, L = {L:,.0f}, k = {K:.4f}, "
+         f"{rms:.1%} rms; without the load term (k = 0) the best fit is W = {W0:,.0f}, L = {L0:,.0f} at {rms0:.1%} rms. "
+         f"An SM holds {warps_per_sm(('', 32, 32), updated, sms)} warps at 32x32 and "
+         f"{warps_per_sm(('', 64, 64), updated, sms)} from 64x64 on.")
+    md.p()
+    have = {name: (updated.get(kk), preset.get(kk)) for name, kk in zip("WLk", keys_of)}
+    fitted = {"W": round(W), "L": round(L), "k": round(K, 4)}
+    agree = all(have[x][0] == fitted[x] and have[x][1] == fitted[x] for x in "WLk")
+    md.p("The configurations take " + ", ".join(f"`workload.{kk}` {have[x][0]} (`configs/updated-mobile.json`) and "
+         f"{have[x][1]} (`paper`)" for x, kk in zip("WLk", keys_of)) + ": " +
+         ("the fit's values." if agree else f"not the fit's values ({fitted['W']}, {fitted['L']}, {fitted['k']}): rerun "
+          "the fit's inputs or update the configurations."))
+    md.p()
+    rows, errs = [], []
+    for k in keys:
+        tr = traces.get(k)
+        if not tr:
+            continue
+        g = float(tr["shader_gap_mean"]) if tr["shader_gap_mean"] else None
+        model = err = None
+        if k in rows_of:
+            _, loop, n = rows_of[k]
+            model = (W + L * loop) * (1 + K * n)
+            err = model / g - 1
+            errs.append((k, err))
+        loop = got[k]["loop"] if k in got else 0.0
+        rows.append([k[0], f"{k[1]}x{k[2]}", k[4], f"{float(tr['gpu_sim_cycle']):,.0f}", tr["traces"], tr["first_trace"],
+                     f"{float(tr['rt_residence_mean']):,.0f}", f"{g:,.0f}" if g else "—", f"{float(tr['rt_share']):.2f}",
+                     f"{loop:.2f}" if loop > 0 else "—", f"{rows_of[k][2]:.1f}" if k in rows_of else "—",
+                     f"{model:,.0f}" if model else "—", pct(err)])
+    md.table(["scene", "frame", "config", "cycles", "traces", "first trace at", "mean RT residence", "mean shader gap",
+              "RT share of a warp's time", "loop (rtunit)", "n", "fitted gap", "error"], rows)
+    worst = sorted(errs, key=lambda kv: -abs(kv[1]))[:3]
+    md.p("Worst fitted gaps: " + ", ".join(f"{k[0]} {k[1]}x{k[2]} {k[4]} {pct(e)}" for k, e in worst) + ".")
+    md.p()
+    # A check the fit did not use: the first trace. Every warp of an SM starts its ray generation
+    # shader together at the first CTA's issue, beside all the others of its SM.
+    checks = []
+    for frame in sorted({(k[1], k[2]) for k in rows_of}):
+        firsts = [int(traces[k]["first_trace"]) - int(traces[k]["cta_first_issue"]) for k in rows_of if (k[1], k[2]) == frame]
+        model = W * (1 + K * (warps_per_sm(("",) + frame, updated, sms) - 1))
+        checks.append(f"{frame[0]}x{frame[1]}: {min(firsts):,}-{max(firsts):,} cycles after the first CTA's issue, the fit "
+                      f"{model:,.0f} ({pct(model / (sum(firsts) / len(firsts)) - 1)} from their mean)")
+    md.p("The first trace, which the fit did not use (a warp's ray generation shader begins with all its SM's warps): "
+         + "; ".join(checks) + ".")
+    md.p()
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--rtsim", default=str(ROOT / "build" / "rtsim"))
@@ -274,7 +383,7 @@ def main():
             for r in csv.DictReader(fh):
                 traces[(r["scene"], int(r["width"]), int(r["height"]), int(r["spp"]), r["config"])] = r
     binary = sha256(a.rtsim)
-    runs = data / "runs" / binary
+    runs = data / "runs" / f"{binary}-{sha256(CONFIG_ARG['updated'])[:8]}"
     runs.mkdir(parents=True, exist_ok=True)
     got = {}
     with concurrent.futures.ThreadPoolExecutor(max_workers=a.jobs) as ex:
@@ -424,68 +533,7 @@ def main():
 
     # --- where the reference's cycles go
     if traces:
-        updated = json.loads((HERE / "configs" / "updated-mobile.json").read_text())["workload"]
-        preset = json.loads((ROOT / "platforms" / "configs" / "paper.json").read_text())["workload"]
-        shade_updated, shade_preset = updated["shade_latency"], preset["shade_latency"]
-        loop_updated, loop_preset = updated["intersection_latency"], preset["intersection_latency"]
-        g64 = sorted(float(t["shader_gap_mean"]) for k, t in traces.items() if k[1] == 64 and k[2] == 64 and k[4] == "dfs")
-        gap_median = g64[len(g64) // 2] if g64 else float("nan")
-        md.p("## Where the reference's cycles go")
-        md.p()
-        md.p("From the reference's log (`reference_traces.csv`, `scripts/reference/trace_stats.py`): each warp's traces "
-             "(arrival at the RT unit to completion) and the shader code between them (completion to the next arrival: "
-             "closest-hit, miss, intersection and ray-generation shaders on the SIMT cores). rtunit stands for that code with "
-             f"`workload.shade_latency` cycles before each trace: {shade_updated:,} in `configs/updated-mobile.json`, the median "
-             f"of the 64x64 DFS runs' mean gaps below ({gap_median:,.0f}), and {shade_preset:,} in rtunit's `paper` preset; "
-             "after a trace whose rays reached procedural leaves, the warp's intersection loop comes first (one intersection "
-             "shader call per leaf, as many iterations as its ray with the most: rtunit's `intersection loop` column, per trace), "
-             f"`workload.intersection_latency` cycles an iteration: {loop_updated:,} in `configs/updated-mobile.json`, "
-             f"{loop_preset:,} in the `paper` preset. The `implied` column is what an iteration costs in the reference if the "
-             "rest of the gap is that constant: the gap less `workload.shade_latency`, over the loop's iterations (the "
-             "updated configuration's runs, where that constant was measured).")
-        md.p()
-        rows = []
-        shares, gaps, implied_rows = [], [], []
-        for k in keys:
-            tr = traces.get(k)
-            if not tr or CONFIGS[k[4]][2] != "none":
-                continue
-            g = float(tr["shader_gap_mean"]) if tr["shader_gap_mean"] else None
-            gaps.append(g)
-            shares.append(float(tr["rt_share"]))
-            loop = got[k]["loop"] if k in got else 0.0
-            # Only where workload.shade_latency was measured: the updated configuration. (The
-            # paper's configuration's gaps hold the shaders' waits on memory, which rtunit's
-            # shader reads do not make: every scene's are 2-10x longer there.)
-            updated_cfg = CONFIGS[k[4]][0] == "updated"
-            implied = (g - shade_updated) / loop if g and loop > 0 and updated_cfg else None
-            if implied is not None:
-                implied_rows.append((k, implied))
-            rows.append([k[0], f"{k[1]}x{k[2]}", k[4], f"{float(tr['gpu_sim_cycle']):,.0f}", tr["traces"], tr["first_trace"],
-                         f"{float(tr['rt_residence_mean']):,.0f}", f"{g:,.0f}" if g else "—", f"{float(tr['rt_share']):.2f}",
-                         f"{loop:.2f}" if loop > 0 else "—", f"{implied:,.0f}" if implied is not None else "—"])
-        md.table(["scene", "frame", "config", "cycles", "traces", "first trace at", "mean RT residence", "mean shader gap",
-                  "RT share of a warp's time", "intersection loop (rtunit)", "implied cycles an iteration"], rows)
-        gs = [g for g in gaps if g]
-        lead = sorted(int(traces[k]["first_trace"]) - int(traces[k]["cta_first_issue"]) for k in traces)
-        issue = sorted({int(traces[k]["cta_first_issue"]) for k in traces})
-        md.p(f"Between two traces a warp spends {min(gs):,.0f} to {max(gs):,.0f} cycles in shader code (mean of the runs above); "
-             f"the RT unit holds a warp for "
-             f"{min(shares):.0%} to {max(shares):.0%} of its time between its first trace and its last. The first trace "
-             f"arrives {lead[0]:,} to {lead[-1]:,} cycles after the first CTA is issued, which itself comes "
-             f"{', '.join(f'{c:,}' for c in issue)} cycles into the kernel.")
-        md.p()
-        if implied_rows:
-            parts = ", ".join(f"{k[0]} {k[1]}x{k[2]} {k[4]} {v:,.0f}" for k, v in implied_rows)
-            lo, hi = min(implied_rows, key=lambda kv: kv[1]), max(implied_rows, key=lambda kv: kv[1])
-            small = [float(traces[k]["shader_gap_mean"]) for k in traces if k[1] == 32 and k[4] == "dfs" and traces[k]["shader_gap_mean"]]
-            below = sum(g < shade_updated for g in small)
-            md.p(f"An intersection loop's iteration, implied by the reference's gaps: {parts} cycles (the configuration's "
-                 f"{loop_updated:,}); least on {lo[0][0]} {lo[0][1]}x{lo[0][2]} ({lo[1]:,.0f}), most on {hi[0][0]} {hi[0][1]}x{hi[0][2]} "
-                 f"({hi[1]:,.0f}). "
-                 f"A constant cannot follow that: on the 32x32 frames an SM holds 4 warps (16 from 64x64 on), and there "
-                 f"{below} of {len(small)} DFS runs' gaps lie below `workload.shade_latency` too.")
-            md.p()
+        shader_code_section(md, traces, got, keys)
 
     # --- TTP speed-up
     md.p("## The TTP speed-up")
