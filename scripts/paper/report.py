@@ -806,9 +806,11 @@ def main():
             "the L1 filled when the RT unit drains its response FIFO rather than when the data arrives (shader.cc "
             "l.3025-3030): this changes how long a prefetched line waits to be useful;",
             "the shader code between trace calls, its time and its loads and stores through the L1 and L2: rtunit charges "
-            "a constant measured on the authors' simulator (docs/paper-preset.md, `workload.shade_latency`), and after a trace "
-            "through procedural leaves a constant per iteration of the warp's intersection loop (`workload.intersection_latency`, "
-            "measured on wknd's 64x64 frame: the reference's loop is cheaper on a GPU with fewer warps per SM); the loads that "
+            "a time fitted to the authors' simulator's gaps between traces (docs/paper-preset.md): `workload.shade_latency`, "
+            "after a trace through procedural leaves `workload.intersection_latency` per iteration of the warp's intersection "
+            "loop, the whole longer by `workload.shader_contention` for each other warp of the SM in shader code; one cost for "
+            "every scene, where the authors' scenes differ (`reports/correlation`, \"Where the reference's cycles go\", "
+            "gives each scene's gaps against the fit); the loads that "
             "reach L2 are `workload.shader_reads` (5.5 sectors per ray of fresh data in the preset; the reads that hit L1 "
             "are not modelled); the stores are not modelled (10-14 sectors per ray reach the authors' L2);",
             "the DRAM's read-to-precharge time (RTPL=4) and write-to-read turn (CDLR=9); reads alone do not reach the "
