@@ -6,6 +6,8 @@
 #include <stdexcept>
 #include <utility>
 
+#include "workloads/warp_selection.h"
+
 namespace rtu {
 
 namespace {
@@ -31,15 +33,12 @@ std::vector<double> schedule_resident(const std::vector<std::vector<double>>& tr
         return launched < traces.size();
     };
     auto launch = [&](uint32_t sm, double at) { events.push({at, 1, sm, launched++}); };
-    // With contention, per SM the cycles at which its warps' shader code ends (as the workload
-    // driver counts them: the warps whose code ends after a warp begins its own).
-    std::vector<std::priority_queue<double, std::vector<double>, std::greater<double>>> shading(shape.contention > 0 ? shape.sms : 0);
+    // With contention, per SM its warps in shader code, counted as the workload driver counts them.
+    std::vector<ShaderCodeEnds<double>> shading(shape.contention > 0 ? shape.sms : 0);
     auto shade = [&](uint32_t sm, double now, double cycles) {
         if (shading.empty() || cycles <= 0) return now + cycles;
-        auto& ends = shading[sm];
-        while (!ends.empty() && ends.top() <= now) ends.pop();
-        const double at = now + cycles * (1.0 + shape.contention * double(ends.size()));
-        ends.push(at);
+        const double at = now + cycles * (1.0 + shape.contention * double(shading[sm].beside(now)));
+        shading[sm].add(at);
         return at;
     };
     // The first warps: those with traces, in order, round robin; an SM's begin their code together.
@@ -49,7 +48,7 @@ std::vector<double> schedule_resident(const std::vector<std::vector<double>>& tr
         const uint32_t sm = uint32_t(k % shape.sms);
         const uint64_t others = first_warps / shape.sms + (sm < first_warps % shape.sms) - 1;
         const double at = double(shape.first) + double(shape.lead) * shape.contention * double(others);
-        if (!shading.empty() && shape.lead > 0) shading[sm].push(at);
+        if (!shading.empty() && shape.lead > 0) shading[sm].add(at);
         launch(sm, at);
     }
     std::vector<double> end(shape.sms, 0.0);

@@ -6,6 +6,8 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
+#include <queue>
 #include <vector>
 
 #include "model/trace_source.h"
@@ -37,6 +39,23 @@ struct ShaderTiming {
         return uint64_t(std::llround(double(cycles) * factor));
     }
     uint64_t first(uint32_t others = 0) const { return shaders ? uint64_t(launch) + contended(shade, others) : 0; }
+};
+
+// The warps of one SM in shader code, for ShaderTiming::contention: when each one's code ends. A
+// warp that begins its code at `now` runs beside those whose code ends later. Shared by the
+// workload driver (cycles) and the sample's schedule model (sampling/schedule_model.h, doubles).
+template <class Cycle>
+class ShaderCodeEnds {
+public:
+    // The warps still in shader code at `now` (those whose code ended by then are dropped).
+    uint32_t beside(Cycle now) {
+        while (!ends_.empty() && ends_.top() <= now) ends_.pop();
+        return uint32_t(ends_.size());
+    }
+    void add(Cycle end) { ends_.push(end); }
+
+private:
+    std::priority_queue<Cycle, std::vector<Cycle>, std::greater<Cycle>> ends_;
 };
 
 // The frame's shader warps, as the driver packed them, in frame order.

@@ -85,7 +85,7 @@ WorkloadDriver::WorkloadDriver(Workload& workload, uint32_t sms, uint32_t warp_s
     if (timing_.contention > 0 && timing_.shaders) shading_.resize(sms);
     for (uint32_t i = 0; i < launched_; ++i) {
         const uint64_t at = timing_.first(on_sm[warps_[i].sm] - 1);
-        if (!shading_.empty()) shading_[warps_[i].sm].push(at);
+        if (!shading_.empty()) shading_[warps_[i].sm].add(at);
         enqueue(i, at);
     }
     live_warps_ = warps_.size();
@@ -98,11 +98,9 @@ void WorkloadDriver::shade(uint32_t warp, uint64_t now, uint64_t cycles) {
         enqueue(warp, now + cycles);
         return;
     }
-    // The warps of the SM in shader code at `now`: those whose code ends later.
-    auto& ends = shading_[warps_[warp].sm];
-    while (!ends.empty() && ends.top() <= now) ends.pop();
-    const uint64_t at = now + timing_.contended(cycles, uint32_t(ends.size()));
-    ends.push(at);
+    ShaderCodeEnds<uint64_t>& sm = shading_[warps_[warp].sm];
+    const uint64_t at = now + timing_.contended(cycles, sm.beside(now));
+    sm.add(at);
     enqueue(warp, at);
 }
 

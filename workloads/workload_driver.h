@@ -11,7 +11,6 @@
 #include <functional>
 #include <memory>
 #include <optional>
-#include <queue>
 #include <set>
 #include <string>
 #include <vector>
@@ -103,9 +102,7 @@ private:
     std::vector<ShaderWarp> warps_;
     std::vector<uint32_t> path_warp_;  // path -> shader warp
     std::vector<std::set<std::pair<uint64_t, uint32_t>>> ready_;  // per SM: (ready cycle, warp)
-    // Per SM, with contention: the cycles at which its warps' shader code ends, those still to come
-    // and some past ones not yet dropped (empty without contention).
-    std::vector<std::priority_queue<uint64_t, std::vector<uint64_t>, std::greater<uint64_t>>> shading_;
+    std::vector<ShaderCodeEnds<uint64_t>> shading_;  // per SM, with contention (else empty)
     std::vector<Record> records_;
     std::vector<uint64_t> free_records_;
     bool keep_rays_ = true;
