@@ -27,6 +27,12 @@ Matrix items are SCENE:WxH:SPP:CONFIG, for example ship:32x32:1:ttp.
           or 1st pops, answered as L1 hits). The fork has no limit study: these need the
           installation built with limit-study.patch (in this folder), and the run fails
           ("no-limit-study") where the simulator does not print that it applied one.
+  paper-dfs-park: DFS without TTP, with Park et al.'s prefetcher as the paper's section 6
+          describes it (prefetches from the stack during each primitive leaf's test, as many 32 B
+          chunks as the config's QUAD intersection latency has cycles, next pop first). The fork
+          has no Park code: this needs the installation built with park.patch (in this folder),
+          and fails the same way ("no-limit-study") where the simulator does not print that it
+          applied it.
   paper-dfs, paper-dfs-ttp, paper-base, paper-ttp: the same switches on
   configs/tested-cfgs/MOBILE/gpgpusim.config (32 KB L1, 4 RT warps, latencies 4,8,8,4,8,8,8, the
   built-in crossbar: the paper's Table 2, and rtunit's `paper` preset), where the two switches
@@ -48,8 +54,8 @@ so several runs can go at once (--jobs). Results:
                                      code 0 and status "ok" are skipped, so an interrupted matrix
                                      resumes). status: ok | crashed-at-exit (statistics complete,
                                      then the process died) | no-stats | failed | timeout |
-                                     no-limit-study (a limit-study CONFIG on an installation
-                                     without limit-study.patch). Items
+                                     no-limit-study (a limit-study or Park CONFIG on an
+                                     installation without its patch). Items
                                      that are not ok are tried again (--retries); use the ok rows.
     OUTDIR/logs/<tag>.log.gz         the run's full stdout + stderr
     OUTDIR/images/<tag>.ppm          the frame the simulator wrote
@@ -114,15 +120,31 @@ CONFIGS = {"dfs": ("updated", 0, 0), "dfs-ttp": ("updated", 0, 1), "base": ("upd
            "paper-dfs": ("tested", 0, 0), "paper-dfs-ttp": ("tested", 0, 1), "paper-base": ("tested", 1, 0),
            "paper-ttp": ("tested", 1, 1),
            "dfs-perfect-up": ("updated", 0, 0), "dfs-perfect-down": ("updated", 0, 0),
-           "paper-dfs-perfect-up": ("tested", 0, 0), "paper-dfs-perfect-down": ("tested", 0, 0)}
+           "paper-dfs-perfect-up": ("tested", 0, 0), "paper-dfs-perfect-down": ("tested", 0, 0),
+           "paper-dfs-park": ("tested", 0, 0)}
+# Our instrumentation patches (this folder), chosen by a CONFIG's suffix: suffix -> (the mode kept
+# in the CSV's limit_study column, the environment variable that turns the patch on, the patch).
+INSTRUMENTS = {"-perfect-up": ("perfect-up", "RTSIM_LIMIT_STUDY", "limit-study.patch"),
+               "-perfect-down": ("perfect-down", "RTSIM_LIMIT_STUDY", "limit-study.patch"),
+               "-park": ("park", "RTSIM_PARK", "park.patch")}
 
 
 def limit_study(config):
-    """The limit study a CONFIG asks for (RTSIM_LIMIT_STUDY of limit-study.patch), or ''."""
-    for mode in ("perfect-up", "perfect-down"):
-        if config.endswith("-" + mode):
-            return mode
-    return ""
+    """The instrumentation a CONFIG asks for: (mode, environment variable, patch), or ('', '', '')."""
+    for suffix, inst in INSTRUMENTS.items():
+        if config.endswith(suffix):
+            return inst
+    return ("", "", "")
+
+
+def quad_latency(config_text, config_file):
+    """The QUAD leaf's test latency of a fork configuration file: the 5th of
+    -gpgpu_rt_intersection_latency (STRUCTURE, INTERNAL, INSTANCE, DESCRIPTOR, QUAD, QUAD_HIT,
+    PROCEDURAL; shader.h l.1621-1628)."""
+    m = re.findall(r"(?m)^-gpgpu_rt_intersection_latency[ \t]+(\S+)", config_text)
+    if len(m) != 1 or len(m[0].split(",")) != 7:
+        raise RuntimeError(f"{config_file}: expected one -gpgpu_rt_intersection_latency with 7 values, found {m}")
+    return int(m[0].split(",")[4])
 
 
 RTIV_BUILD = "RayTracingInVulkan/build/linux"
@@ -297,7 +319,8 @@ TOP_STATS = [
     "rt_n_total_rays", "rt_n_closesthit_rays", "rt_n_anyhit_rays", "rt_num_hits", "rt_num_any_hits",
     "rt_avg_nodes_per_ray", "rt_max_nodes_per_ray", "rt_tot_nodes_per_ray", "rt_max_tree_depth",
     "rt_avg_warp_latency", "rt_avg_thread_latency", "rt_avg_efficiency", "rt_avg_warp_occupancy",
-    "rt_avg_op_intensity", "rt_avg_performance", "rt_writes", "rt_limit_study_hits", "rt_max_mem_store_q",
+    "rt_avg_op_intensity", "rt_avg_performance", "rt_writes", "rt_limit_study_hits", "rt_park_prefetch_records",
+    "rt_max_mem_store_q",
     "rt_avg_mem_store_cycles", "rt_total_cycles", "rt_total_cycles_sum",
     "gpgpu_n_rt_insn", "gpgpu_n_rt_access_insn",
     # L1D (the RT unit uses L1 as its RT cache: -gpgpu_rt_use_l1 1)
@@ -716,7 +739,7 @@ class Runner:
         _, bfs, ttp = CONFIGS[item.config]
         row = {"scene": item.scene, "lumibench_id": SCENES[item.scene]["id"],
                "width": item.width, "height": item.height, "spp": item.spp,
-               "config": item.config, "bfs": bfs, "ttp": ttp, "limit_study": limit_study(item.config),
+               "config": item.config, "bfs": bfs, "ttp": ttp, "limit_study": limit_study(item.config)[0],
                **self.versions}
         bindir, mroot, fingerprint, order = self.prepare(item, run)
         row["assets_sha"] = sha256_listing(fingerprint) if fingerprint else "procedural"
@@ -724,14 +747,23 @@ class Runner:
                                       if order else "")
         app_args = ["--scene", str(SCENES[item.scene]["id"]), "--width", str(item.width),
                     "--height", str(item.height), "--samples", str(item.spp)]
+        # the instrumentation's switch: the limit study's mode, or Park's chunks a leaf test (the
+        # QUAD latency of the configuration as written for this run: one 32 B chunk a cycle)
+        _, env_name, _ = limit_study(item.config)
+        env_value = row["limit_study"]
+        if env_name == "RTSIM_PARK":
+            config_path = os.path.join(bindir, "gpgpusim.config")
+            with open(config_path, encoding="utf-8") as f:
+                env_value = str(quad_latency(f.read(), config_path))
+        switch = f"{env_name}={env_value}" if env_name else ""
         # env-vsim.sh cds into vulkan-sim/ and sources its setup_environment: run it in a subshell,
         # then set the private MESA_ROOT (lavapipe writes the shaders' PTX to
         # $MESA_ROOT/gpgpusimShaders/) and start the application from bin/.
         script = ('source "$1/env-vsim.sh" >/dev/null 2>&1; export MESA_ROOT="$2/"; '
-                  'if [ -n "$4" ]; then export RTSIM_LIMIT_STUDY="$4"; else unset RTSIM_LIMIT_STUDY; fi; '
+                  'unset RTSIM_LIMIT_STUDY RTSIM_PARK; if [ -n "$4" ]; then export "$4"; fi; '
                   'cd "$3" || exit 98; shift 4; exec ./RayTracer "$@"')
         cmd = ["nice", "-n", str(self.nice), "bash", "-c", script, "run_reference",
-               self.root, mroot, bindir, row["limit_study"]] + app_args
+               self.root, mroot, bindir, switch] + app_args
         logpath = os.path.join(run, "run.log")
         row["started_utc"] = utc_now()
         log(f"start {item.text} ({' '.join(app_args)})")
@@ -739,7 +771,7 @@ class Runner:
         with open(logpath, "wb") as logf:
             logf.write(f"# run_reference.py {item.text}: {' '.join(app_args)} "
                        f"(BFS_based_traversal={bfs} stack_trend_prefetch={ttp}"
-                       f"{' RTSIM_LIMIT_STUDY=' + row['limit_study'] if row['limit_study'] else ''})\n".encode())
+                       f"{' ' + switch if switch else ''})\n".encode())
             logf.flush()
             p = subprocess.Popen(cmd, stdout=logf, stderr=subprocess.STDOUT,
                                  stdin=subprocess.DEVNULL, start_new_session=True)
@@ -771,9 +803,9 @@ class Runner:
         row.update(stats)
         row["app_models_loaded"] = len(re.findall(r"^- loading '[^']*\.obj'", text, re.M))
         finished = "Max simulated kernels of" in text
-        applied = not row["limit_study"] or f"RTSIM_LIMIT_STUDY = {row['limit_study']}" in text
+        applied = not switch or switch.replace("=", " = ", 1) in text
         if not applied:
-            # the installation was built without limit-study.patch: the run is a plain DFS run
+            # the installation was built without the patch: the run is a plain DFS run
             row["status"] = "no-limit-study"
         elif p.returncode == 0 and "gpu_sim_cycle" in stats and finished:
             row["status"] = "ok"
@@ -788,7 +820,8 @@ class Runner:
         else:
             row["status"] = "failed"
         if row["status"] == "no-limit-study":
-            row["error"] = "the simulator did not apply the limit study: build it with scripts/reference/limit-study.patch"
+            row["error"] = (f"the simulator did not apply {env_name}: build it with scripts/reference/"
+                            f"{limit_study(item.config)[2]}")
         elif row["status"] != "ok":
             row["error"] = first_error(text)
             if p.returncode < 0:
