@@ -151,16 +151,23 @@ def known(*xs):
 CORRELATION = pathlib.Path(__file__).resolve().parents[2] / "reports" / "correlation" / "rtunit.csv"
 
 
+def correlation_cycles(path):
+    """Both simulators' cycles in reports/correlation's rtunit.csv, by (scene, frame, reference
+    config): (reference, rtunit); {} without the file."""
+    cyc = {}
+    if path.exists():
+        with open(path, newline="") as fh:
+            for r in csv.DictReader(fh):
+                cyc[(r["scene"], f"{r['width']}x{r['height']}", r["config"])] = (float(r["cycles_reference"]),
+                                                                                 float(r["cycles_rtunit"]))
+    return cyc
+
+
 def reference_limits(path=CORRELATION):
     """The limit studies run on the authors' simulator (reports/correlation, limit-study.patch):
     (scene, frame, baseline config, reference up, reference down, rtunit up, rtunit down) for each
     frame with a DFS baseline and both limits on both sides; [] without the file."""
-    if not path.exists():
-        return []
-    cyc = {}
-    with open(path, newline="") as fh:
-        for r in csv.DictReader(fh):
-            cyc[(r["scene"], f"{r['width']}x{r['height']}", r["config"])] = (float(r["cycles_reference"]), float(r["cycles_rtunit"]))
+    cyc = correlation_cycles(path)
     out = []
     for (scene, frame, config), (tb, ob) in sorted(cyc.items()):
         up, down = cyc.get((scene, frame, config + "-perfect-up")), cyc.get((scene, frame, config + "-perfect-down"))
@@ -175,12 +182,7 @@ def reference_park(path=CORRELATION):
     """Park run on the authors' simulator (reports/correlation, park.patch): (scene, frame, reference
     Park, reference TTP, rtunit Park, rtunit TTP) speed-ups over the DFS baseline of the paper's
     configuration, for each frame with all three runs on both sides; [] without the file."""
-    if not path.exists():
-        return []
-    cyc = {}
-    with open(path, newline="") as fh:
-        for r in csv.DictReader(fh):
-            cyc[(r["scene"], f"{r['width']}x{r['height']}", r["config"])] = (float(r["cycles_reference"]), float(r["cycles_rtunit"]))
+    cyc = correlation_cycles(path)
     out = []
     for (scene, frame, config), (tb, ob) in sorted(cyc.items()):
         park, ttp = cyc.get((scene, frame, config + "-park")), cyc.get((scene, frame, config + "-ttp"))
