@@ -204,10 +204,11 @@ def reference_park_words(runs):
              f"{share_words(g[2] - 1, g[3] - 1)}")
     if ref_share > 0.25 and abs(our_share - ref_share) <= 0.10:
         return words + ("; so Park as the paper's text describes it gains as much in the authors' own simulator: the "
-                        "paper's 1.04x comes from their Park code, which is not public and which the text does not describe")
+                        f"paper's {times(PAPER['park'], 2)} comes from their Park code, which is not public and which the "
+                        "text does not describe")
     if ref_share > 0.25:
-        return words + ("; Park as the paper's text describes it gains far more than 1.04x in the authors' own simulator "
-                        "too, so the paper's figure comes from their Park code (not public), and rtunit's share differs "
+        return words + (f"; Park as the paper's text describes it gains far more than {times(PAPER['park'], 2)} in the "
+                        "authors' own simulator too, so the paper's figure comes from their Park code (not public), and rtunit's share differs "
                         "from the reference's by more than 10 points")
     return words + "; the reference's Park is far below TTP where rtunit's is not: the difference is in rtunit's model"
 
