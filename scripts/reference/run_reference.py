@@ -129,7 +129,7 @@ INSTRUMENTS = {"-perfect-up": ("perfect-up", "RTSIM_LIMIT_STUDY", "limit-study.p
                "-park": ("park", "RTSIM_PARK", "park.patch")}
 
 
-def limit_study(config):
+def instrument(config):
     """The instrumentation a CONFIG asks for: (mode, environment variable, patch), or ('', '', '')."""
     for suffix, inst in INSTRUMENTS.items():
         if config.endswith(suffix):
@@ -737,9 +737,10 @@ class Runner:
                 else:
                     os.remove(p)
         _, bfs, ttp = CONFIGS[item.config]
+        mode, env_name, patch = instrument(item.config)
         row = {"scene": item.scene, "lumibench_id": SCENES[item.scene]["id"],
                "width": item.width, "height": item.height, "spp": item.spp,
-               "config": item.config, "bfs": bfs, "ttp": ttp, "limit_study": limit_study(item.config)[0],
+               "config": item.config, "bfs": bfs, "ttp": ttp, "limit_study": mode,
                **self.versions}
         bindir, mroot, fingerprint, order = self.prepare(item, run)
         row["assets_sha"] = sha256_listing(fingerprint) if fingerprint else "procedural"
@@ -749,8 +750,7 @@ class Runner:
                     "--height", str(item.height), "--samples", str(item.spp)]
         # the instrumentation's switch: the limit study's mode, or Park's chunks a leaf test (the
         # QUAD latency of the configuration as written for this run: one 32 B chunk a cycle)
-        _, env_name, _ = limit_study(item.config)
-        env_value = row["limit_study"]
+        env_value = mode
         if env_name == "RTSIM_PARK":
             config_path = os.path.join(bindir, "gpgpusim.config")
             with open(config_path, encoding="utf-8") as f:
@@ -820,8 +820,7 @@ class Runner:
         else:
             row["status"] = "failed"
         if row["status"] == "no-limit-study":
-            row["error"] = (f"the simulator did not apply {env_name}: build it with scripts/reference/"
-                            f"{limit_study(item.config)[2]}")
+            row["error"] = f"the simulator did not apply {env_name}: build it with scripts/reference/{patch}"
         elif row["status"] != "ok":
             row["error"] = first_error(text)
             if p.returncode < 0:
