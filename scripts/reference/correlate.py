@@ -487,6 +487,7 @@ def main():
             t, o = theirs(ref[k]), got[k]
             w.writerow(list(k) + [v for m in metrics for v in (t[m], o[m])] + [o[m] for m in extra])
 
+    crashed = [f"{k[0]} {k[1]}x{k[2]} {k[4]}" for k in sorted(ref) if ref[k]["status"] != "ok"]  # crashed-at-exit, used
     md = Markdown()
     md.p("# rtunit against the TTP authors' simulator")
     md.p()
@@ -497,10 +498,9 @@ def main():
          "limit studies and Park runs, in sections of their own). rtunit: AT, the same scene, frame, traversal "
          f"and prefetcher, rtsim {binary} (sha256 prefix of the binary); `rtunit.csv` holds both sides. Made by "
          "`/usr/bin/python3 scripts/reference/correlate.py` (rtunit's runs are cached under `runs/`)." +
-         ("" if not any(ref[k]["status"] != "ok" for k in ref) else
+         ("" if not crashed else
           " Runs whose every attempt printed its statistics and then died in Mesa's exit (status crashed-at-exit) are "
-          "used as printed: " + ", ".join(f"{k[0]} {k[1]}x{k[2]} {k[4]}" for k in sorted(ref) if ref[k]["status"] != "ok")
-          + "."))
+          "used as printed: " + ", ".join(crashed) + "."))
     md.p()
     md.p("Configurations: `dfs`, `dfs-ttp`, `base` (BFS), `ttp` (BFS with TTP) are the fork's "
          "`configs/updated-config/MOBILE-gpgpusim.config` with its two switches set; rtunit runs "
