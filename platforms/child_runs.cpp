@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <chrono>
 #include <csignal>
 #include <cstdio>
 #include <cstring>
@@ -89,16 +90,23 @@ void run_child(std::vector<std::string> args, const std::string& err, const std:
 }
 
 ErrorCheck run_error_check(const std::vector<std::string>& frame_args, const std::string& fidelity, std::optional<uint64_t> quantum,
-                           double rate, uint64_t sample_seed, bool quiet) {
+                           double rate, uint64_t sample_seed, double run_s, bool quiet) {
+    const auto start = std::chrono::steady_clock::now();
     const TempFolder dir("--check-error");
+    // The fidelity's child traces the frame for the sample's plan and writes it; AT's reads it
+    // (a plan holds no timing: docs/sampling.md, "Sample plan"), so the frame is traced once.
     std::vector<std::string> base = frame_args;
-    if (rate < 1.0) base.insert(base.end(), {"--sample", exact(rate), "--sample-seed", std::to_string(sample_seed), "--sample-unchecked"});
+    base.insert(base.end(), {"--sample", exact(rate), "--sample-seed", std::to_string(sample_seed), "--sample-unchecked", "--sample-plan",
+                             (dir.path / "plan.bin").string()});
     struct Child {
         uint64_t cycles;
         double seconds;
-        uint64_t warps, warps_total, clusters;  // sampled: simulated warps, the frame's, simulated clusters
+        uint64_t warps, warps_total, clusters;  // simulated warps, the frame's, simulated clusters
+        StrataWork strata;
+        double wall;  // the child's wall time, start to end
     };
     auto child = [&](const std::string& fid) {
+        const auto child_start = std::chrono::steady_clock::now();
         std::vector<std::string> args = base;
         const std::string stats = (dir.path / (fid + ".json")).string(), err = (dir.path / (fid + ".err")).string();
         args.insert(args.end(), {"--fidelity", fid, "--stats", stats});
@@ -109,24 +117,49 @@ ErrorCheck run_error_check(const std::vector<std::string>& frame_args, const std
             throw std::runtime_error(e.what());  // the run itself was accepted: not the user's input
         }
         const nlohmann::json j = nlohmann::json::parse(std::ifstream(stats));
-        const bool sampled = j["timing"].contains("sampling");
+        const nlohmann::json& s = j["timing"]["sampling"];
         Child c;
-        c.cycles = sampled ? j["timing"]["sampling"]["cycles_simulated"].get<uint64_t>() : j["cycles"].get<uint64_t>();
+        c.cycles = s["cycles_simulated"].get<uint64_t>();
         c.seconds = j["time_s"]["run"].get<double>();
-        c.warps = sampled ? j["timing"]["sampling"]["warps_simulated"].get<uint64_t>() : 1;
-        c.warps_total = sampled ? j["timing"]["sampling"]["warps_total"].get<uint64_t>() : 1;
-        c.clusters = sampled ? j["timing"]["sampling"]["strata"].get<uint64_t>() + j["timing"]["sampling"]["first_wave_clusters"].get<uint64_t>() : 0;
+        c.warps = s["warps_simulated"].get<uint64_t>();
+        c.warps_total = s["warps_total"].get<uint64_t>();
+        c.clusters = s["strata"].get<uint64_t>() + s["first_wave_clusters"].get<uint64_t>();
+        c.strata.first_wave = s["strata_work"]["first_wave_residence_cycles"].get<double>();
+        c.strata.work = s["strata_work"]["residence_cycles"].get<std::vector<double>>();
+        c.strata.weight = s["strata_work"]["weights"].get<std::vector<double>>();
+        c.wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - child_start).count();
         return c;
     };
-    if (!quiet) std::cerr << "checking the error: the same " << (rate < 1.0 ? "sample" : "frame") << " in " << fidelity << " and in AT\n";
-    const Child f = child(fidelity), at = child("at");
+    if (!quiet) std::cerr << "checking the error: the same sample in " << fidelity << " and in AT\n";
+    const Child f = child(fidelity);
+    // The sample took a share q of the full run's time in this fidelity. If AT's sample takes the
+    // same share of AT's full run (less, as AT's fixed costs weigh less in its longer run), the
+    // check costs q (T + T_at), below T_at exactly when q < T_at / (T + T_at), which is at least
+    // 1/2 since AT is never the faster (measured on the check's grid, docs/accuracy.md). Where the
+    // sample costs half the run or more (small frames, whose load, pre-pass and warming outweigh
+    // their simulation: primary rays at 256x256), AT's full run is the cheaper answer.
+    const double q = run_s > 0 ? f.wall / run_s : 0.0;
+    if (q >= 0.5) {
+        char why[320];
+        std::snprintf(why, sizeof why,
+                      "its sample took %.2f s in %s, %.0f %% of this run's %.2f s: AT's sample would cost about as much as AT's full "
+                      "run, so run --fidelity at for the reference",
+                      f.wall, fidelity.c_str(), 100.0 * q, run_s);
+        throw CheckRefused(why);
+    }
+    const Child at = child("at");
     ErrorCheck c;
     c.share = double(f.warps) / double(std::max<uint64_t>(1, f.warps_total));
-    c.clusters = f.clusters;  // 0 for the whole frame: the caller knows its clusters
+    c.clusters = f.clusters;
     c.fidelity_cycles = f.cycles;
     c.at_cycles = at.cycles;
+    c.residence = paired_work_difference(f.strata, at.strata);
+    if (c.residence.pairs == 0)
+        throw std::runtime_error("--check-error: the check's sample drew " + std::to_string(f.strata.work.size()) +
+                                 " strata with work, too few to pair for an interval");
     c.fidelity_s = f.seconds;
     c.at_s = at.seconds;
+    c.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return c;
 }
 

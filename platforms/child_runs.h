@@ -29,10 +29,14 @@ struct TempFolder {
 void run_child(std::vector<std::string> args, const std::string& err, const std::string& what);
 
 // --check-error: the frame sampled at `rate` with `sample_seed` (the same clusters, the same
-// functional warming), or whole at rate 1, once in `fidelity` and once in AT; their simulated
-// cycles and times. `quantum`: LT's, passed on.
+// functional warming, one pre-pass through a plan in the check's temporary folder), once in
+// `fidelity` and once in AT; the sample's cycles, their strata paired, and the times. `quantum`:
+// LT's, passed on. `run_s`: the wall time of the run being checked (the whole frame in
+// `fidelity`; 0: any cost, --check-error-any-cost). Throws CheckRefused before AT's run where the
+// fidelity's took half of that or more: AT's sample would then cost about as much as AT's full
+// run (ErrorCheck).
 ErrorCheck run_error_check(const std::vector<std::string>& frame_args, const std::string& fidelity, std::optional<uint64_t> quantum,
-                           double rate, uint64_t sample_seed, bool quiet);
+                           double rate, uint64_t sample_seed, double run_s, bool quiet);
 
 // --sample-segments K without --segment: each segment simulated by a child rtsim, up to `threads`
 // at once (each child given threads / that many threads), and their statistics read back in

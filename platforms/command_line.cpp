@@ -122,11 +122,15 @@ RunSpec spec_of(const Args& a, const std::atomic<int>* stop) {
     if (a.quantum && *a.quantum == 0) throw InputError("--quantum 0: the LT quantum must be at least 1 core cycle");
     if (!a.trace_warp.empty() && a.vcd.empty() && a.timeline.empty())
         throw InputError("--trace-warp picks the warp-buffer slot traced: it needs --vcd FILE or --timeline FILE");
-    if (a.sample_seed && a.sample == 1.0) throw InputError("--sample-seed needs --sample RATE below 1");
+    if (a.sample_seed && a.sample == 1.0 && !a.check_error) throw InputError("--sample-seed needs --sample RATE below 1 (or --check-error N)");
     if (a.sample_unchecked && a.sample == 1.0) throw InputError("--sample-unchecked needs --sample RATE below 1");
     if (!a.sample_plan.empty() && a.sample == 1.0) throw InputError("--sample-plan keeps a sampled run's pre-pass: it needs --sample RATE below 1");
     if (a.check_error && spec.run.fidelity != Fidelity::LT && spec.run.fidelity != Fidelity::Interval)
         throw InputError("--check-error compares a fast fidelity with AT: it needs --fidelity lt or interval (AT is the reference)");
+    if (a.check_error_any_cost && !a.check_error) throw InputError("--check-error-any-cost needs --check-error N");
+    if (a.check_error && a.check_error < 4)
+        throw InputError("--check-error " + std::to_string(a.check_error) +
+                         ": the check pairs its drawn clusters' strata two by two for its interval; it needs N of at least 4 (2 pairs)");
     if (a.sample_segments < 1 || a.sample_segments > 4096)
         throw InputError("--sample-segments " + std::to_string(a.sample_segments) + ": a sample splits into 1 to 4096 segments");
     if (a.sample_segments > 1 && a.sample == 1.0)
@@ -212,8 +216,9 @@ RunSpec spec_of(const Args& a, const std::atomic<int>* stop) {
                                         stop, a.quiet);
         };
     if (a.check_error)
-        spec.run_check = [&a](double rate) {
-            return run_error_check(frame_args(a), a.fidelity, a.quantum, rate, a.sample_seed.value_or(a.seed), a.quiet);
+        spec.run_check = [&a](double rate, double run_s) {
+            return run_error_check(frame_args(a), a.fidelity, a.quantum, rate, a.sample_seed.value_or(a.seed),
+                                   a.check_error_any_cost ? 0.0 : run_s, a.quiet);
         };
     return spec;
 }
@@ -227,7 +232,7 @@ std::optional<int> parse_command_line(int argc, char** argv, Args& a) {
         "             [--fidelity functional|at|lt|interval] [--config NAME|FILE] [--set KEY=VALUE]... [--quantum CYCLES]\n"
         "             [--prefetcher none|ttp|park|treelet|perfect-up|perfect-down]\n"
         "             [--sample RATE [--sample-seed S] [--sample-unchecked]\n"
-        "              [--sample-plan FILE] [--sample-segments K [--segment I | --merge-segments FILE...]]] [--check-error N]\n"
+        "              [--sample-plan FILE] [--sample-segments K [--segment I | --merge-segments FILE...]]] [--check-error N [--sample-seed S] [--check-error-any-cost]]\n"
         "             [--threads N]\n"
         "             [--stats FILE.json] [--image FILE.png] [--vcd FILE] [--timeline FILE.json] [--trace-warp SM:WARP] [--verify] [--quiet]\n"
         "             [--dump-bvh FILE] [--dump-rays FILE] [--dump-hits FILE]\n"
@@ -262,7 +267,7 @@ std::optional<int> parse_command_line(int argc, char** argv, Args& a) {
         ("prefetcher", po::value(&a.prefetcher), "none, ttp, park, treelet, perfect-up, perfect-down (same as --set prefetch.kind=...; interval: none, ttp)")
         ("sample", po::value(&a.sample), "simulate this share (0..1] of the frame's warps, stratified, and extrapolate (at, lt, interval)")
         ("sample-seed", po::value<uint64_t>()->notifier([&a](uint64_t v) { a.sample_seed = v; }),
-         "which clusters --sample draws (default: --seed, which also seeds the rays)")
+         "which clusters --sample and --check-error draw (default: --seed, which also seeds the rays)")
         ("sample-unchecked", po::bool_switch(&a.sample_unchecked),
          "run a sample too small for a 95 % interval (fewer than 10 strata) and report no interval")
         ("sample-segments", po::value(&a.sample_segments), "simulate the sample as K independent segments and merge them "
@@ -283,7 +288,12 @@ std::optional<int> parse_command_line(int argc, char** argv, Args& a) {
              a.check_error = v;
          }),
          "lt, interval: simulate N randomly drawn clusters (and the first wave) of the frame in this fidelity and in AT, "
-         "and report the measured difference beside the error estimate")
+         "and report their RT-unit residence's difference, paired by stratum, with its 95 % interval, in the error estimate "
+         "(N at least 4; the N + 1 clusters at most a fifth of the frame's; refused after the run where its sample took half "
+         "the run's time or more)")
+        ("check-error-any-cost", po::bool_switch(&a.check_error_any_cost),
+         "run --check-error's check even where its sample took half the run's time or more (it may then cost more than "
+         "AT's full run)")
         ("vcd", po::value(&a.vcd), "write waveforms to this VCD file (at, lt)")
         ("trace-warp", po::value(&a.trace_warp), "with --vcd: trace each thread's stack depth of warp-buffer slot WARP of SM; with --timeline: the slot it records (default 0:0)")
         ("timeline", po::value(&a.timeline), "write one warp-buffer slot's threads as Chrome trace events, JSON for Perfetto or chrome://tracing (at, lt)")

@@ -28,6 +28,7 @@ struct Args {
     std::optional<uint64_t> sample_seed;  // which clusters a sampled run simulates (default: --seed)
     bool sample_unchecked = false;
     uint64_t check_error = 0;  // --check-error N
+    bool check_error_any_cost = false;  // --check-error-any-cost
     long long sample_segments = 1;  // --sample-segments K (signed: a negative number is an error, not a wrap)
     std::optional<uint64_t> segment;  // --segment I
     std::vector<std::string> merge_segments;  // --merge-segments FILE...

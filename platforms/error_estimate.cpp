@@ -154,8 +154,9 @@ std::optional<std::string> outside_regime(const RunSpec& spec, const ErrorBounds
     return "a configuration other than the grid's (" + join(bounds.configs) + ", each at its preset's values)";
 }
 
-ErrorEstimate estimate_error(const RunSpec& spec, const TimingResult& t, const std::optional<ErrorCheck>& check,
-                             const ErrorBounds& bounds) {
+namespace {
+
+ErrorEstimate estimate_of(const RunSpec& spec, const TimingResult& t, const std::optional<ErrorCheck>& check, const ErrorBounds& bounds) {
     ErrorEstimate e;
     e.check = check;
     // A sampled run first carries its sampling interval (relative half-width around the estimate).
@@ -192,7 +193,9 @@ ErrorEstimate estimate_error(const RunSpec& spec, const TimingResult& t, const s
     std::string measured;
     if (check)
         measured = "measured against AT on " + std::to_string(check->clusters) + " clusters (" + percent_text(check->share) +
-                   " of the frame's warps): " + (check->difference() >= 0 ? "+" : "") + percent_text(check->difference());
+                   " of the frame's warps): the frame's RT-unit residence " + (check->difference() >= 0 ? "+" : "") +
+                   percent_text(check->difference()) + " +- " + percent_text(check->residence.half_width) + " (95 %, " +
+                   std::to_string(check->residence.pairs) + " stratum pairs)";
     if (!outside) {
         const ErrorBounds::Bound b = *bounds.bound(fid, spec.workload, bounds.side(spec));
         const std::string bound_basis = "worst |cycles error| against AT in the " + std::to_string(b.runs) + " runs of " + fid + " on " +
@@ -200,11 +203,12 @@ ErrorEstimate estimate_error(const RunSpec& spec, const TimingResult& t, const s
                                         std::to_string(bounds.scenes.size()) + " scenes, configurations " + join(bounds.configs) +
                                         "; rtsim " + bounds.measured_on + (b.added.empty() ? "" : "; " + join(b.added)) +
                                         "; docs/accuracy.md)";
-        // A measurement beyond the bound shows the bound does not hold here: it replaces it.
-        if (check && std::abs(check->difference()) > b.worst) {
-            e.value = sampling + std::abs(check->difference());
+        // A check whose interval reaches beyond the bound may show the bound does not hold here:
+        // the larger stands.
+        if (check && check->bound() > b.worst) {
+            e.value = sampling + check->bound();
             e.kind = plus + "measured";
-            e.basis = add_sampling(measured + ", beyond the " + percent_text(b.worst) + " " + bound_basis);
+            e.basis = add_sampling(measured + ", reaching beyond the " + percent_text(b.worst) + " " + bound_basis);
         } else {
             e.value = sampling + b.worst;
             e.kind = plus + "validated bound";
@@ -213,13 +217,22 @@ ErrorEstimate estimate_error(const RunSpec& spec, const TimingResult& t, const s
         return e;
     }
     if (check) {
-        e.value = sampling + std::abs(check->difference());
+        e.value = sampling + check->bound();
         e.kind = plus + "measured";
         e.basis = add_sampling(measured + "; outside the validated regime: " + *outside);
         return e;
     }
     e.kind = "none";
     e.basis = "outside the validated regime: " + *outside + "; --check-error N measures this run's error against AT";
+    return e;
+}
+
+}  // namespace
+
+ErrorEstimate estimate_error(const RunSpec& spec, const TimingResult& t, const std::optional<ErrorCheck>& check, const ErrorBounds& bounds,
+                             const std::string& check_refused) {
+    ErrorEstimate e = estimate_of(spec, t, check, bounds);
+    if (!check_refused.empty()) e.basis += "; --check-error refused: " + check_refused;
     return e;
 }
 
@@ -232,11 +245,12 @@ std::string error_line(const nlohmann::ordered_json& s) {
     if (s.contains("check") && !s["check"].is_null()) {
         const auto& c = s["check"];
         line += "\nchecked against AT on " + std::to_string(c["clusters"].get<uint64_t>()) + " clusters (" +
-                percent_text(c["share"].get<double>()) + " of the frame): " + std::to_string(c["fidelity_cycles"].get<uint64_t>()) +
-                " cycles against AT's " + std::to_string(c["at_cycles"].get<uint64_t>()) + ", " +
-                (c["difference"].get<double>() >= 0 ? "+" : "") + percent_text(c["difference"].get<double>());
-        char took[64];
-        std::snprintf(took, sizeof took, "; AT took %.1f s, this fidelity %.1f s", c["at_s"].get<double>(), c["fidelity_s"].get<double>());
+                percent_text(c["share"].get<double>()) + " of the frame): RT-unit residence " +
+                (c["difference"].get<double>() >= 0 ? "+" : "") + percent_text(c["difference"].get<double>()) + " +- " +
+                percent_text(c["difference_half_width"].get<double>()) + " (95 %, paired by stratum)";
+        char took[96];
+        std::snprintf(took, sizeof took, "; the check took %.1f s (AT %.1f s, this fidelity %.1f s)", c["wall_s"].get<double>(),
+                      c["at_s"].get<double>(), c["fidelity_s"].get<double>());
         line += took;
     }
     return line;

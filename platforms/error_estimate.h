@@ -9,26 +9,44 @@
 // - A sampled run adds its 95 % interval's relative half-width (docs/sampling.md).
 // Plain C++ (no SystemC).
 #pragma once
+#include <cmath>
 #include <cstdint>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include <nlohmann/json.hpp>
+
+#include "sampling/estimator.h"
 
 namespace rtu {
 
 struct RunSpec;
 struct TimingResult;
 
-// --check-error N: the same clusters of the frame simulated in the run's fidelity and in AT
-// (child runs of rtsim; SystemC elaborates once per process).
+// --check-error N: the same clusters of the frame (a sample of N drawn strata and the first wave)
+// simulated in the run's fidelity and in AT (child runs of rtsim; SystemC elaborates once per
+// process). The error it states is the frame's RT-unit residence in the fidelity against AT, a
+// ratio estimate paired by stratum, with its 95 % interval (paired_work_difference,
+// sampling/estimator.h): the sample's own cycles are its makespan, which one SM's tail sets, and
+// their ratio missed the full runs' by up to 9 % where the paired residence missed by 2.5 %
+// (docs/accuracy.md, "--check-error").
 struct ErrorCheck {
     uint64_t clusters = 0;  // clusters simulated, the first wave included
     double share = 0;       // of the frame's shader warps
-    uint64_t fidelity_cycles = 0, at_cycles = 0;
+    uint64_t fidelity_cycles = 0, at_cycles = 0;  // the sample's simulated cycles in each
+    PairedDifference residence;                   // the fidelity against AT, paired by stratum
     double fidelity_s = 0, at_s = 0;  // wall-clock time of each child's simulation
-    double difference() const { return at_cycles ? double(fidelity_cycles) / double(at_cycles) - 1.0 : 0.0; }
+    double wall_s = 0;                // of the whole check, both children from start to end
+    double difference() const { return residence.difference; }
+    // The largest |error| within the check's 95 % interval: what the error estimate takes.
+    double bound() const { return std::abs(residence.difference) + residence.half_width; }
+};
+
+// --check-error refused after the run (child_runs.h): the run stands without a check.
+struct CheckRefused : std::runtime_error {
+    using std::runtime_error::runtime_error;
 };
 
 struct ErrorEstimate {
@@ -70,8 +88,9 @@ struct ErrorBounds {
 std::optional<std::string> outside_regime(const RunSpec& spec, const ErrorBounds& bounds);
 
 // The run's error estimate; `t` is its timing result (a timing fidelity's run).
+// `check_refused`: why --check-error did not run its check (CheckRefused), or empty.
 ErrorEstimate estimate_error(const RunSpec& spec, const TimingResult& t, const std::optional<ErrorCheck>& check,
-                             const ErrorBounds& bounds = ErrorBounds::built_in());
+                             const ErrorBounds& bounds = ErrorBounds::built_in(), const std::string& check_refused = "");
 
 // One line for the run's summary: "error estimate: +-1.9 % (validated bound: ...)".
 std::string error_line(const nlohmann::ordered_json& error_estimate_stats);

@@ -33,11 +33,15 @@ void write_error_estimate(StatsOut& out, const ErrorEstimate& e) {
     }
     c.value("clusters", e.check->clusters, "clusters", "simulated in both, the first wave included");
     c.value("share", e.check->share, "ratio", "of the frame's shader warps");
-    c.value("fidelity_cycles", e.check->fidelity_cycles, "cycles", "simulated in this run's fidelity");
-    c.value("at_cycles", e.check->at_cycles, "cycles", "simulated in AT");
-    c.value("difference", e.check->difference(), "ratio", "fidelity_cycles / at_cycles - 1");
+    c.value("fidelity_cycles", e.check->fidelity_cycles, "cycles", "the sample's cycles in this run's fidelity (its makespan: not what the check states)");
+    c.value("at_cycles", e.check->at_cycles, "cycles", "the sample's cycles in AT");
+    c.value("difference", e.check->difference(), "ratio",
+            "the frame's RT-unit residence in this fidelity / in AT - 1: a ratio estimate over the strata, paired by stratum");
+    c.value("difference_half_width", e.check->residence.half_width, "ratio", "its 95 % half-width (Student's t over collapsed stratum pairs)");
+    c.value("variance_pairs", e.check->residence.pairs, "pairs", "collapsed stratum pairs behind the half-width");
     c.value("fidelity_s", e.check->fidelity_s, "s", "the fidelity's simulation time");
     c.value("at_s", e.check->at_s, "s", "AT's simulation time");
+    c.value("wall_s", e.check->wall_s, "s", "the whole check: both child runs from start to end (scene, BVH and one pre-pass, shared through a plan)");
 }
 
 }  // namespace

@@ -387,18 +387,48 @@ void verify_stage(const Scene& scene, const EmbreeReference& reference, const st
     }
 }
 
+uint64_t frame_clusters(uint64_t warps, const HwConfig& hw) {
+    const uint64_t capacity = gpu_warp_capacity(hw);
+    return (warps + capacity - 1) / capacity;
+}
+
+// --check-error N simulates N + 1 of the frame's clusters twice, in the run's fidelity and in AT,
+// each child tracing the frame (once, through a plan) and loading the scene: refused before the
+// run where that is more than a fifth of the frame, which would cost about as much as the frame
+// in AT (measured: at 11 of 64 clusters the check took 0.2-0.8 of the full AT run's time,
+// docs/accuracy.md "--check-error"), and below 4 drawn clusters, which pair into fewer than 2
+// strata pairs for its interval (command_line.cpp); and where the frame cannot be sampled.
+void check_error_refusal(const WorkloadStage& w, const BvhImage& image) {
+    const RunSpec& spec = w.spec;
+    if (!spec.check_error) return;
+    if (const std::optional<std::string> why = sample_refusal(spec.hw, image))
+        throw InputError("--check-error: its check simulates a sample of the frame, and " + *why);
+    // A shader warp is warp_size neighbouring paths (pixels: each thread traces its pixel's
+    // samples in turn), or rays of a ray file.
+    const uint64_t paths = w.kind == WorkloadKind::RayFile ? w.ray_file.size() : uint64_t(spec.params.width) * uint64_t(spec.params.height);
+    const uint64_t clusters = frame_clusters((paths + spec.hw.warp_size - 1) / spec.hw.warp_size, spec.hw);
+    if (5 * (spec.check_error + 1) > clusters)
+        throw InputError("--check-error " + std::to_string(spec.check_error) + ": the check simulates " + std::to_string(spec.check_error + 1) +
+                         " clusters (the first wave and N drawn) of this frame's " + std::to_string(clusters) + " (of " +
+                         std::to_string(gpu_warp_capacity(spec.hw)) + " shader warps each) in this fidelity and in AT; more than a fifth "
+                         "of the frame costs about as much as the frame in AT, so run --fidelity at (the reference)" +
+                         (clusters >= 25 ? ", or give N at most " + std::to_string(clusters / 5 - 1) : std::string(": the frame is too small for a check")));
+}
+
 // A timing run's error against AT (docs/accuracy.md); after the run's own time, so that
 // --check-error's child runs are not this run's speed.
-void error_stage(const RunSpec& spec, const TimingResult& t, RunRecord& rec) {
+void error_stage(const RunSpec& spec, const TimingResult& t, double run_s, RunRecord& rec) {
     std::optional<ErrorCheck> check;
+    std::string refused;
     if (spec.check_error && spec.run_check && !rec.interrupted) {
-        // N drawn clusters and the first wave: a sample at (N + 1) / clusters, or the whole frame.
-        const uint64_t capacity = gpu_warp_capacity(spec.hw);
-        const uint64_t clusters = (t.estimate.warps_total + capacity - 1) / capacity;
-        const double rate = clusters <= spec.check_error + 1 ? 1.0 : double(spec.check_error + 1) / double(clusters);
+        // N drawn clusters and the first wave: a sample at (N + 1) / clusters (at most a fifth of
+        // the frame: check_error_refusal).
+        const uint64_t clusters = frame_clusters(t.estimate.warps_total, spec.hw);
         try {
-            check = spec.run_check(rate);
-            if (rate == 1.0) check->clusters = clusters;
+            check = spec.run_check(double(spec.check_error + 1) / double(clusters), run_s);
+        } catch (const CheckRefused& e) {
+            refused = e.what();
+            std::cerr << "warning: --check-error refused: " << refused << "\n";
         } catch (...) {
             // The check's child runs got the same signal: the run itself is whole; it is
             // written without its check.
@@ -413,7 +443,7 @@ void error_stage(const RunSpec& spec, const TimingResult& t, RunRecord& rec) {
         rec.error.kind = "none";
         rec.error.basis = "one segment of a split sample: its cycles simulated; --merge-segments gives the frame's estimate and error";
     } else {
-        rec.error = estimate_error(spec, t, check);
+        rec.error = estimate_error(spec, t, check, ErrorBounds::built_in(), refused);
     }
 }
 
@@ -462,6 +492,7 @@ void output_stage(const WorkloadStage& w, const Ran& ran, RunRecord& rec, RunRes
 }  // namespace
 
 RunResult run_simulation(const RunSpec& spec, std::ostream* log) {
+    const auto start = Clock::now();
     const bool timing = is_timing(spec.run.fidelity);
     RunRecord rec;
     rec.fidelity = spec.run.fidelity;
@@ -472,6 +503,7 @@ RunResult run_simulation(const RunSpec& spec, std::ostream* log) {
     const BvhImage image = build_stage(spec, scene, rec, log);
     WorkloadStage w{spec, scene, spec.rays.empty() ? parse_workload(spec.workload) : WorkloadKind::RayFile, {}, nullptr};
     make_workload_stage(w, image.stats, rec);
+    check_error_refusal(w, image);
     std::unique_ptr<EmbreeReference> reference;
     if (spec.verify) reference = std::make_unique<EmbreeReference>(scene);
     RunResult out;
@@ -487,7 +519,7 @@ RunResult run_simulation(const RunSpec& spec, std::ostream* log) {
         if (reference) verify_stage(scene, *reference, out.rays, spec.run.threads, ran);
     }
     rec.run_s = seconds_since(t0);
-    if (timing) error_stage(spec, ran.timing, rec);
+    if (timing) error_stage(spec, ran.timing, seconds_since(start), rec);
     memory_record(scene, image, rec);
     output_stage(w, ran, rec, out);
     return out;

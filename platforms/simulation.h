@@ -58,10 +58,11 @@ struct RunSpec {
     std::string dump_bvh, dump_rays, dump_hits;
     std::string timeline;  // --timeline: the file TimingResult::timeline goes to (RunResult::files)
     // --check-error N (LT, interval): N clusters drawn besides the first wave simulated in the
-    // run's fidelity and in AT; run_check simulates a sample of the frame at `rate` (1: the
-    // whole frame) in both (rtsim runs child processes) and returns the two cycle counts.
+    // run's fidelity and in AT; run_check simulates the sample of the frame at `rate` in both
+    // (rtsim runs child processes) and returns what they measured; `run_s`, the run's own wall
+    // time so far, decides whether the check would cost less than AT's full run (CheckRefused).
     uint64_t check_error = 0;
-    std::function<ErrorCheck(double rate)> run_check;
+    std::function<ErrorCheck(double rate, double run_s)> run_check;
     // A stop requested through run.stop (rtsim: SIGINT, SIGTERM) ends the run at its next clean
     // point with what it simulated so far (RunResult::interrupted); before the simulation
     // starts, Interrupted is thrown instead (model/stop_request.h).

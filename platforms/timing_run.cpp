@@ -9,20 +9,25 @@
 
 namespace rtu {
 
-SamplingOptions sampling_options(const HwConfig& c, const BvhImage& img, const TimingOptions& o, const Treelets* treelets) {
+std::optional<std::string> sample_refusal(const HwConfig& c, const BvhImage& img) {
     // The sample's schedule model (sampling/schedule_model.h) puts a constant of shader code
     // between a warp's traces; the intersection loops that follow traces through procedural
     // leaves are not in it, so it cannot estimate such a frame.
     if (c.intersection_latency > 0 && img.stats.procedural_leaves > 0)
-        throw InputError("--sample: this scene has " + std::to_string(img.stats.procedural_leaves) +
-                         " procedural leaves, and a sample's schedule model leaves out the shaders' intersection loops "
-                         "(workload.intersection_latency " + std::to_string(c.intersection_latency) +
-                         "): run the frame whole, or with --set workload.intersection_latency=0");
+        return "this scene has " + std::to_string(img.stats.procedural_leaves) +
+               " procedural leaves, and a sample's schedule model leaves out the shaders' intersection loops "
+               "(workload.intersection_latency " + std::to_string(c.intersection_latency) +
+               "): run the frame whole, or with --set workload.intersection_latency=0";
     // Without a limit of resident warps every warp of the frame is on its SM at once, and the
     // schedule model does not count which of them are in shader code.
     if (c.shader_contention > 0 && c.resident_warps == 0)
-        throw InputError("--sample: workload.shader_contention > 0 needs a limit of resident warps (workload.resident_warps is 0), which a sample's schedule model "
-                         "counts the warps in shader code by: set workload.resident_warps, or run the frame whole");
+        return std::string("workload.shader_contention > 0 needs a limit of resident warps (workload.resident_warps is 0), which a sample's "
+                           "schedule model counts the warps in shader code by: set workload.resident_warps, or run the frame whole");
+    return std::nullopt;
+}
+
+SamplingOptions sampling_options(const HwConfig& c, const BvhImage& img, const TimingOptions& o, const Treelets* treelets) {
+    if (const std::optional<std::string> why = sample_refusal(c, img)) throw InputError("--sample: " + *why);
     SamplingOptions s;
     s.rate = o.sample_rate;
     s.seed = o.sample_seed;

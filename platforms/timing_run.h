@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -89,6 +90,9 @@ inline uint32_t gpu_warp_capacity(const HwConfig& c) { return c.sms * c.warp_buf
 // its warp selection; the run sets its on_warm.
 std::unique_ptr<FrameSample> frame_sample(const HwConfig& cfg, const BvhImage& image, const TimingOptions& opt, const Treelets* treelets,
                                           const Workload& workload);
+// Why a frame cannot be sampled on this hardware (its schedule model would leave out part of the
+// shaders' time), or nothing: --sample and --check-error refuse such a frame.
+std::optional<std::string> sample_refusal(const HwConfig& cfg, const BvhImage& image);
 // The sampling options frame_sample uses (the merge of a split sample draws with them too).
 SamplingOptions sampling_options(const HwConfig& cfg, const BvhImage& image, const TimingOptions& opt, const Treelets* treelets);
 // Puts the sample's estimate into `r` (r.cycles_simulated and r.interrupted set): a sampled run's

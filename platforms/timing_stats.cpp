@@ -193,6 +193,13 @@ void write_sampling(StatsOut& out, const SampleEstimate& est, double rate, uint6
     s.value("work_done_saturated", est.work_saturated, "slot-cycles", "residence done by then");
     s.value("cycles_ci95", has_interval ? nlohmann::ordered_json{std::max(c - h, double(cycles_simulated)), c + h} : nlohmann::ordered_json(),
             "cycles", "95 % interval of the frame's cycles [low, high], low at least cycles_simulated; null without one (--sample-unchecked: fewer than 10 strata, or segments of fewer than 16 clusters)");
+    {
+        StatsOut w = s.child("strata_work", "the simulated residence by stratum, as --check-error pairs two runs of one draw");
+        w.value("first_wave_residence_cycles", est.strata_work.first_wave, "slot-cycles", "the first wave's (weight 1)");
+        w.value("residence_cycles", nlohmann::ordered_json(est.strata_work.work), "slot-cycles",
+                "per drawn stratum, in stratum order: its cluster's residence x the stratum's weight");
+        w.value("weights", nlohmann::ordered_json(est.strata_work.weight), "clusters", "per drawn stratum: the clusters it stands for");
+    }
     s.value("relative_se", est.relative_se, "ratio", "standard error of the work estimate / the estimate");
     s.value("variance_pairs", est.variance_pairs, "pairs", "collapsed stratum pairs behind relative_se");
     for (const auto& [name, share, what] :

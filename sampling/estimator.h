@@ -27,6 +27,29 @@ struct WarpRecord {
     double last_done = -1;  // the cycle its latest simulated trace left the RT unit (of its segment's run; -1: not known)
 };
 
+// The residence of a sample's clusters per stratum: what two runs of the same draw (--check-error:
+// a fast fidelity and AT) are paired by.
+struct StrataWork {
+    double first_wave = 0;       // the first wave's residence (simulated whole, weight 1)
+    std::vector<double> work;    // per drawn stratum: its cluster's residence x the stratum's weight
+    std::vector<double> weight;  // per drawn stratum: the clusters it stands for
+};
+
+// The frame's residence in one run of a draw against another run of the same draw, as a ratio
+// estimate over the strata (the fast run's weighted residence over the reference's), minus 1,
+// with its 95 % half-width: Student's t over the collapsed stratum pairs of the residuals
+// W_fast,h - R W_ref,h (as SampleEstimate::relative_se takes the work's), divided by the
+// reference's total, with Satterthwaite's degrees of freedom for pairs of unequal variance. The pairing takes out what both runs share (which clusters were drawn,
+// how much work they hold); what is left is how differently the two fidelities time the same
+// clusters, stratum by stratum. Throws std::invalid_argument if the two are not of one draw
+// (other strata or weights).
+struct PairedDifference {
+    double difference = 0, half_width = 0;
+    uint32_t pairs = 0;   // collapsed stratum pairs
+    double degrees = 0;   // of Student's t: (sum of the pairs' variances)^2 / sum of their squares
+};
+PairedDifference paired_work_difference(const StrataWork& fast, const StrataWork& reference);
+
 // A sampled run's estimate of the frame. A warp's work is the cycles its traces spent in an RT
 // unit's warp buffer. With the functional pre-pass (the schedule estimator):
 // - each trace's residence is fitted as a + b x its critical path (the most nodes one of its
@@ -49,6 +72,7 @@ struct SampleEstimate {
     // Per SM with traces in both: the cycle its last simulated trace left / the same in the
     // schedule model of the sample - 1 (with segments, each side summed over the segments).
     std::vector<double> misfit_per_sm;
+    StrataWork strata_work;  // the simulated residence by stratum (paired_work_difference)
     double relative_se = 0;  // standard error of work_estimate / work_estimate
     uint32_t variance_pairs = 0;  // collapsed stratum pairs behind relative_se (degrees of freedom)
     // The design, as the workload driver drew it: warps per cluster, drawn strata, clusters of the

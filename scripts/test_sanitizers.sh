@@ -17,7 +17,9 @@
 #   RtsimTiming.IntervalIsWithinTheStatedBoundOfAt, RtsimTiming.IntervalShaderReadsKeepAtsPace (the
 #   shaders' reads in every fidelity run here in RtsimTiming.ShaderReadsGoThroughL1L2AndDram),
 #   RtsimPresets.TtpSpeedsUpPathTracingOnEveryPreset
-#   and RtsimError.EveryTimingRunStatesItsError (every timing run writes its error statement);
+#   RtsimError.EveryTimingRunStatesItsError (every timing run writes its error statement)
+#   and RtsimError.CheckErrorPairsTheSameClustersInAt (--check-error's children and its pairing
+#   run here in RtsimError.CheckErrorRefusesWhatCostsAsMuchAsAt and RtsimStats.SchemaListsEveryKey...);
 # - checks that observing changes no statistic: RtsimTiming.TracingChangesNoStatistic and
 #   RtsimTiming.TimelineChangesNoStatistic (the VCD and timeline writers run here in
 #   RtsimTiming.VcdHasTheDocumentedSignals, RtsimTiming.TraceWindowSetsTheWaveformSamplingOnly and
@@ -40,7 +42,7 @@
 # there are cores: many of them wait on rtsim child processes or poll for a signal's answer.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-left='^(Sweeps\.|RtsimSampling\.(IntervalCoversTheFullRun|IntervalCarriesTheDesignBias|IntervalFidelitySampledAsAt|PrimaryRaysOfASparseFrame)$|RtsimTiming\.(IntervalIsWithinTheStatedBoundOfAt|IntervalShaderReadsKeepAtsPace|TracingChangesNoStatistic|TimelineChangesNoStatistic)$|RtsimPresets\.TtpSpeedsUpPathTracingOnEveryPreset$|RtsimError\.EveryTimingRunStatesItsError$)'
+left='^(Sweeps\.|RtsimSampling\.(IntervalCoversTheFullRun|IntervalCarriesTheDesignBias|IntervalFidelitySampledAsAt|PrimaryRaysOfASparseFrame)$|RtsimTiming\.(IntervalIsWithinTheStatedBoundOfAt|IntervalShaderReadsKeepAtsPace|TracingChangesNoStatistic|TimelineChangesNoStatistic)$|RtsimPresets\.TtpSpeedsUpPathTracingOnEveryPreset$|RtsimError\.(EveryTimingRunStatesItsError|CheckErrorPairsTheSameClustersInAt)$)'
 if [ "${1:-}" = "--all" ]; then left='^$'; shift; fi
 scripts/setup.sh
 cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_UNITY_BUILD=ON -DRTU_SANITIZE=address,undefined \
