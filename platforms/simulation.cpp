@@ -19,6 +19,7 @@
 #include "model/treelet.h"
 #include "run_record.h"
 #include "sample_segments.h"
+#include "segment_threads.h"
 #include "workloads/bvh_builder.h"
 #include "workloads/embree_reference.h"
 #include "workloads/input_error.h"
@@ -339,14 +340,26 @@ void timing_stage(const WorkloadStage& w, const BvhImage& image, Ran& ran, RunRe
         };
     TimingResult& t = ran.timing;
     const bool merge = spec.run.sample_segments > 1 && spec.run.sample_segment >= spec.run.sample_segments;
-    if (merge) {  // the segments ran elsewhere (files) or as child processes: merged into one estimate
+    if (merge) {  // the segments ran elsewhere (files), on threads or as child processes: merged into one estimate
         std::vector<SegmentRun> segments;
+        const std::vector<IdentityKey> identity = segment_identity(spec, w.scene.name);
         if (!spec.merge_segments.empty()) {
             for (const std::string& f : spec.merge_segments) segments.push_back(read_segment(f));
+        } else if (spec.run_segments && spec.run.fidelity == Fidelity::Interval) {
+            // Plain C++: the segments on this process's threads, sharing its scene, image and the
+            // frame's pre-pass, which the merge takes too (platforms/segment_threads.h).
+            std::optional<PrepassResult> prepass;
+            try {
+                segments = run_segment_threads(spec.hw, image, [&w] { return w.fresh(); }, to, spec.run.threads, identity, prepass,
+                                               !spec.run.progress);
+            } catch (const std::invalid_argument& e) {
+                throw InputError(e.what());
+            }
+            to.prepass = std::make_shared<const PrepassResult>(std::move(*prepass));
         } else if (spec.run_segments) {
             segments = spec.run_segments();
         }
-        t = merge_segments(spec.hw, image, *w.workload, to, std::move(segments), segment_identity(spec, w.scene.name));
+        t = merge_segments(spec.hw, image, *w.workload, to, std::move(segments), identity);
     } else {
         try {
             t = run_timing(spec.hw, image, *w.workload, to);

@@ -43,6 +43,10 @@ SamplingOptions sampling_options(const HwConfig& c, const BvhImage& img, const T
         // Several segment tasks may write the same plan at once: whole files only.
         s.save_prepass = [file = o.sample_plan, id = o.plan_identity](const PrepassResult& p) { write_file_atomic(file, plan_bytes(id, p)); };
     }
+    if (o.prepass) {
+        s.load_prepass = [p = o.prepass] { return std::optional<PrepassResult>(*p); };
+        s.save_prepass = nullptr;
+    }
     s.progress = o.progress;
     s.stop = o.stop;
     // Enough fetches to refill every cache twice over.

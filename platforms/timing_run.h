@@ -48,6 +48,9 @@ struct TimingOptions {
     // --sample-plan: the pre-pass read from this file if it exists, else run and written to it;
     // `plan_identity` (prepass_identity, simulation.h) is what the plan must match.
     std::string sample_plan, plan_identity;
+    // The frame's pre-pass, made already in this process (segments on threads,
+    // platforms/segment_threads.h): taken instead of running it or reading a plan.
+    std::shared_ptr<const PrepassResult> prepass;
     // Keep every ray with its hit for TimingResult::rays (hits files, verification); without,
     // memory holds only the rays in flight.
     bool keep_rays = true;

@@ -5,7 +5,7 @@
 # has cores, so that the threads interleave: the functional pass and --verify's checks against
 # Embree (a built-in scene and a 20,000-triangle mesh written here, whose BVH Embree builds on
 # TBB's threads), a timing run's --verify, the sampling pre-pass, and a split sample's segments
-# run at once. A data race fails the run (exit status 66) with ThreadSanitizer's report. CI runs
+# on threads of one process (the interval fidelity), sharing its scene, BVH image and pre-pass. A data race fails the run (exit status 66) with ThreadSanitizer's report. CI runs
 # it after the fuzz smoke. Accesses from Debian's uninstrumented libraries (Embree, TBB, SystemC)
 # are not checked (ignore_noninstrumented_modules); scripts/tsan.supp says what else is hidden
 # and why. That the statistics are the same for every thread count is the Release suite's test
@@ -31,7 +31,7 @@ runs=(
   "--scene $out/grid.obj --width 64 --height 64 --spp 2 --verify --threads 3"
   "--scene wknd --width 64 --height 64 --spp 2 --fidelity interval --verify --threads 3"
   "--scene cornell --width 256 --height 256 --spp 1 --fidelity interval --sample 0.5 --threads 3"
-  "--scene cornell --width 512 --height 256 --spp 1 --fidelity interval --sample 0.5 --sample-segments 2 --threads 2"
+  "--scene cornell --width 512 --height 256 --spp 1 --fidelity interval --sample 0.5 --sample-segments 3 --threads 3"
 )
 for args in "${runs[@]}"; do
   echo "tsan: rtsim $args"

@@ -1148,8 +1148,9 @@ TEST(RtsimSampling, IntervalFidelitySampledAsAt) {
 
 // A sample split into segments (docs/sampling.md, "Segments"): the segments run as separate
 // processes (as array tasks on a cluster would) and merged in any order give the same statistics,
-// bit for bit, as rtsim --sample-segments alone, with its children one at a time or three at
-// once; the segments together simulate the warps of
+// bit for bit, as rtsim --sample-segments alone, with its segments one at a time or three at once
+// (AT: child processes; the interval fidelity: threads of the one process, which share its scene,
+// BVH image and pre-pass); the segments together simulate the warps of
 // the continuous sample, each once, and their cycles add up to the merged run's simulated
 // cycles; the merged interval covers the full run. A sample plan (the pre-pass kept in a file)
 // changes no statistic, and a plan of another frame is refused. Merging refuses a missing
@@ -1194,11 +1195,10 @@ TEST(RtsimSampling, SegmentsMergedEqualTheSingleProcessRun) {
         ASSERT_EQ(merged.status, 0) << merged.err;
         const auto m = load("merged.json");
         EXPECT_EQ(m, load("single.json"));
-        // The three segments' children at once (--threads 3; the others start when the first has
-        // written the frame's plan, on its 3 threads): the same statistics, but for the record of
-        // the pre-pass's threads. The children are run alike whatever their fidelity: checked on
-        // the faster one.
-        if (fidelity == "interval") {
+        // The three segments at once (--threads 3; AT's children start when the first has written
+        // the frame's plan, on its 3 threads; the interval fidelity's threads after the frame's
+        // pre-pass on all 3): the same statistics, but for the record of the pre-pass's threads.
+        {
             std::string split3 = split;
             split3.replace(split3.find("--threads 1"), 11, "--threads 3");
             const Result concurrent = rtsim(dir, split3 + " --stats " + dir.file("concurrent.json"));
