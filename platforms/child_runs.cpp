@@ -132,12 +132,14 @@ ErrorCheck run_error_check(const std::vector<std::string>& frame_args, const std
     };
     if (!quiet) std::cerr << "checking the error: the same sample in " << fidelity << " and in AT\n";
     const Child f = child(fidelity);
-    // The sample took a share q of the full run's time in this fidelity. If AT's sample takes the
-    // same share of AT's full run (less, as AT's fixed costs weigh less in its longer run), the
-    // check costs q (T + T_at), below T_at exactly when q < T_at / (T + T_at), which is at least
-    // 1/2 since AT is never the faster (measured on the check's grid, docs/accuracy.md). Where the
-    // sample costs half the run or more (small frames, whose load, pre-pass and warming outweigh
-    // their simulation: primary rays at 256x256), AT's full run is the cheaper answer.
+    // The sample took a share q of the full run's time T in this fidelity. If AT's sample takes the
+    // same share of AT's full run T_at (less where AT's fixed costs weigh less in its longer run),
+    // the check costs q (T + T_at), below T_at exactly when q < T_at / (T + T_at), which is at
+    // least 1/2 wherever AT's run is not the faster. (On the check's grids AT took 0.8-6.9 times
+    // the fidelity's time: LT can be slower than AT on small frames, and there a check that passes
+    // can cost about AT's run, docs/accuracy.md.) Where the sample costs half the run or more
+    // (small frames, whose load, pre-pass and warming outweigh their simulation: primary rays at
+    // 256x256), AT's full run is the cheaper answer.
     const double q = run_s > 0 ? f.wall / run_s : 0.0;
     if (q >= 0.5) {
         char why[320];

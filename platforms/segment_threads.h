@@ -24,8 +24,8 @@ namespace rtu {
 
 // Segments 0..count-1 of the sample `opt` describes (count: opt.sample_segments), up to
 // `threads` at once, after the frame's pre-pass on all `threads` (or read from its plan,
-// opt.sample_plan, and written to it where it was not there). `fresh` makes a workload instance (one per segment); `identity`
-// is the run's segment identity. `prepass` (out): the frame's pre-pass, for the merge. A stop
+// opt.sample_plan, and written to it where it was not there). `fresh` makes a workload instance
+// (one per segment); `identity` is the run's segment identity. `prepass` (out): the frame's pre-pass, for the merge. A stop
 // requested (opt.stop) ends every segment at its next clean point and throws Interrupted; after a
 // segment fails no other starts, and its error is thrown (the lowest segment's first).
 std::vector<SegmentRun> run_segment_threads(const HwConfig& hw, const BvhImage& image, const std::function<std::unique_ptr<Workload>()>& fresh,

@@ -406,11 +406,12 @@ uint64_t frame_clusters(uint64_t warps, const HwConfig& hw) {
 }
 
 // --check-error N simulates N + 1 of the frame's clusters twice, in the run's fidelity and in AT,
-// each child tracing the frame (once, through a plan) and loading the scene: refused before the
-// run where that is more than a fifth of the frame, which would cost about as much as the frame
-// in AT (measured: at 11 of 64 clusters the check took 0.2-0.8 of the full AT run's time,
-// docs/accuracy.md "--check-error"), and below 4 drawn clusters, which pair into fewer than 2
-// strata pairs for its interval (command_line.cpp); and where the frame cannot be sampled.
+// each child loading the scene (and one tracing the frame for the plan both use): refused before
+// the run where that is more than a fifth of the frame, whose two samples would then simulate two
+// fifths of it or more beside their fixed costs, about as much as AT's run where AT is not much
+// slower than the fidelity (docs/accuracy.md, "--check-error"); below 4 drawn clusters, which
+// pair into fewer than 2 strata pairs for its interval (command_line.cpp); and where the frame
+// cannot be sampled.
 void check_error_refusal(const WorkloadStage& w, const BvhImage& image) {
     const RunSpec& spec = w.spec;
     if (!spec.check_error) return;

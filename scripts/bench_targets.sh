@@ -8,7 +8,7 @@
 #      timing fidelities simulate on one thread: their scaling is 1.0 by construction), and a
 #      sampled interval run of the bunny at 512x512 (a quarter: 64 clusters, split into one segment
 #      per core, 2 to 4 segments of at least 16 clusters) on 1 thread and on every core (its
-#      segments' child runs at once);
+#      segments on threads at once, after the frame's pre-pass on all of them);
 #   3. the 871 k-triangle dragon (--scene ref-full), 128x128, 2 spp path tracing, AT, in under 2 minutes;
 #   4. peak resident memory <= 1.5 x (scene + BVH image) + 200 MB (bunny, sprng, the dragon).
 # Embree's time is one core's (`--verify` times both traversals on the recorded rays, one after

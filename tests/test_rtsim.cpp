@@ -1688,7 +1688,7 @@ TEST(RtsimStats, SchemaListsEveryKeyWrittenAndNothingElse) {
     std::set<std::string> written;
     const std::string bunny = "--scene bunny --assets " + rtu::test::shared_dir() + "/scenes/bunny --spp 1 ";
     const std::string scene = bunny + "--width 64 --height 32 ";  // 64 warps
-    for (const std::string args : {scene + "--verify", scene + "--fidelity at --prefetcher ttp --sample 0.75 --verify",
+    for (const std::string& args : {scene + "--verify", scene + "--fidelity at --prefetcher ttp --sample 0.75 --verify",
                                    // 1,024 warps, 32 clusters (a check of 4 drawn needs 25)
                                    bunny + "--width 256 --height 128 --fidelity interval --check-error 4 --check-error-any-cost",
                                    scene + "--fidelity at --sample 0.75 --sample-unchecked --sample-segments 2 --segment 1"}) {
