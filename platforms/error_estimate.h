@@ -31,7 +31,8 @@ struct TimingResult;
 // ratio estimate paired by stratum, with its 95 % interval (paired_work_difference,
 // sampling/estimator.h): the sample's own cycles are its makespan, which one SM's tail sets, and
 // their ratio lay up to 14.1 % from the full runs' where the paired residence lay within 1.8 %
-// (ship's path tracing at 256x256 under `paper`; docs/accuracy.md, "--check-error").
+// (ship's path tracing at 256x256 under `paper`; docs/accuracy.md, "The check against the full
+// runs").
 struct ErrorCheck {
     uint64_t clusters = 0;  // clusters simulated, the first wave included
     double share = 0;       // of the frame's shader warps

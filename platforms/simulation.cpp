@@ -409,9 +409,9 @@ uint64_t frame_clusters(uint64_t warps, const HwConfig& hw) {
 // each child loading the scene (and one tracing the frame for the plan both use): refused before
 // the run where that is more than a fifth of the frame, whose two samples would then simulate two
 // fifths of it or more beside their fixed costs, about as much as AT's run where AT is not much
-// slower than the fidelity (docs/accuracy.md, "--check-error"); below 4 drawn clusters, which
-// pair into fewer than 2 strata pairs for its interval (command_line.cpp); and where the frame
-// cannot be sampled.
+// slower than the fidelity (docs/accuracy.md, "The check against the full runs"); below 4 drawn
+// clusters, which pair into fewer than 2 strata pairs for its interval (command_line.cpp); and
+// where the frame cannot be sampled.
 void check_error_refusal(const WorkloadStage& w, const BvhImage& image) {
     const RunSpec& spec = w.spec;
     if (!spec.check_error) return;
