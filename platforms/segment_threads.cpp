@@ -5,9 +5,9 @@
 #include <exception>
 #include <iostream>
 #include <mutex>
-#include <thread>
 
 #include "fidelity_run.h"
+#include "model/on_threads.h"
 #include "sampling/prepass.h"
 
 namespace rtu {
@@ -50,7 +50,7 @@ std::vector<SegmentRun> run_segment_threads(const HwConfig& hw, const BvhImage& 
     std::atomic<uint32_t> next{0};
     std::atomic<bool> failed{false};
     std::mutex log;
-    auto work = [&] {
+    on_threads(parallel, [&](unsigned) {
         for (uint32_t i; (i = next.fetch_add(1)) < segments;) {
             if (failed.load() || opt.stop.requested()) return;
             if (!quiet) {
@@ -74,11 +74,7 @@ std::vector<SegmentRun> run_segment_threads(const HwConfig& hw, const BvhImage& 
                 return;
             }
         }
-    };
-    std::vector<std::thread> pool;
-    for (uint32_t t = 1; t < parallel; ++t) pool.emplace_back(work);
-    work();
-    for (std::thread& t : pool) t.join();
+    });
     for (const std::exception_ptr& e : errors)
         if (e) std::rethrow_exception(e);
     if (opt.stop.requested()) throw Interrupted{opt.stop.signal()};

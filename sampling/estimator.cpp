@@ -15,10 +15,13 @@ namespace {
 // Each pair is a stratum of weight[a] + weight[b] clusters of which 2 were drawn: the finite
 // population correction 1 - 2 / (weight[a] + weight[b]) makes a pair of single-cluster strata
 // (simulated whole) contribute nothing.
+// One pair's term, strata i and i + 1.
+double pair_variance(const std::vector<double>& d, const std::vector<double>& weight, size_t i) {
+    return (d[i] - d[i + 1]) * (d[i] - d[i + 1]) * std::max(0.0, 1.0 - 2.0 / std::max(2.0, weight[i] + weight[i + 1]));
+}
 double collapsed_pairs_variance(const std::vector<double>& d, const std::vector<double>& weight) {
     double v = 0;
-    for (size_t i = 0; i + 1 < d.size(); i += 2)
-        v += (d[i] - d[i + 1]) * (d[i] - d[i + 1]) * std::max(0.0, 1.0 - 2.0 / std::max(2.0, weight[i] + weight[i + 1]));
+    for (size_t i = 0; i + 1 < d.size(); i += 2) v += pair_variance(d, weight, i);
     return v;
 }
 
@@ -47,10 +50,11 @@ PairedDifference paired_work_difference(const StrataWork& fast, const StrataWork
     // draws of 20 and of 40 strata held a synthetic frame's ratio,
     // PairedWorkDifference.CoversAKnownFrameRatio; 97-98 % now): the degrees of freedom are
     // Satterthwaite's, (sum v)^2 / sum v^2, between 1 and the pairs.
+    std::vector<double> residual(fast.work.size());
+    for (size_t h = 0; h < residual.size(); ++h) residual[h] = fast.work[h] - r * reference.work[h];
     double v = 0, vv = 0;
-    for (size_t i = 0; i + 1 < fast.work.size(); i += 2) {
-        const double da = fast.work[i] - r * reference.work[i], db = fast.work[i + 1] - r * reference.work[i + 1];
-        const double g = collapsed_pairs_variance({da, db}, {fast.weight[i], fast.weight[i + 1]});
+    for (size_t i = 0; i + 1 < residual.size(); i += 2) {
+        const double g = pair_variance(residual, fast.weight, i);
         v += g, vv += g * g;
     }
     p.degrees = vv > 0 ? v * v / vv : double(p.pairs);

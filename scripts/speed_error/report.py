@@ -89,7 +89,7 @@ def main():
         mt = sum(r[2] for r in rows) / len(rows)
         # The error the baseline runs state (error_estimate.value, %), median over the scenes
         # that state one; None where none does (outside the validated regime).
-        stated = sorted(100 * v(f"{fid}_base", s, "error_bound") for s in SCENES if v(f"{fid}_base", s, "error_bound") is not None)
+        stated = sorted(100 * e for e in (v(f"{fid}_base", s, "error_bound") for s in SCENES) if e is not None)
         pts.append((fid, gm, me, statistics.median(stated) if stated else None))
         p(f"| {LABEL[fid]} | {gm:.2f}x | {me:.2f} % | {mx:.2f} % | {mt:.2f} % |")
     p("")
