@@ -98,6 +98,11 @@ void write_stats(StatsOut& out, const RunRecord& r) {
         t.value("load", r.load_s, "s", "loading the scene");
         t.value("build", r.build_s, "s", "building the BVH image with Embree");
         t.value("run", r.run_s, "s", "tracing or simulating (the sampling pre-pass included)");
+        if (r.timing && r.timing->sampled)
+            t.value("prepass", r.timing->prepass_s, "s",
+                    "sampled runs, part of run: before the first simulated warp, the frame's functional pre-pass (or reading its plan) "
+                    "and tracing the warming fetches; a merge of segments: its own, and the frame's pre-pass its segments' threads made "
+                    "before them (each segment's warming is in the segments' time)");
     }
     {
         StatsOut m = out.child("memory_mb", "host memory");

@@ -79,6 +79,7 @@ TimingResult merge_segments(const HwConfig& cfg, const BvhImage& image, Workload
     }
     r.sampled = true;
     r.estimate = sample.merge(records);
+    r.prepass_s = sample.select_seconds();
     r.cycles = uint64_t(std::llround(r.estimate.cycles_estimate(double(r.cycles_simulated))));
     for (const std::string& f : counter_invariants(r.counts, r.summary)) r.invariant_failures.push_back(f);
     return r;

@@ -14,7 +14,7 @@ namespace rtu {
 
 std::vector<SegmentRun> run_segment_threads(const HwConfig& hw, const BvhImage& image, const std::function<std::unique_ptr<Workload>()>& fresh,
                                             const TimingOptions& opt, unsigned threads, const std::vector<IdentityKey>& identity,
-                                            std::optional<PrepassResult>& prepass, bool quiet) {
+                                            std::optional<PrepassResult>& prepass, bool quiet, double* prepass_s) {
     const uint32_t segments = opt.sample_segments;
     // The frame's design and pre-pass first, on every thread, as the merge makes them (a sample
     // drawn with kNoSegment simulates no warp); from the plan file where one is kept, into it
@@ -38,6 +38,7 @@ std::vector<SegmentRun> run_segment_threads(const HwConfig& hw, const BvhImage& 
         };
         FrameSample sample(s, hw.sms, shader_timing(hw, *workload));
         const WorkloadDriver driver(*workload, hw.sms, hw.warp_size, shader_timing(hw, *workload), &sample);
+        if (prepass_s) *prepass_s = sample.select_seconds();
     }
     if (!prepass) throw std::logic_error("--sample-segments: the frame's pre-pass was not made");
     const auto shared = std::make_shared<const PrepassResult>(*prepass);

@@ -30,6 +30,6 @@ namespace rtu {
 // segment fails no other starts, and its error is thrown (the lowest segment's first).
 std::vector<SegmentRun> run_segment_threads(const HwConfig& hw, const BvhImage& image, const std::function<std::unique_ptr<Workload>()>& fresh,
                                             const TimingOptions& opt, unsigned threads, const std::vector<IdentityKey>& identity,
-                                            std::optional<PrepassResult>& prepass, bool quiet);
+                                            std::optional<PrepassResult>& prepass, bool quiet, double* prepass_s = nullptr);
 
 }  // namespace rtu

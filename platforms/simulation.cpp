@@ -342,6 +342,7 @@ void timing_stage(const WorkloadStage& w, const BvhImage& image, Ran& ran, RunRe
     const bool merge = spec.run.sample_segments > 1 && spec.run.sample_segment >= spec.run.sample_segments;
     if (merge) {  // the segments ran elsewhere (files), on threads or as child processes: merged into one estimate
         std::vector<SegmentRun> segments;
+        double prepass_s = 0;  // the segments on threads: their frame's pre-pass
         const std::vector<IdentityKey> identity = segment_identity(spec, w.scene.name);
         if (!spec.merge_segments.empty()) {
             for (const std::string& f : spec.merge_segments) segments.push_back(read_segment(f));
@@ -351,7 +352,7 @@ void timing_stage(const WorkloadStage& w, const BvhImage& image, Ran& ran, RunRe
             std::optional<PrepassResult> prepass;
             try {
                 segments = run_segment_threads(spec.hw, image, [&w] { return w.fresh(); }, to, spec.run.threads, identity, prepass,
-                                               !spec.run.progress);
+                                               !spec.run.progress, &prepass_s);
             } catch (const std::invalid_argument& e) {
                 throw InputError(e.what());
             }
@@ -360,6 +361,7 @@ void timing_stage(const WorkloadStage& w, const BvhImage& image, Ran& ran, RunRe
             segments = spec.run_segments();
         }
         t = merge_segments(spec.hw, image, *w.workload, to, std::move(segments), identity);
+        t.prepass_s += prepass_s;  // the segments on threads made the frame's pre-pass before them
     } else {
         try {
             t = run_timing(spec.hw, image, *w.workload, to);

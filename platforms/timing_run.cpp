@@ -73,6 +73,7 @@ void take_estimate(TimingResult& r, const FrameSample* sample, const WorkloadDri
     }
     r.sampled = true;
     r.estimate = sample->estimate();
+    r.prepass_s = sample->select_seconds();
     if (!r.interrupted) r.cycles = uint64_t(std::llround(r.estimate.cycles_estimate(double(r.cycles_simulated))));
     if (sample->segment_run()) r.segment_records = sample->warp_records();
 }

@@ -77,6 +77,11 @@ struct TimingResult {
     std::string timeline;           // with TimingOptions::timeline: the Chrome trace JSON
     bool sampled = false;
     SampleEstimate estimate;        // sampled runs
+    // Sampled runs: host wall seconds before the first simulated warp, the frame's pre-pass
+    // (FrameSample::select_seconds); a merge of segments: its own (reading the plan, or taking
+    // the pre-pass its segments' threads made, whose time is added; each segment's own warming
+    // is in the segments' time).
+    double prepass_s = 0;
     std::vector<WarpRecord> segment_records;  // one segment of a split sample: its warps' records for the merge
     uint64_t payloads_allocated = 0;  // AT and LT: transaction payloads the pool made
     // Stopped by TimingOptions::stop before the frame ended: the statistics are those of the

@@ -1,5 +1,6 @@
 #include "frame_sample.h"
 
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <optional>
@@ -78,6 +79,7 @@ FrameSample::FrameSample(const SamplingOptions& opt, uint32_t sms, const ShaderT
                  opt.capacity) {}
 
 std::vector<uint64_t> FrameSample::select(const FrameWarps& frame) {
+    const auto t0 = std::chrono::steady_clock::now();
     const SamplingOptions& o = opt_;
     const uint64_t warps = frame.warps(), cluster = std::max<uint32_t>(1, o.capacity);
     warps_total_ = warps;
@@ -166,6 +168,7 @@ std::vector<uint64_t> FrameSample::select(const FrameWarps& frame) {
             records_.push_back(std::move(rec));
         }
     if (traced) estimator_.set_prepass(std::move(prepass));
+    select_s_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return kept;
 }
 

@@ -38,6 +38,9 @@ public:
 
     // The frame was sampled (a frame without warps never is).
     bool sampled() const { return sampled_; }
+    // Host wall seconds select() took: the frame's pre-pass (its functional trace, or reading its
+    // plan), the design, and tracing the warming fetches, all before the first simulated warp.
+    double select_seconds() const { return select_s_; }
     // The estimate of the frame from the simulated warps.
     SampleEstimate estimate() const;
     // This run simulates one segment of a split sample (SamplingOptions::segments): its records
@@ -64,6 +67,7 @@ private:
     uint32_t sms_, resident_;
     SampleEstimator estimator_;
     bool sampled_ = false;
+    double select_s_ = 0.0;
     uint64_t warps_total_ = 0;
     SampleEstimate::Design design_;
     std::vector<WarpRecord> records_;      // per kept warp

@@ -1066,6 +1066,7 @@ TEST(RtsimSampling, FullFrameSampleEqualsTheUnsampledRun) {
     EXPECT_FALSE(exists(dir.file("refused.json")));
     auto full = nlohmann::json::parse(read_text(dir.file("full.json")));
     auto one = nlohmann::json::parse(read_text(dir.file("one.json")));
+    EXPECT_FALSE(full["time_s"].contains("prepass"));  // no sample, no pre-pass
     for (auto* j : {&full, &one}) erase_host_keys(*j);
     EXPECT_EQ(full, one);
     EXPECT_FALSE(full["timing"].contains("sampling"));
@@ -1094,6 +1095,9 @@ TEST(RtsimSampling, FullFrameSampleEqualsTheUnsampledRun) {
         EXPECT_GE(ci[0].get<double>(), s["cycles_simulated"].get<double>());
         EXPECT_LE(ci[0].get<double>(), t["cycles"].get<double>());
         EXPECT_GE(ci[1].get<double>(), t["cycles"].get<double>());
+        // The pre-pass's wall time is part of the run's.
+        EXPECT_GT(t["time_s"]["prepass"].get<double>(), 0.0);
+        EXPECT_LE(t["time_s"]["prepass"].get<double>(), t["time_s"]["run"].get<double>());
         erase_host_keys(by_threads.back());
         by_threads.back()["timing"]["sampling"].erase("prepass_threads");
     }
@@ -1175,6 +1179,11 @@ TEST(RtsimSampling, SegmentsMergedEqualTheSingleProcessRun) {
         };
         const Result single = rtsim(dir, split + " --stats " + dir.file("single.json"));
         ASSERT_EQ(single.status, 0) << single.err;
+        // The merge's pre-pass: the frame's, made before the segments (threads), or read from the
+        // plan the first child wrote; part of the run's time.
+        const auto timed = nlohmann::json::parse(read_text(dir.file("single.json")))["time_s"];
+        EXPECT_GT(timed["prepass"].get<double>(), 0.0);
+        EXPECT_LE(timed["prepass"].get<double>(), timed["run"].get<double>());
         uint64_t cycles = 0, rays = 0, warps = 0;
         std::set<uint64_t> simulated;
         for (int i = 0; i < 3; ++i) {
