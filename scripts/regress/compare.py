@@ -13,7 +13,7 @@ import json
 import re
 import sys
 
-VOLATILE = re.compile(r"^(provenance|time_s|simulation_rate|speed|memory_mb\.peak_resident|timing\.sampling\.prepass_threads|error_estimate\.check\.(fidelity_s|at_s))(\.|$)")
+VOLATILE = re.compile(r"^(provenance|time_s|simulation_rate|speed|memory_mb\.peak_resident|timing\.sampling\.prepass_threads|error_estimate\.check\.(fidelity_s|at_s|wall_s))(\.|$)")
 
 
 def flatten(j, prefix="", out=None):
