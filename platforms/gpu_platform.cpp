@@ -109,7 +109,7 @@ struct GpuPlatform::Impl {
           // Treelet traversal (and with it the Treelet prefetcher, which needs it) works on treelets.
           treelets(traversal_treelets(c, img, o.order)),
           sample(frame_sample(c, img, o, treelets.get(), w)),
-          driver(w, c.sms, c.warp_size, shader_timing(c, w), sample.get()),
+          driver(w, c.sms, c.warp_size, shader_timing(c, w), sample.get(), o.begun.get()),
           gpu("gpu", c, img, o.order, driver, o.fidelity, treelets.get(), o.check_protocol),
           core(gpu.core_clock()),
           mem(gpu.memory_clock()) {}

@@ -18,7 +18,7 @@ TimingResult run_interval(const HwConfig& cfg, const BvhImage& image, Workload& 
             for (const WarmFetch& f : fetches)
                 for (uint32_t o = 0; o < f.bytes; o += sector) gpu.warm(f.sm, f.addr + o);
         };
-    WorkloadDriver driver(workload, cfg.sms, cfg.warp_size, shader_timing(cfg, workload), sample.get());
+    WorkloadDriver driver(workload, cfg.sms, cfg.warp_size, shader_timing(cfg, workload), sample.get(), opt.begun.get());
     driver.keep_rays(opt.keep_rays);
 
     // Warp-buffer slots by the cycle they are free (then by SM: deterministic order). A slot whose

@@ -44,7 +44,14 @@ std::vector<SegmentRun> run_segment_threads(const HwConfig& hw, const BvhImage& 
     const auto shared = std::make_shared<const PrepassResult>(*prepass);
 
     // Then the segments, up to `threads` at once, each on one thread (the pre-pass is made): the
-    // next segment goes to the first thread free. Results land in their segment's slot.
+    // next segment goes to the first thread free. Results land in their segment's slot. They
+    // share one workload, begun here: each segment's warps are its own paths, which no other
+    // segment touches (the warming traces the pre-pass's own instances), so a segment thread
+    // holds its warps' state, not the frame's (at 1920x1080 a workload instance and its first
+    // rays are about 270 MB).
+    const std::unique_ptr<Workload> workload = fresh();
+    auto begun = std::make_shared<std::vector<WorkRay>>();
+    workload->begin(*begun);
     const uint32_t parallel = std::max(1u, std::min<uint32_t>(segments, threads));
     std::vector<std::optional<TimingResult>> results(segments);
     std::vector<std::exception_ptr> errors(segments);
@@ -67,7 +74,7 @@ std::vector<SegmentRun> run_segment_threads(const HwConfig& hw, const BvhImage& 
                 o.progress = false;
                 o.snapshot = nullptr;
                 o.keep_rays = false;
-                const std::unique_ptr<Workload> workload = fresh();
+                o.begun = begun;
                 results[i] = run_timing(hw, image, *workload, o);
             } catch (...) {
                 errors[i] = std::current_exception();

@@ -3,9 +3,10 @@
 // C++, so several of its runs can share one process (AT and LT elaborate a SystemC platform,
 // once per process, and keep their children): every segment reads the same scene and BVH image,
 // and the frame's pre-pass is made once, before the segments, and handed to them and to the
-// merge in memory. Each segment has its own workload instance and GPU. What a segment gives the
-// merge is what a child's statistics file gives (SegmentRun), so the merged statistics are the
-// same, bit for bit, as those of the segments' files (RtsimSampling.SegmentsMergedEqualTheSingleProcessRun).
+// merge in memory. The segments share one workload, begun once (each runs its own paths), and each
+// has its own driver and GPU. What a segment gives the merge is what a child's statistics file
+// gives (SegmentRun), so the merged statistics are the same, bit for bit, as those of the
+// segments' files (RtsimSampling.SegmentsMergedEqualTheSingleProcessRun).
 #pragma once
 #include <cstdint>
 #include <functional>

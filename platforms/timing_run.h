@@ -51,6 +51,9 @@ struct TimingOptions {
     // The frame's pre-pass, made already in this process (segments on threads,
     // platforms/segment_threads.h): taken instead of running it or reading a plan.
     std::shared_ptr<const PrepassResult> prepass;
+    // The run's workload has begun already, and these are its first rays (a split sample's
+    // segments on threads share one workload: WorkloadDriver's `begun`); null: the run begins it.
+    std::shared_ptr<const std::vector<WorkRay>> begun;
     // Keep every ray with its hit for TimingResult::rays (hits files, verification); without,
     // memory holds only the rays in flight.
     bool keep_rays = true;

@@ -17,6 +17,10 @@ public:
         if (++head_ == rays_.size()) rays_.clear(), head_ = 0;
     }
     void push_back(const WorkRay& r) { rays_.push_back(r); }
+    void clear() {  // keeps its allocation (a queue refilled for each warp allocates once)
+        rays_.clear();
+        head_ = 0;
+    }
 
 private:
     std::vector<WorkRay> rays_;

@@ -10,23 +10,71 @@
 
 namespace rtu {
 
+// The frame's shader warps as the workload's first rays lay them out: its paths in the order of
+// their first ray, each run of warp_size of them (neighbouring pixels) one shader warp, bound to
+// the SMs round robin; a path's first rays in the order given. Read by a selection, and by the
+// driver to make the warps it runs: a warp's threads (with a queue of rays each) are made only
+// for the warps that run, so a sample does not hold the frame's queues (a sampled 1920x1080 frame
+// held about 120 bytes a path in them, in every segment that ran at once).
 class WorkloadDriver::Frame : public FrameWarps {
 public:
-    explicit Frame(const std::vector<ShaderWarp>& warps) : warps_(warps) {}
-    size_t warps() const override { return warps_.size(); }
-    uint32_t sm(size_t w) const override { return warps_[w].sm; }
-    void threads(size_t w, std::vector<uint32_t>& paths, std::vector<RayQueue>& first) const override {
-        const ShaderWarp& sw = warps_[w];
-        paths.resize(sw.threads.size());
-        first.resize(std::max(first.size(), sw.threads.size()));
-        for (size_t i = 0; i < sw.threads.size(); ++i) {
-            paths[i] = sw.threads[i].path;
-            first[i] = sw.threads[i].pending;
+    Frame(const std::vector<WorkRay>& first, uint32_t warp_size, uint32_t sms) : first_(&first), warp_size_(warp_size), sms_(sms) {
+        uint32_t max_path = 0;
+        for (const WorkRay& w : first) max_path = std::max(max_path, w.path);
+        std::vector<uint32_t> rank(first.empty() ? 0 : size_t(max_path) + 1, ~0u);  // path -> its place in paths_
+        for (const WorkRay& w : first)
+            if (rank[w.path] == ~0u) {
+                rank[w.path] = uint32_t(paths_.size());
+                paths_.push_back(w.path);
+            }
+        // A path's rays together, in the order given (the frame workloads give one per path, in
+        // path order: they are taken as they are).
+        auto by_rank = [&](const WorkRay& a, const WorkRay& b) { return rank[a.path] < rank[b.path]; };
+        if (!std::is_sorted(first.begin(), first.end(), by_rank)) {
+            sorted_ = first;
+            std::stable_sort(sorted_.begin(), sorted_.end(), by_rank);
+            first_ = &sorted_;
         }
+        start_.assign(paths_.size() + 1, 0);
+        for (const WorkRay& w : first) ++start_[rank[w.path] + 1];
+        for (size_t r = 0; r < paths_.size(); ++r) start_[r + 1] += start_[r];
+    }
+    size_t warps() const override { return (paths_.size() + warp_size_ - 1) / warp_size_; }
+    uint32_t sm(size_t w) const override { return uint32_t(w % sms_); }
+    void threads(size_t w, std::vector<uint32_t>& paths, std::vector<RayQueue>& first) const override {
+        const size_t begin = w * warp_size_, n = std::min<size_t>(warp_size_, paths_.size() - begin);
+        paths.resize(n);
+        first.resize(std::max(first.size(), n));
+        for (size_t i = 0; i < n; ++i) {
+            paths[i] = paths_[begin + i];
+            fill(first[i], begin + i);
+        }
+    }
+    // Shader warp `w` of the frame, on SM `sm`, its threads holding their first rays.
+    ShaderWarp warp(size_t w, uint32_t sm) const {
+        if (w >= warps()) throw std::out_of_range("a selection picked shader warp " + std::to_string(w) + " of " + std::to_string(warps()));
+        ShaderWarp sw;
+        sw.sm = sm;
+        const size_t begin = w * warp_size_, n = std::min<size_t>(warp_size_, paths_.size() - begin);
+        sw.threads.reserve(n);
+        for (size_t i = 0; i < n; ++i) {
+            sw.threads.push_back(Thread{paths_[begin + i], 0, {}});
+            fill(sw.threads.back().pending, begin + i);
+        }
+        return sw;
     }
 
 private:
-    const std::vector<ShaderWarp>& warps_;
+    // `q` holds the first rays of the path at `rank`, and nothing else.
+    void fill(RayQueue& q, size_t rank) const {
+        q.clear();
+        for (uint32_t i = start_[rank]; i < start_[rank + 1]; ++i) q.push_back((*first_)[i]);
+    }
+    const std::vector<WorkRay>* first_;  // the first rays given, or sorted_
+    std::vector<WorkRay> sorted_;        // the first rays by path, where they were not given so
+    uint32_t warp_size_, sms_;
+    std::vector<uint32_t> paths_;  // in the order of their first ray
+    std::vector<uint32_t> start_;  // per path (by that order): its rays are first_[start_[r], start_[r + 1])
 };
 
 ShaderTiming shader_timing(const HwConfig& hw, const Workload& workload) {
@@ -40,44 +88,26 @@ ShaderTiming shader_timing(const HwConfig& hw, const Workload& workload) {
     return t;
 }
 
-WorkloadDriver::WorkloadDriver(Workload& workload, uint32_t sms, uint32_t warp_size, const ShaderTiming& timing, WarpSelection* selection)
+WorkloadDriver::WorkloadDriver(Workload& workload, uint32_t sms, uint32_t warp_size, const ShaderTiming& timing, WarpSelection* selection,
+                               const std::vector<WorkRay>* begun)
     : workload_(workload), timing_(timing), ready_(sms), selection_(selection) {
     timing_.shaders = timing.shaders && workload.runs_shaders();
-    std::vector<WorkRay> first;
-    workload_.begin(first);
-    // Paths in order; each run of warp_size paths (neighbouring pixels) is one shader warp.
-    uint32_t max_path = 0;
-    for (const WorkRay& w : first) max_path = std::max(max_path, w.path);
-    path_warp_.assign(first.empty() ? 0 : max_path + 1, ~0u);
-    for (const WorkRay& w : first) {
-        if (path_warp_[w.path] == ~0u) {
-            if (warps_.empty() || warps_.back().threads.size() == warp_size) {
-                ShaderWarp sw;
-                sw.sm = uint32_t(warps_.size() % sms);
-                warps_.push_back(std::move(sw));
-            }
-            warps_.back().threads.push_back(Thread{w.path, 0, {}});
-            path_warp_[w.path] = uint32_t(warps_.size() - 1);
+    std::vector<WorkRay> own;
+    if (!begun) workload_.begin(own);
+    {
+        const Frame frame(begun ? *begun : own, warp_size, sms);
+        warps_total_ = frame.warps();
+        if (selection_ && warps_total_) {
+            // Only the selected warps run, in the order given, bound to the SMs round robin anew.
+            const std::vector<uint64_t> picked = selection_->select(frame);
+            warps_.reserve(picked.size());
+            for (uint64_t w : picked) warps_.push_back(frame.warp(w, uint32_t(warps_.size() % sms)));
+        } else {
+            warps_.reserve(warps_total_);
+            for (uint64_t w = 0; w < warps_total_; ++w) warps_.push_back(frame.warp(w, uint32_t(w % sms)));
         }
-        ShaderWarp& sw = warps_[path_warp_[w.path]];
-        auto it = std::find_if(sw.threads.begin(), sw.threads.end(), [&](const Thread& t) { return t.path == w.path; });
-        it->pending.push_back(w);
     }
-    warps_total_ = warps_.size();
-    if (selection_ && !warps_.empty()) {
-        // Only the selected warps run, in the order given, bound to the SMs round robin anew.
-        const std::vector<uint64_t> picked = selection_->select(Frame(warps_));
-        std::vector<ShaderWarp> kept;
-        kept.reserve(picked.size());
-        for (uint64_t w : picked) {
-            ShaderWarp sw = std::move(warps_.at(w));
-            sw.sm = uint32_t(kept.size() % sms);
-            kept.push_back(std::move(sw));
-        }
-        warps_ = std::move(kept);
-        for (uint32_t i = 0; i < warps_.size(); ++i)
-            for (const Thread& t : warps_[i].threads) path_warp_[t.path] = i;
-    }
+    std::vector<WorkRay>().swap(own);
     launched_ = timing_.resident ? std::min<size_t>(warps_.size(), size_t(sms) * timing_.resident) : warps_.size();
     // The first warps of an SM begin their shader code together, each beside all the others.
     std::vector<uint32_t> on_sm(sms, 0);

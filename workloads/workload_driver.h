@@ -40,8 +40,13 @@ public:
     // resident warps the first sms x resident warps go to the SMs round robin; a warp that
     // finishes gives its place to the next warp of the frame, on its SM, which then runs its
     // shader code before its first trace. `selection` (may be null: every warp runs) picks the
-    // warps to simulate and is told what they do; it must outlive the driver.
-    WorkloadDriver(Workload& workload, uint32_t sms, uint32_t warp_size, const ShaderTiming& timing, WarpSelection* selection = nullptr);
+    // warps to simulate and is told what they do; it must outlive the driver. `begun` (may be
+    // null: the driver calls workload.begin()): the workload has begun already, and these are
+    // its first rays. Drivers that run disjoint warps of one frame may then share the workload
+    // and its first rays, on threads of their own (a split sample's segments): each touches only
+    // its own warps' paths.
+    WorkloadDriver(Workload& workload, uint32_t sms, uint32_t warp_size, const ShaderTiming& timing, WarpSelection* selection = nullptr,
+                   const std::vector<WorkRay>* begun = nullptr);
 
     std::optional<std::vector<WarpRay>> next_trace(uint32_t sm, uint64_t now) override;
     uint64_t earliest_ready(uint32_t sm) const override;
@@ -100,7 +105,6 @@ private:
     Workload& workload_;
     ShaderTiming timing_;
     std::vector<ShaderWarp> warps_;
-    std::vector<uint32_t> path_warp_;  // path -> shader warp
     std::vector<std::set<std::pair<uint64_t, uint32_t>>> ready_;  // per SM: (ready cycle, warp)
     std::vector<ShaderCodeEnds<uint64_t>> shading_;  // per SM, with contention (else empty)
     std::vector<Record> records_;
