@@ -16,6 +16,9 @@ std::vector<SegmentRun> run_segment_threads(const HwConfig& hw, const BvhImage& 
                                             const TimingOptions& opt, unsigned threads, const std::vector<IdentityKey>& identity,
                                             std::optional<PrepassResult>& prepass, bool quiet, double* prepass_s) {
     const uint32_t segments = opt.sample_segments;
+    // The one workload instance the pre-pass and every segment's warming trace (PrepassWorkload:
+    // a segment thread does not hold a copy of the frame's paths for its warming).
+    const auto traced = opt.sample_workload ? std::make_shared<PrepassWorkload>(opt.sample_workload) : nullptr;
     // The frame's design and pre-pass first, on every thread, as the merge makes them (a sample
     // drawn with kNoSegment simulates no warp); from the plan file where one is kept, into it
     // where it is not.
@@ -23,6 +26,7 @@ std::vector<SegmentRun> run_segment_threads(const HwConfig& hw, const BvhImage& 
         TimingOptions o = opt;
         o.sample_segment = SamplingOptions::kNoSegment;
         o.threads = std::max(1u, threads);
+        o.prepass_workload = traced;
         const std::unique_ptr<Workload> workload = fresh();
         SamplingOptions s = sampling_options(hw, image, o, nullptr);
         const auto load = s.load_prepass;
@@ -46,7 +50,7 @@ std::vector<SegmentRun> run_segment_threads(const HwConfig& hw, const BvhImage& 
     // Then the segments, up to `threads` at once, each on one thread (the pre-pass is made): the
     // next segment goes to the first thread free. Results land in their segment's slot. They
     // share one workload, begun here: each segment's warps are its own paths, which no other
-    // segment touches (the warming traces the pre-pass's own instances), so a segment thread
+    // segment touches (the warming traces the pre-pass's instance, `traced`), so a segment thread
     // holds its warps' state, not the frame's (at 1920x1080 a workload instance and its first
     // rays are about 270 MB).
     const std::unique_ptr<Workload> workload = fresh();
@@ -70,6 +74,7 @@ std::vector<SegmentRun> run_segment_threads(const HwConfig& hw, const BvhImage& 
                 o.sample_segment = i;
                 o.threads = 1;
                 o.prepass = shared;
+                o.prepass_workload = traced;
                 o.sample_plan.clear();
                 o.progress = false;
                 o.snapshot = nullptr;

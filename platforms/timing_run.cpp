@@ -35,6 +35,7 @@ SamplingOptions sampling_options(const HwConfig& c, const BvhImage& img, const T
     s.capacity = gpu_warp_capacity(c);
     s.node_blocks = (img.size() + kBlockBytes - 1) / kBlockBytes;
     s.make_workload = o.sample_workload;
+    s.shared_workload = o.prepass_workload;
     s.threads = o.threads;
     s.segments = o.sample_segments;
     s.segment = o.sample_segment;

@@ -37,8 +37,8 @@ struct TimingOptions {
     double sample_rate = 1.0;         // < 1: sampled simulation of this share of the frame's warps
     uint64_t sample_seed = 1;
     bool sample_unchecked = false;    // run a sample too small for an interval, and report none
-    // Sampled runs: makes fresh instances of the workload for the functional pre-pass
-    // (docs/sampling.md), one per thread; empty: the plain stratified estimate.
+    // Sampled runs: makes a fresh instance of the workload for the functional pre-pass and the
+    // warming (docs/sampling.md), shared by their threads; empty: the plain stratified estimate.
     std::function<std::unique_ptr<Workload>()> sample_workload;
     unsigned threads = 1;  // --threads: the functional pass, --verify's checks and the sampling pre-pass
     // A sample split into independent segments (docs/sampling.md, "Segments"): this run simulates
@@ -51,6 +51,9 @@ struct TimingOptions {
     // The frame's pre-pass, made already in this process (segments on threads,
     // platforms/segment_threads.h): taken instead of running it or reading a plan.
     std::shared_ptr<const PrepassResult> prepass;
+    // The workload instance the pre-pass and the warming trace, shared by the segment threads
+    // (SamplingOptions::shared_workload); null: the run makes its own.
+    std::shared_ptr<PrepassWorkload> prepass_workload;
     // The run's workload has begun already, and these are its first rays (a split sample's
     // segments on threads share one workload: WorkloadDriver's `begun`); null: the run begins it.
     std::shared_ptr<const std::vector<WorkRay>> begun;

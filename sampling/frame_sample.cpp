@@ -90,9 +90,9 @@ std::vector<uint64_t> FrameSample::select(const FrameWarps& frame) {
     PrepassResult prepass;
     std::vector<double> cluster_work;
     const bool traced = o.make_workload && o.trace;
-    std::optional<PrepassWorkloads> workloads;
+    std::shared_ptr<PrepassWorkload> workload;
     if (traced) {
-        workloads.emplace(o);
+        workload = o.shared_workload ? o.shared_workload : std::make_shared<PrepassWorkload>(o.make_workload);
         std::optional<PrepassResult> kept = o.load_prepass ? o.load_prepass() : std::nullopt;
         if (kept && kept->trace_nodes.size() != warps)
             throw InputError("the sample plan holds " + std::to_string(kept->trace_nodes.size()) + " shader warps, this frame " +
@@ -100,7 +100,7 @@ std::vector<uint64_t> FrameSample::select(const FrameWarps& frame) {
         if (kept) {
             prepass = std::move(*kept);
         } else {
-            prepass = run_prepass(frame, o, *workloads);
+            prepass = run_prepass(frame, o, *workload);
             if (o.save_prepass) o.save_prepass(prepass);
         }
         cluster_work.assign((warps + cluster - 1) / cluster, 0.0);
@@ -130,7 +130,7 @@ std::vector<uint64_t> FrameSample::select(const FrameWarps& frame) {
         // on average, 0.117 in the frame) and handed the first touches of the cluster's bounces
         // to the uncounted skipped warps (wknd: 0.0024 against 0.0050); docs/sampling.md,
         // "Warming".
-        std::vector<std::vector<WarmFetch>> fetches = warming_fetches(frame, o, design, *workloads);
+        std::vector<std::vector<WarmFetch>> fetches = warming_fetches(frame, o, design, *workload);
         warm_.assign(fetches.size(), std::vector<Warming>(resident_ ? 1 : sms_));
         for (size_t i = 0; i < fetches.size(); ++i) {
             for (const WarmFetch& f : fetches[i]) {

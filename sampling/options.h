@@ -12,7 +12,8 @@
 
 namespace rtu {
 
-struct PrepassResult;  // sampling/prepass.h
+struct PrepassResult;    // sampling/prepass.h
+class PrepassWorkload;  // sampling/prepass.h
 
 // rate < 1 (docs/sampling.md): the frame's shader warps (groups of warp_size neighbouring pixel
 // samples) are cut into clusters of `capacity` consecutive warps (as many as the GPU holds, so
@@ -30,11 +31,14 @@ struct SamplingOptions {
     // runs and reports no interval.
     bool unchecked = false;
     uint32_t capacity = 32;  // shader warps the GPU keeps in flight at once (SMs x warp-buffer slots)
-    // Functional pre-pass of the schedule estimator: a maker of fresh instances of the run's
-    // workload (one per pre-pass thread) and a functional tracer that may be called from several
-    // threads at once. Without them the clusters are stratified by position and the estimator is
-    // the plain stratified one.
+    // Functional pre-pass of the schedule estimator: a maker of a fresh instance of the run's
+    // workload (the pre-pass's and the warming's threads share it) and a functional tracer that
+    // may be called from several threads at once. Without them the clusters are stratified by
+    // position and the estimator is the plain stratified one. `shared_workload`, if set, is that
+    // instance already made by another run of the frame in this process (a split sample's segment
+    // threads share one); else the run makes its own.
     std::function<std::unique_ptr<Workload>()> make_workload;
+    std::shared_ptr<PrepassWorkload> shared_workload;
     std::function<TraceResult(const Ray&, std::vector<StackEntry>* fetched)> trace;
     unsigned threads = 1;  // pre-pass threads (results do not depend on the number)
     // Functional warming: before each simulated cluster, the last `warm_window` node fetches of

@@ -4,17 +4,15 @@
 #include <atomic>
 #include <chrono>
 #include <iostream>
+#include <stdexcept>
+#include <string>
+#include <thread>
 
 #include "model/node_format.h"
 #include "model/on_threads.h"
 
 namespace rtu {
 namespace {
-
-// Runs body(thread, workload) on `threads` threads, each with its own workload (model/on_threads.h).
-void on_threads(unsigned threads, PrepassWorkloads& workloads, const std::function<void(unsigned, Workload&)>& body) {
-    rtu::on_threads(threads, [&](unsigned t) { body(t, workloads.of_thread(t)); });
-}
 
 // Traces shader warp `wi` functionally: per trace, the most nodes one of its rays visits (a
 // trace costs its longest ray, since the warp waits for its last thread); with `rec`, every node
@@ -27,7 +25,9 @@ struct WarpTracer {
     std::vector<uint32_t> paths;
     std::vector<StackEntry> fetched;
 
-    void trace(Workload& workload, size_t wi, std::vector<uint32_t>& trace_nodes, std::vector<WarmFetch>* rec) {
+    void trace(PrepassWorkload& shared, size_t wi, std::vector<uint32_t>& trace_nodes, std::vector<WarmFetch>* rec) {
+        Workload& workload = shared.get(frame.warps());
+        const PrepassWorkload::Hold hold(shared, wi);  // no other thread traces this warp's paths meanwhile
         const uint32_t sm = frame.sm(wi);
         frame.threads(wi, paths, pending);
         for (uint32_t p : paths) workload.restart(p);  // whatever this workload traced of them before
@@ -66,20 +66,35 @@ struct WarpTracer {
 
 }  // namespace
 
-PrepassWorkloads::PrepassWorkloads(const SamplingOptions& opt) : opt_(opt), made_(std::max(1u, opt.threads)) {}
-
 // Set up as the driver's workload was; its first rays are in the driver's queues.
-Workload& PrepassWorkloads::of_thread(unsigned t) {
-    if (!made_.at(t)) {
-        made_[t] = opt_.make_workload();
-        made_[t]->begin_for_restarts();  // WarpTracer::trace restarts every path it traces
-    }
-    return *made_[t];
+Workload& PrepassWorkload::get(uint64_t warps) {
+    std::call_once(made_once_, [&] {
+        made_ = make_();
+        made_->begin_for_restarts();  // WarpTracer::trace restarts every path it traces
+        warps_ = warps;
+        busy_ = std::make_unique<std::atomic<bool>[]>(warps);  // value-initialised: false
+    });
+    if (warps != warps_)
+        throw std::logic_error("PrepassWorkload: made for " + std::to_string(warps_) + " shader warps, asked for " + std::to_string(warps));
+    return *made_;
 }
+
+std::atomic<bool>& PrepassWorkload::busy(uint64_t warp) {
+    if (warp >= warps_) throw std::logic_error("PrepassWorkload: warp " + std::to_string(warp) + " of " + std::to_string(warps_));
+    return busy_[warp];
+}
+
+// A spin on the warp's flag: only a warming window that overlaps another segment's waits, for
+// one warp's trace.
+PrepassWorkload::Hold::Hold(PrepassWorkload& w, uint64_t warp) : busy_(w.busy(warp)) {
+    while (busy_.exchange(true, std::memory_order_acquire)) std::this_thread::yield();
+}
+
+PrepassWorkload::Hold::~Hold() { busy_.store(false, std::memory_order_release); }
 
 // Contiguous ranges of warps go to the threads; the results are put together in frame order, so
 // they do not depend on the number of threads.
-PrepassResult run_prepass(const FrameWarps& frame, const SamplingOptions& opt, PrepassWorkloads& workloads) {
+PrepassResult run_prepass(const FrameWarps& frame, const SamplingOptions& opt, PrepassWorkload& shared) {
     const auto t0 = std::chrono::steady_clock::now();
     const size_t n_warps = frame.warps();
     const unsigned threads = unsigned(std::max<size_t>(1, std::min<size_t>(opt.threads, (n_warps + 63) / 64)));
@@ -94,7 +109,7 @@ PrepassResult run_prepass(const FrameWarps& frame, const SamplingOptions& opt, P
     constexpr uint64_t kUnread = ~uint64_t(0);
     std::vector<std::vector<uint64_t>> in_rounds(count_first ? threads : 0), by_warp(count_first ? threads : 0);
     std::atomic<size_t> done{0};
-    on_threads(threads, workloads, [&](unsigned t, Workload& workload) {
+    on_threads(threads, [&](unsigned t) {
         WarpTracer tracer{frame, opt, {}, {}, {}, {}};
         std::vector<WarmFetch> fetches;
         if (count_first) in_rounds[t].assign(opt.node_blocks, kUnread), by_warp[t].assign(opt.node_blocks, kUnread);
@@ -103,7 +118,7 @@ PrepassResult run_prepass(const FrameWarps& frame, const SamplingOptions& opt, P
         for (size_t wi = n_warps * t / threads, hi = n_warps * (t + 1) / threads; wi < hi; ++wi) {
             if (opt.stop.requested()) throw Interrupted{opt.stop.signal()};
             fetches.clear();
-            tracer.trace(workload, wi, result.trace_nodes[wi], count_first ? &fetches : nullptr);
+            tracer.trace(shared, wi, result.trace_nodes[wi], count_first ? &fetches : nullptr);
             for (const WarmFetch& f : fetches) {
                 const uint64_t b = f.addr / kBlockBytes;
                 if (b >= opt.node_blocks) continue;
@@ -155,12 +170,12 @@ double critical_nodes_total(const std::vector<std::vector<uint32_t>>& trace_node
 // are traced backwards (warps are independent), recording whole warps until `window` fetches are
 // there. Simulated clusters are shared out among the threads; each result lands in its own slot.
 std::vector<std::vector<WarmFetch>> warming_fetches(const FrameWarps& frame, const SamplingOptions& opt, const SampleDesign& design,
-                                                    PrepassWorkloads& workloads) {
+                                                    PrepassWorkload& shared) {
     const auto& sim = design.simulated();
     std::vector<std::vector<WarmFetch>> warm(sim.size());
     if (opt.warm_window == 0 || sim.empty()) return warm;
     const unsigned threads = unsigned(std::max<size_t>(1, std::min<size_t>(opt.threads, sim.size())));
-    on_threads(threads, workloads, [&](unsigned t, Workload& workload) {
+    on_threads(threads, [&](unsigned t) {
         WarpTracer tracer{frame, opt, {}, {}, {}, {}};
         std::vector<uint32_t> ignored;
         std::vector<std::vector<WarmFetch>> by_warp;  // the recorded warps, last first
@@ -173,7 +188,7 @@ std::vector<std::vector<WarmFetch>> warming_fetches(const FrameWarps& frame, con
             for (uint64_t w = design.first_warp(i); w-- > from && recorded < opt.warm_window;) {
                 by_warp.emplace_back();
                 ignored.clear();
-                tracer.trace(workload, size_t(w), ignored, &by_warp.back());
+                tracer.trace(shared, size_t(w), ignored, &by_warp.back());
                 recorded += by_warp.back().size();
             }
             for (auto it = by_warp.rbegin(); it != by_warp.rend(); ++it) warm[i].insert(warm[i].end(), it->begin(), it->end());

@@ -3,8 +3,11 @@
 // functional warming, the node fetches replayed into the caches before each simulated cluster.
 // Plain C++ (no SystemC).
 #pragma once
+#include <atomic>
 #include <cstdint>
+#include <functional>
 #include <memory>
+#include <mutex>
 #include <vector>
 
 #include "design.h"
@@ -22,16 +25,41 @@ struct WarmFetch {
     uint32_t trace = 0;  // which trace of its warp fetched it (0: the first)
 };
 
-// Fresh instances of the run's workload (opt.make_workload), one per pre-pass thread, made on the
-// thread's first use and kept for the warming pass. Each thread touches only its own.
-class PrepassWorkloads {
+// A fresh instance of the run's workload (SamplingOptions::make_workload) for the pre-pass and the
+// warming pass, made on first use and shared by their threads, and by a split sample's segment
+// threads (SamplingOptions::shared_workload). A workload keeps its state per path and WarpTracer
+// restarts every path of a warp before tracing it, so the threads share it safely as long as no
+// two trace the same warp at once: a warp is traced holding its own flag (a byte per warp; a
+// lock shared by several warps made threads walking the frame in step wait on each other:
+// 1.07x the wall time on party 512x512). The pre-pass's threads take disjoint ranges of warps;
+// the warming's windows of different segments may overlap, and there a thread waits. One
+// instance instead of one per thread: at 1920x1080 an instance is about 140 MB (a pixel's state
+// and its image value).
+class PrepassWorkload {
 public:
-    explicit PrepassWorkloads(const SamplingOptions& opt);
-    Workload& of_thread(unsigned t);
+    explicit PrepassWorkload(std::function<std::unique_ptr<Workload>()> make) : make_(std::move(make)) {}
+    // The instance, made on the first call, for a frame of `warps` shader warps (the same in
+    // every call). Thread-safe.
+    Workload& get(uint64_t warps);
+    // Holds warp `warp` (< warps) for the caller's thread while it lives.
+    class Hold {
+    public:
+        Hold(PrepassWorkload& w, uint64_t warp);
+        ~Hold();
+        Hold(const Hold&) = delete;
+        Hold& operator=(const Hold&) = delete;
+
+    private:
+        std::atomic<bool>& busy_;
+    };
 
 private:
-    const SamplingOptions& opt_;
-    std::vector<std::unique_ptr<Workload>> made_;
+    std::atomic<bool>& busy(uint64_t warp);
+    std::function<std::unique_ptr<Workload>()> make_;
+    std::once_flag made_once_;
+    std::unique_ptr<Workload> made_;
+    uint64_t warps_ = 0;
+    std::unique_ptr<std::atomic<bool>[]> busy_;  // per warp: traced now
 };
 
 // The functional pre-pass traces every path of the frame as the timing run will trace it (the
@@ -51,7 +79,7 @@ struct PrepassResult {
     const std::vector<uint32_t>& first_reads(bool rounds) const { return rounds ? first_reads_in_rounds : first_reads_by_warp; }
     unsigned threads = 0;
 };
-PrepassResult run_prepass(const FrameWarps& frame, const SamplingOptions& opt, PrepassWorkloads& workloads);
+PrepassResult run_prepass(const FrameWarps& frame, const SamplingOptions& opt, PrepassWorkload& shared);
 // The sum of first reads over the frame's warps.
 double first_reads_total(const std::vector<uint32_t>& first_reads);
 // The sum of every trace's critical path, in frame order (the one order, so that a pre-pass read
@@ -62,6 +90,6 @@ double critical_nodes_total(const std::vector<std::vector<uint32_t>>& trace_node
 // (the clusters skipped before it), in frame order: traced again, backwards from the cluster,
 // until the window is full.
 std::vector<std::vector<WarmFetch>> warming_fetches(const FrameWarps& frame, const SamplingOptions& opt, const SampleDesign& design,
-                                                    PrepassWorkloads& workloads);
+                                                    PrepassWorkload& shared);
 
 }  // namespace rtu

@@ -4,8 +4,10 @@
 # only, about 75 s on 2 cores) and runs each threaded path with more threads than this machine
 # has cores, so that the threads interleave: the functional pass and --verify's checks against
 # Embree (a built-in scene and a 20,000-triangle mesh written here, whose BVH Embree builds on
-# TBB's threads), a timing run's --verify, the sampling pre-pass, and a split sample's segments
-# on threads of one process (the interval fidelity), sharing its scene, BVH image and pre-pass. A data race fails the run (exit status 66) with ThreadSanitizer's report. CI runs
+# TBB's threads), a timing run's --verify, the sampling pre-pass and warming (their threads share
+# one workload instance), and a split sample's segments on threads of one process (the interval
+# fidelity), sharing its scene, BVH image, pre-pass and workloads. A data race fails the run (exit
+# status 66) with ThreadSanitizer's report. CI runs
 # it after the fuzz smoke. Accesses from Debian's uninstrumented libraries (Embree, TBB, SystemC)
 # are not checked (ignore_noninstrumented_modules); scripts/tsan.supp says what else is hidden
 # and why. That the statistics are the same for every thread count is the Release suite's test

@@ -571,8 +571,8 @@ TEST(SamplePrepass, FirstReadsCountEachNodeOnceAtItsFirstReader) {
         s.trace = [&](const Ray& r, std::vector<StackEntry>* fetched) { return trace_ray(img, r, TraversalOrder::DFS, nullptr, fetched); };
         const std::unique_ptr<Workload> workload = s.make_workload();
         const PathWarps frame(*workload);
-        PrepassWorkloads workloads(s);
-        return run_prepass(frame, s, workloads);
+        PrepassWorkload shared(s.make_workload);
+        return run_prepass(frame, s, shared);
     };
     // The count made here, primary rays in frame order.
     const std::unique_ptr<Workload> workload = make_scene_workload(WorkloadKind::Primary, scene, p);
