@@ -7,6 +7,7 @@
 #include "sampling/estimator.h"
 #include "sampling/frame_sample.h"
 #include "sampling/plan.h"
+#include "sampling/prepass.h"
 #include "sampling/schedule_model.h"
 #include "workloads/workload_driver.h"
 #include "workloads/bvh_builder.h"
@@ -19,6 +20,10 @@
 #include <fstream>
 
 #include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <stdexcept>
+#include <thread>
 #include <cmath>
 #include <map>
 #include <random>
@@ -605,6 +610,40 @@ TEST(SamplePrepass, FirstReadsCountEachNodeOnceAtItsFirstReader) {
     EXPECT_NE(pt.first_reads_by_warp, pt.first_reads_in_rounds);
     EXPECT_EQ(&pt.first_reads(true), &pt.first_reads_in_rounds);
     EXPECT_EQ(&pt.first_reads(false), &pt.first_reads_by_warp);
+}
+
+// The pre-pass's and the warming's threads (and a split sample's segment threads) share one
+// workload instance, made once; a warp is traced by one thread at a time, others stay free.
+TEST(SamplePrepass, OneSharedWorkloadHoldsEachWarpForOneThreadAtATime) {
+    struct NoWork : Workload {
+        void begin(std::vector<WorkRay>&) override {}
+        void complete(const WorkRay&, const Hit&, std::vector<WorkRay>&) override {}
+    };
+    int made = 0;
+    PrepassWorkload shared([&] {
+        ++made;
+        return std::make_unique<NoWork>();
+    });
+    Workload& a = shared.get(8);
+    EXPECT_EQ(&shared.get(8), &a);
+    EXPECT_EQ(made, 1);
+    EXPECT_THROW(shared.get(9), std::logic_error);  // another frame's warps
+    EXPECT_THROW(PrepassWorkload::Hold(shared, 8), std::logic_error);
+    std::atomic<bool> released{false}, second_holds{false}, held_after_release{false};
+    auto first = std::make_unique<PrepassWorkload::Hold>(shared, 3);
+    std::thread other([&] {
+        const PrepassWorkload::Hold h(shared, 3);
+        held_after_release = released.load();
+        second_holds = true;
+    });
+    { const PrepassWorkload::Hold free_warp(shared, 4); }  // another warp is not held meanwhile
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    EXPECT_FALSE(second_holds.load()) << "warp 3 was taken while held";
+    released = true;
+    first.reset();
+    other.join();
+    EXPECT_TRUE(second_holds.load());
+    EXPECT_TRUE(held_after_release.load());
 }
 
 // The hand-driven warming tests' frame: cornell at 64x48 and 1 spp (3072 paths: 96 shader warps,
