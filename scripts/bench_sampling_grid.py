@@ -6,7 +6,8 @@ errors. Resumable (a run with stats is not redone; use a new OUTDIR for a new rt
 Usage: scripts/bench_sampling_grid.py RTSIM OUTDIR [SCENES]   (SCENES: comma-separated, from
 mesh, bunny, cornell, sprng, ship; default mesh,bunny,cornell)
 Environment: SIZES (default 64,128), PRESETS (mobile,desktop), RATES (0.1,0.25), SEEDS (4),
-FID (at), WORKLOADS (pt; also primary, ao, sh), SHARED (../shared/scenes beside the repository),
+FID (at), WORKLOADS (pt; also primary, ao, sh), FIRST_SEED (1: the sample seeds are FIRST_SEED,
+FIRST_SEED + 1, ...), SHARED (../shared/scenes beside the repository),
 JOBS (runs at a time, 2).
 The grids of docs/sampling.md:
   SIZES=128,256 RATES=0.25,0.5 scripts/bench_sampling_grid.py build/rtsim out/grid
@@ -19,7 +20,7 @@ scenes = sys.argv[3].split(",") if len(sys.argv) > 3 else ["mesh", "bunny", "cor
 sizes = [int(x) for x in os.environ.get("SIZES", "64,128").split(",")]
 presets = os.environ.get("PRESETS", "mobile,desktop").split(",")
 rates = os.environ.get("RATES", "0.1,0.25").split(",")
-seeds = range(1, int(os.environ.get("SEEDS", "4")) + 1)
+seeds = range(int(os.environ.get("FIRST_SEED", "1")), int(os.environ.get("FIRST_SEED", "1")) + int(os.environ.get("SEEDS", "4")))
 fid = os.environ.get("FID", "at")
 workloads = os.environ.get("WORKLOADS", "pt").split(",")
 os.makedirs(out, exist_ok=True)
