@@ -202,6 +202,8 @@ void write_sampling(StatsOut& out, const SampleEstimate& est, double rate, uint6
     }
     s.value("relative_se", est.relative_se, "ratio", "standard error of the work estimate / the estimate");
     s.value("variance_pairs", est.variance_pairs, "pairs", "collapsed stratum pairs behind relative_se");
+    s.value("variance_degrees", est.variance_degrees, "degrees of freedom",
+            "Student's t's for relative_se: Satterthwaite's over the pairs, (sum of their variances)^2 / sum of their squares");
     for (const auto& [name, share, what] :
          {std::tuple<const char*, const SampleEstimate::Share*, const char*>{"node_fetch_l1_miss_share", &est.l1_miss_nodes, "the frame's share of node reads not served by L1"},
           {"node_fetch_dram_share", &est.dram_nodes, "the frame's share of node reads served by DRAM"}}) {

@@ -19,17 +19,29 @@ namespace {
 double pair_variance(const std::vector<double>& d, const std::vector<double>& weight, size_t i) {
     return (d[i] - d[i + 1]) * (d[i] - d[i + 1]) * std::max(0.0, 1.0 - 2.0 / std::max(2.0, weight[i] + weight[i + 1]));
 }
-double collapsed_pairs_variance(const std::vector<double>& d, const std::vector<double>& weight) {
-    double v = 0;
-    for (size_t i = 0; i + 1 < d.size(); i += 2) v += pair_variance(d, weight, i);
-    return v;
+// The pairs' variance, and Satterthwaite's degrees of freedom for Student's t over it: each pair's
+// term is one degree of freedom of its own variance, so where a few pairs hold most of the sum
+// (the strata of the heaviest clusters, whose work spans orders of magnitude) t with a degree per
+// pair makes the interval too narrow. (sum of the terms)^2 / sum of their squares lies between 1
+// and the pairs (the pairs where every term is 0).
+struct PairsVariance {
+    double v = 0, degrees = 0;
+};
+PairsVariance collapsed_pairs(const std::vector<double>& d, const std::vector<double>& weight) {
+    PairsVariance p;
+    double vv = 0;
+    for (size_t i = 0; i + 1 < d.size(); i += 2) {
+        const double g = pair_variance(d, weight, i);
+        p.v += g, vv += g * g;
+    }
+    p.degrees = vv > 0 ? p.v * p.v / vv : double(d.size() / 2);
+    return p;
 }
 
 // Student's t for a two-sided 95 % interval; one pair (or none) leaves one degree of freedom at the least.
 double t95(double degrees) {
     return boost::math::quantile(boost::math::complement(boost::math::students_t(std::max(1.0, degrees)), 0.025));
 }
-double t95(uint32_t pairs) { return t95(double(pairs)); }
 
 }  // namespace
 
@@ -52,13 +64,9 @@ PairedDifference paired_work_difference(const StrataWork& fast, const StrataWork
     // Satterthwaite's, (sum v)^2 / sum v^2, between 1 and the pairs.
     std::vector<double> residual(fast.work.size());
     for (size_t h = 0; h < residual.size(); ++h) residual[h] = fast.work[h] - r * reference.work[h];
-    double v = 0, vv = 0;
-    for (size_t i = 0; i + 1 < residual.size(); i += 2) {
-        const double g = pair_variance(residual, fast.weight, i);
-        v += g, vv += g * g;
-    }
-    p.degrees = vv > 0 ? v * v / vv : double(p.pairs);
-    p.half_width = p.pairs ? t95(p.degrees) * std::sqrt(v) / a : 0.0;
+    const PairsVariance v = collapsed_pairs(residual, fast.weight);
+    p.degrees = v.degrees;
+    p.half_width = p.pairs ? t95(p.degrees) * std::sqrt(v.v) / a : 0.0;
     return p;
 }
 
@@ -224,12 +232,17 @@ SampleEstimate SampleEstimator::estimate(const std::vector<WarpRecord>& warps, u
     // their residuals from the ratio line, scaled to the frame's nodes outside the first wave.
     std::vector<double> residual(work.size());
     for (size_t h = 0; h < work.size(); ++h) residual[h] = work[h] - r * nodes[h];
-    double v = collapsed_pairs_variance(residual, weight);
+    // Student's t with Satterthwaite's degrees of freedom (collapsed_pairs): with a degree per pair
+    // the interval held a synthetic frame's total in 88 % of 2,000 draws with 10 and 20 strata, 93 %
+    // with 40 (SampleEstimator.TheWorksIntervalCoversAKnownFrame), as --check-error's had.
+    const PairsVariance pv = collapsed_pairs(residual, weight);
+    double v = pv.v;
+    e.variance_pairs = uint32_t(work.size() / 2);
+    e.variance_degrees = pv.degrees;
     if (ratio) v *= (rest_nodes / drawn_nodes) * (rest_nodes / drawn_nodes);
     e.relative_se = sampled && e.work_estimate > 0 ? std::sqrt(v) / e.work_estimate : 0.0;
-    e.variance_pairs = uint32_t(work.size() / 2);
-    // Shares of node fetches: ratio estimates over the strata, residual variance by collapsed pairs.
-    const double t = t95(e.variance_pairs);
+    // Shares of node fetches: ratio estimates over the strata, residual variance by collapsed
+    // pairs, Student's t with the pairs' own Satterthwaite degrees.
     auto share = [&](double WarpRecord::*part) {
         std::vector<double> num(work.size(), 0.0), den(work.size(), 0.0);
         double sn = 0, sd = 0;
@@ -245,7 +258,8 @@ SampleEstimate SampleEstimator::estimate(const std::vector<WarpRecord>& warps, u
         s.estimate = sn / sd;
         std::vector<double> res(num.size());
         for (size_t h = 0; h < num.size(); ++h) res[h] = num[h] - s.estimate * den[h];
-        const double half = sampled ? t * std::sqrt(collapsed_pairs_variance(res, weight)) / sd : 0.0;
+        const PairsVariance rv = collapsed_pairs(res, weight);
+        const double half = sampled ? t95(rv.degrees) * std::sqrt(rv.v) / sd : 0.0;
         s.lo = std::max(0.0, s.estimate - half);
         s.hi = std::min(1.0, s.estimate + half);
         return s;
@@ -258,7 +272,7 @@ SampleEstimate SampleEstimator::estimate(const std::vector<WarpRecord>& warps, u
 }
 
 double SampleEstimate::relative_half_width(double cycles_simulated) const {
-    const double t = t95(variance_pairs);
+    const double t = t95(variance_degrees > 0 ? variance_degrees : double(variance_pairs));
     const double model = 1.96 * std::sqrt(2.0) * model_error(cycles_simulated);
     const double gap = 1.96 * extrapolation_gap(), first = first_reads_gap();
     return std::sqrt(t * relative_se * t * relative_se + model * model + gap * gap + first * first + design_bias * design_bias);

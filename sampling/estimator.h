@@ -74,7 +74,11 @@ struct SampleEstimate {
     std::vector<double> misfit_per_sm;
     StrataWork strata_work;  // the simulated residence by stratum (paired_work_difference)
     double relative_se = 0;  // standard error of work_estimate / work_estimate
-    uint32_t variance_pairs = 0;  // collapsed stratum pairs behind relative_se (degrees of freedom)
+    uint32_t variance_pairs = 0;  // collapsed stratum pairs behind relative_se
+    // Student's t's degrees of freedom for relative_se: Satterthwaite's, (sum of the pairs'
+    // variances)^2 / sum of their squares, between 1 and variance_pairs (0: none computed, and
+    // t takes variance_pairs).
+    double variance_degrees = 0;
     // The design, as the workload driver drew it: warps per cluster, drawn strata, clusters of the
     // first wave (simulated whole) and empty clusters (no node read; not simulated); whether the
     // sample carries an interval (false: too few strata, --sample-unchecked).

@@ -297,6 +297,72 @@ TEST(PairedWorkDifference, CoversAKnownFrameRatio) {
     }
 }
 
+// The work's sampling error (SampleEstimate::relative_se) against a synthetic frame whose total
+// is known: 400 clusters (one warp each, after a first wave) of 10-1,000 critical-path nodes,
+// each costing 20-40 slot-cycles a node (more for the larger ones) with 10 % noise, sorted by
+// nodes into 10, 20 or 40 strata of one draw each. Without trace records there is no residence
+// fit, so the estimate is the stratified ratio estimate and its half-width Student's t over the
+// collapsed pairs times the standard error: over 2,000 draws it holds the frame's total at least
+// as often as the binomial range of 95 % allows (3 sigma), and the estimate's mean lies within a
+// fifth of its spread of the total (the ratio estimate's bias). With a degree of freedom per pair
+// it held 88 %, 88 % and 93 %; with Satterthwaite's 96 %, 97 % and 98 % (on the frames of seeds 7
+// and 99: 93.8-97.7 %).
+TEST(SampleEstimator, TheWorksIntervalCoversAKnownFrame) {
+    std::mt19937_64 rng(20261202);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    std::normal_distribution<double> noise(0.0, 0.1);
+    const size_t warps = 401;  // warp 0: the first wave
+    std::vector<double> nodes(warps), work(warps);
+    double total = 0, total_nodes = 0;
+    for (size_t w = 0; w < warps; ++w) {
+        nodes[w] = std::round(10.0 * std::pow(100.0, u(rng)));
+        work[w] = nodes[w] * (20.0 + 20.0 * std::log10(nodes[w] / 10.0) / 2.0) * (1.0 + noise(rng));
+        total += work[w], total_nodes += nodes[w];
+    }
+    std::vector<size_t> order(warps - 1);
+    for (size_t k = 0; k < order.size(); ++k) order[k] = k + 1;
+    std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return nodes[a] < nodes[b]; });
+    for (const size_t strata : {10u, 20u, 40u}) {
+        const size_t draws = 2000;
+        size_t held = 0;
+        std::vector<double> estimates;
+        for (size_t d = 0; d < draws; ++d) {
+            SampleEstimator est({1, 4, 0, 0}, 4);
+            PrepassResult p;
+            p.trace_nodes.assign(warps, {});
+            p.critical_nodes_total = total_nodes;
+            est.set_prepass(std::move(p));
+            std::vector<WarpRecord> rec;
+            auto add = [&](size_t w, uint32_t stratum, double weight) {
+                WarpRecord& r = rec.emplace_back();
+                r.frame_warp = w;
+                r.stratum = stratum;
+                r.weight = weight;
+                r.critical_nodes = nodes[w];
+                est.on_trace_done(r, work[w]);
+            };
+            add(0, SampledCluster::kCertain, 1.0);
+            for (size_t h = 0; h < strata; ++h) {
+                const size_t lo = h * order.size() / strata, hi = (h + 1) * order.size() / strata;
+                add(order[lo + size_t(u(rng) * double(hi - lo))], uint32_t(h), double(hi - lo));
+            }
+            const SampleEstimate e = est.estimate(rec, warps, true);
+            ASSERT_FALSE(e.schedule);
+            ASSERT_EQ(e.variance_pairs, strata / 2);
+            ASSERT_DOUBLE_EQ(e.work_estimate, e.work_estimate_stratified);
+            const double half = e.relative_half_width(0) * e.work_estimate;  // t x se alone: no other term here
+            held += std::fabs(e.work_estimate - total) <= half;
+            estimates.push_back(e.work_estimate);
+        }
+        double mean = 0, var = 0;
+        for (double x : estimates) mean += x / double(draws);
+        for (double x : estimates) var += (x - mean) * (x - mean) / double(draws - 1);
+        const double coverage = double(held) / double(draws);
+        EXPECT_GE(coverage, 0.95 - 3.0 * std::sqrt(0.95 * 0.05 / double(draws))) << strata << " strata";
+        EXPECT_LT(std::fabs(mean - total), 0.2 * std::sqrt(var)) << strata << " strata: the ratio estimate's bias";
+    }
+}
+
 // Conservation: with one RT unit, one slot and no shading the slot never idles, so the frame
 // takes exactly the sum of all durations, in any order of warps.
 TEST(ScheduleModel, OneBusySlotTakesTheSumOfAllWork) {
