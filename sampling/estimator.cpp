@@ -272,7 +272,7 @@ SampleEstimate SampleEstimator::estimate(const std::vector<WarpRecord>& warps, u
 }
 
 double SampleEstimate::relative_half_width(double cycles_simulated) const {
-    const double t = t95(variance_degrees > 0 ? variance_degrees : double(variance_pairs));
+    const double t = t95(variance_degrees);
     const double model = 1.96 * std::sqrt(2.0) * model_error(cycles_simulated);
     const double gap = 1.96 * extrapolation_gap(), first = first_reads_gap();
     return std::sqrt(t * relative_se * t * relative_se + model * model + gap * gap + first * first + design_bias * design_bias);

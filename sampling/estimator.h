@@ -76,8 +76,7 @@ struct SampleEstimate {
     double relative_se = 0;  // standard error of work_estimate / work_estimate
     uint32_t variance_pairs = 0;  // collapsed stratum pairs behind relative_se
     // Student's t's degrees of freedom for relative_se: Satterthwaite's, (sum of the pairs'
-    // variances)^2 / sum of their squares, between 1 and variance_pairs (0: none computed, and
-    // t takes variance_pairs).
+    // variances)^2 / sum of their squares, between 1 and variance_pairs (0 without pairs).
     double variance_degrees = 0;
     // The design, as the workload driver drew it: warps per cluster, drawn strata, clusters of the
     // first wave (simulated whole) and empty clusters (no node read; not simulated); whether the

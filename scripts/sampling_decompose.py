@@ -17,6 +17,7 @@ Per cell (scene, frame, preset, rate) the draws' mean error, mean work part and 
 then, over every run, the mean |error| and the mean |part| of each.
 Usage: scripts/sampling_decompose.py RTSIM DIR...   (DIR: folders of bench_sampling_grid.py;
 prints Markdown)"""
+import functools
 import json
 import os
 import statistics
@@ -26,8 +27,9 @@ import sys
 from bench_util import sampling_grid_runs
 
 
+@functools.lru_cache(maxsize=None)
 def near_full(rtsim, full_path):
-    """The 99 % sample of a full run's frame (run once, kept beside it)."""
+    """The 99 % sample's work of a full run's frame (run once, kept beside it; read once per cell)."""
     path = full_path[:-len("_full.json")] + "_near99.json"
     if not os.path.exists(path):
         argv = json.load(open(full_path))["provenance"]["command_line"]
@@ -45,6 +47,11 @@ def near_full(rtsim, full_path):
     return json.load(open(path))["timing"]["sampling"]["work_estimate_residence_cycles"]
 
 
+@functools.lru_cache(maxsize=None)
+def full_cycles(full_path):
+    return json.load(open(full_path))["cycles"]
+
+
 def main():
     rtsim, folders = sys.argv[1], sys.argv[2:]
     cells = {}
@@ -54,7 +61,7 @@ def main():
             s = run["timing"].get("sampling")
             if not s:
                 continue
-            cycles = json.load(open(full_path))["cycles"]
+            cycles = full_cycles(full_path)
             work = near_full(rtsim, full_path)
             total = run["cycles"] / cycles
             part = s["work_estimate_residence_cycles"] / work
