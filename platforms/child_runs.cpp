@@ -89,6 +89,24 @@ void run_child(std::vector<std::string> args, const std::string& err, const std:
     check_child(reap(spawn_child(std::move(args), err, what)), err, what);
 }
 
+nlohmann::json run_width_pilot(const std::vector<std::string>& frame_args, const std::string& fidelity, std::optional<uint64_t> quantum,
+                               double rate, uint64_t sample_seed, const std::string& plan, bool quiet) {
+    const auto start = std::chrono::steady_clock::now();
+    const TempFolder dir("--sample-width");
+    const std::string stats = (dir.path / "pilot.json").string(), err = (dir.path / "pilot.err").string();
+    std::vector<std::string> args = frame_args;
+    args.insert(args.end(), {"--fidelity", fidelity, "--sample", exact(rate), "--sample-seed", std::to_string(sample_seed), "--sample-unchecked",
+                             "--sample-plan", plan, "--stats", stats});
+    if (fidelity == "lt" && quantum) args.insert(args.end(), {"--quantum", std::to_string(*quantum)});
+    if (!quiet) std::cerr << "planning the sample's width: a pilot sample of " << exact(100.0 * rate) << " % of the frame\n";
+    run_child(args, err, "--sample-width: the pilot sample");
+    const nlohmann::json j = nlohmann::json::parse(std::ifstream(stats));
+    nlohmann::json s = j["timing"]["sampling"];
+    s["cycles"] = j["cycles"];
+    s["pilot_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return s;
+}
+
 ErrorCheck run_error_check(const std::vector<std::string>& frame_args, const std::string& fidelity, std::optional<uint64_t> quantum,
                            double rate, uint64_t sample_seed, double run_s, bool quiet) {
     const auto start = std::chrono::steady_clock::now();

@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "error_estimate.h"
 #include "model/stop_request.h"
 #include "sample_segments.h"
@@ -37,6 +39,13 @@ void run_child(std::vector<std::string> args, const std::string& err, const std:
 // run (ErrorCheck).
 ErrorCheck run_error_check(const std::vector<std::string>& frame_args, const std::string& fidelity, std::optional<uint64_t> quantum,
                            double rate, uint64_t sample_seed, double run_s, bool quiet);
+
+// --sample-width: the pilot sample, the frame sampled at `rate` with `sample_seed` in `fidelity`
+// (`quantum`: LT's), writing or reading the run's plan `plan`, without the check on its strata
+// (--sample-unchecked: the caller reads them). Returns its statistics' timing.sampling, with the
+// frame's estimate added as "cycles" and its wall time as "pilot_s". Throws InputError for what the child refused.
+nlohmann::json run_width_pilot(const std::vector<std::string>& frame_args, const std::string& fidelity, std::optional<uint64_t> quantum,
+                               double rate, uint64_t sample_seed, const std::string& plan, bool quiet);
 
 // --sample-segments K without --segment: each segment simulated by a child rtsim, up to `threads`
 // at once (each child given threads / that many threads), and their statistics read back in

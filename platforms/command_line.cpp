@@ -122,9 +122,17 @@ RunSpec spec_of(const Args& a, const std::atomic<int>* stop) {
     if (a.quantum && *a.quantum == 0) throw InputError("--quantum 0: the LT quantum must be at least 1 core cycle");
     if (!a.trace_warp.empty() && a.vcd.empty() && a.timeline.empty())
         throw InputError("--trace-warp picks the warp-buffer slot traced: it needs --vcd FILE or --timeline FILE");
-    if (a.sample_seed && a.sample == 1.0 && !a.check_error) throw InputError("--sample-seed needs --sample RATE below 1 (or --check-error N)");
+    if (a.sample_width) {
+        if (!timing) throw InputError("--sample-width needs --fidelity at, lt or interval");
+        if (!(*a.sample_width > 0 && *a.sample_width < 100))
+            throw InputError("--sample-width " + exact(*a.sample_width) + ": the 95 % half-width asked is a percentage of the frame's cycles, above 0 and below 100");
+        if (a.sample != 1.0 || a.sample_unchecked || a.sample_segments > 1 || a.check_error)
+            throw InputError("--sample-width chooses the sample's rate itself: not with --sample, --sample-unchecked, --sample-segments or --check-error");
+    }
+    const bool sampled = a.sample != 1.0 || a.sample_width;
+    if (a.sample_seed && !sampled && !a.check_error) throw InputError("--sample-seed needs --sample RATE below 1 (or --sample-width W, or --check-error N)");
     if (a.sample_unchecked && a.sample == 1.0) throw InputError("--sample-unchecked needs --sample RATE below 1");
-    if (!a.sample_plan.empty() && a.sample == 1.0) throw InputError("--sample-plan keeps a sampled run's pre-pass: it needs --sample RATE below 1");
+    if (!a.sample_plan.empty() && !sampled) throw InputError("--sample-plan keeps a sampled run's pre-pass: it needs --sample RATE below 1 (or --sample-width W)");
     if (a.check_error && spec.run.fidelity != Fidelity::LT && spec.run.fidelity != Fidelity::Interval)
         throw InputError("--check-error compares a fast fidelity with AT: it needs --fidelity lt or interval (AT is the reference)");
     if (a.check_error_any_cost && !a.check_error) throw InputError("--check-error-any-cost needs --check-error N");
@@ -215,6 +223,11 @@ RunSpec spec_of(const Args& a, const std::atomic<int>* stop) {
             return run_segment_children(segment_args(a), uint32_t(a.sample_segments), unsigned(a.threads), folder ? std::string() : a.sample_plan,
                                         stop, a.quiet);
         };
+    spec.sample_width = a.sample_width.value_or(0) / 100.0;
+    if (a.sample_width)
+        spec.run_pilot = [&a](double rate) {
+            return run_width_pilot(frame_args(a), a.fidelity, a.quantum, rate, a.sample_seed.value_or(a.seed), a.sample_plan, a.quiet);
+        };
     if (a.check_error)
         spec.run_check = [&a](double rate, double run_s) {
             return run_error_check(frame_args(a), a.fidelity, a.quantum, rate, a.sample_seed.value_or(a.seed),
@@ -233,6 +246,7 @@ std::optional<int> parse_command_line(int argc, char** argv, Args& a) {
         "             [--prefetcher none|ttp|park|treelet|perfect-up|perfect-down]\n"
         "             [--sample RATE [--sample-seed S] [--sample-unchecked]\n"
         "              [--sample-plan FILE] [--sample-segments K [--segment I | --merge-segments FILE...]]] [--check-error N [--sample-seed S] [--check-error-any-cost]]\n"
+        "             [--sample-width W [--sample-seed S] [--sample-plan FILE]]\n"
         "             [--threads N]\n"
         "             [--stats FILE.json] [--image FILE.png] [--vcd FILE] [--timeline FILE.json] [--trace-warp SM:WARP] [--verify] [--quiet]\n"
         "             [--dump-bvh FILE] [--dump-rays FILE] [--dump-hits FILE]\n"
@@ -268,6 +282,10 @@ std::optional<int> parse_command_line(int argc, char** argv, Args& a) {
         ("sample", po::value(&a.sample), "simulate this share (0..1] of the frame's warps, stratified, and extrapolate (at, lt, interval)")
         ("sample-seed", po::value<uint64_t>()->notifier([&a](uint64_t v) { a.sample_seed = v; }),
          "which clusters --sample and --check-error draw (default: --seed, which also seeds the rays)")
+        ("sample-width", po::value<double>()->notifier([&a](double v) { a.sample_width = v; }),
+         "at, lt, interval: sample the frame at the smallest rate whose 95 % interval should be within +-W % of its cycles, "
+         "planned from a pilot sample of 10 strata (a child run); refused where the sample design's bias bound alone is W or "
+         "more, or where the pilot's parts that no rate narrows reach W (docs/sampling.md, \"A sample of a given width\")")
         ("sample-unchecked", po::bool_switch(&a.sample_unchecked),
          "run a sample too small for a 95 % interval (fewer than 10 strata) and report no interval")
         ("sample-segments", po::value(&a.sample_segments), "simulate the sample as K independent segments and merge them "

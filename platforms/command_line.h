@@ -33,6 +33,7 @@ struct Args {
     std::optional<uint64_t> segment;  // --segment I
     std::vector<std::string> merge_segments;  // --merge-segments FILE...
     std::string sample_plan;  // --sample-plan FILE
+    std::optional<double> sample_width;  // --sample-width W: the 95 % half-width asked, in percent
     // Threads of the functional work (the functional pass, --verify's checks, the sampling
     // pre-pass); default: the cores this process may run on. Read as signed so that a negative
     // number is an error, not a wrap to 4 billion.

@@ -153,6 +153,11 @@ int run(const Args& given) {
         plan_dir.emplace("--sample-segments");
         a.sample_plan = (plan_dir->path / "plan.bin").string();
     }
+    // --sample-width: its pilot writes the frame's plan, and the run reads it (the frame is traced once).
+    if (a.sample_width && a.sample_plan.empty()) {
+        plan_dir.emplace("--sample-width");
+        a.sample_plan = (plan_dir->path / "plan.bin").string();
+    }
     RunSpec spec = spec_of(a, &stop_signal);
     spec.run.stop.snapshot = &snapshot_signal;
     spec.write_snapshot = [&a](const std::string& stats, const std::string& what) {

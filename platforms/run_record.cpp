@@ -120,7 +120,7 @@ void write_stats(StatsOut& out, const RunRecord& r) {
         out.value("cycles", t.cycles, "core cycles", "the frame's cycles (a sampled run's estimate; simulated cycles under timing.sampling)");
         write_error_estimate(out, r.error);
         StatsOut tm = out.child("timing", "the timing model's statistics");
-        if (t.sampled && !t.interrupted && !r.segment_identity) write_sampling(tm, t.estimate, r.sample_rate, t.cycles, t.cycles_simulated);
+        if (t.sampled && !t.interrupted && !r.segment_identity) write_sampling(tm, t.estimate, r.sample_rate, t.cycles, t.cycles_simulated, r.width);
         write_hierarchy(tm, *r.hw, t.counts, t.summary, t.estimate.scale());
         if (r.fidelity != Fidelity::Interval)
             tm.value("payloads_allocated", t.payloads_allocated, "payloads", "TLM payloads the pool made (AT, LT)");

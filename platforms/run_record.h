@@ -12,6 +12,7 @@
 #include "model/stats.h"
 #include "model/traversal.h"
 #include "sampling/segments.h"
+#include "sampling/width.h"
 #include "timing_run.h"
 #include "workloads/rays.h"
 #include "workloads/verify.h"
@@ -39,6 +40,7 @@ struct RunRecord {
     const Config* config = nullptr;
     const std::vector<std::string>* command_line = nullptr;  // the provenance's (none: not written)
     double sample_rate = 1.0;
+    const SampleWidth* width = nullptr;  // --sample-width: what it planned
     const VerifyCounts* verify = nullptr;  // --verify
     const std::vector<uint64_t>* mismatch_rays = nullptr;
     bool has_speed = false;  // functional --verify: our traversal and Embree's on the same rays

@@ -26,6 +26,7 @@
 #include "workloads/scenes.h"
 #include "sampling/bias.h"
 #include "sampling/plan.h"
+#include "sampling/width.h"
 
 namespace rtu {
 namespace {
@@ -71,6 +72,8 @@ std::vector<StatKey> stats_schema() {
     TimingResult t;
     t.sampled = true;
     r.error.check = ErrorCheck{};
+    const SampleWidth width;
+    r.width = &width;
     const Config config = Config::load("mobile");
     const HwConfig hw = config.resolve();
     r.timing = &t;
@@ -319,8 +322,11 @@ void record_timing(RunRecord& rec, const TimingResult& t, const RunSpec& spec) {
     rec.interrupted = t.interrupted;
 }
 
-// Run, a timing fidelity (or the merge of a split sample's segments).
-void timing_stage(const WorkloadStage& w, const BvhImage& image, Ran& ran, RunRecord& rec) {
+TimingResult sample_of_width(WorkloadStage& w, const BvhImage& image, TimingOptions& to, SampleWidth& planned);
+
+// Run, a timing fidelity (or the merge of a split sample's segments; or with --sample-width, the
+// sample it plans, `width` what it planned).
+void timing_stage(WorkloadStage& w, const BvhImage& image, Ran& ran, RunRecord& rec, SampleWidth* width) {
     const RunSpec& spec = w.spec;
     TimingOptions to = spec.run;
     if (!spec.run.sample_plan.empty()) {  // hashing the image costs tens of ms on large scenes: only for a plan
@@ -329,7 +335,7 @@ void timing_stage(const WorkloadStage& w, const BvhImage& image, Ran& ran, RunRe
     }
     // A sampled run traces the whole frame functionally first, with fresh instances of the
     // workload (the run's own one accumulates the simulated image).
-    if (spec.run.sample_rate < 1.0) to.sample_workload = [&w] { return w.fresh(); };
+    if (spec.run.sample_rate < 1.0 || width) to.sample_workload = [&w] { return w.fresh(); };
     // SIGUSR1: the statistics so far, from a copy of the record (the run's own is filled at its end).
     if (spec.write_snapshot)
         to.snapshot = [&spec, &rec](const TimingResult& so_far) {
@@ -362,6 +368,8 @@ void timing_stage(const WorkloadStage& w, const BvhImage& image, Ran& ran, RunRe
         }
         t = merge_segments(spec.hw, image, *w.workload, to, std::move(segments), identity);
         t.prepass_s += prepass_s;  // the segments on threads made the frame's pre-pass before them
+    } else if (width) {
+        t = sample_of_width(w, image, to, *width);
     } else {
         try {
             t = run_timing(spec.hw, image, *w.workload, to);
@@ -371,6 +379,12 @@ void timing_stage(const WorkloadStage& w, const BvhImage& image, Ran& ran, RunRe
     }
     // The sample design's bias bound, measured on the grids, widens the interval.
     if (t.sampled) t.estimate.design_bias = SamplingBias::built_in().value(spec.rays.empty() ? spec.workload : "");
+    if (spec.sample_width > 0 && t.sampled && !t.interrupted) {
+        const double h = t.estimate.relative_half_width(double(t.cycles_simulated));
+        if (h > spec.sample_width)
+            std::cerr << "warning: --sample-width " << percent_text(spec.sample_width) << ": the sample states +-" << percent_text(h)
+                      << ", wider than asked (its schedule model's error or its sampling error came out larger than the pilot's)\n";
+    }
     if (!merge && spec.run.sample_segments > 1 && !t.interrupted) {
         // One segment: its own cycles; the frame's estimate is the merge's.
         t.cycles = t.cycles_simulated;
@@ -380,6 +394,7 @@ void timing_stage(const WorkloadStage& w, const BvhImage& image, Ran& ran, RunRe
         rec.segment_identity = &ran.identity;
     }
     record_timing(rec, t, spec);
+    rec.sample_rate = to.sample_rate;  // --sample-width: the rate it chose
 }
 
 // A timing run's rays against Embree (--verify): classified on `threads` threads, each ray into
@@ -407,6 +422,14 @@ uint64_t frame_clusters(uint64_t warps, const HwConfig& hw) {
     return (warps + capacity - 1) / capacity;
 }
 
+// The frame's shader warps: a shader warp is warp_size neighbouring paths (pixels: each thread
+// traces its pixel's samples in turn), or rays of a ray file.
+uint64_t frame_warps(const WorkloadStage& w) {
+    const RunSpec& spec = w.spec;
+    const uint64_t paths = w.kind == WorkloadKind::RayFile ? w.ray_file.size() : uint64_t(spec.params.width) * uint64_t(spec.params.height);
+    return (paths + spec.hw.warp_size - 1) / spec.hw.warp_size;
+}
+
 // --check-error N simulates N + 1 of the frame's clusters twice, in the run's fidelity and in AT,
 // each child loading the scene (and one tracing the frame for the plan both use): refused before
 // the run where that is more than a fifth of the frame, whose two samples would then simulate two
@@ -419,16 +442,175 @@ void check_error_refusal(const WorkloadStage& w, const BvhImage& image) {
     if (!spec.check_error) return;
     if (const std::optional<std::string> why = sample_refusal(spec.hw, image))
         throw InputError("--check-error: its check simulates a sample of the frame, and " + *why);
-    // A shader warp is warp_size neighbouring paths (pixels: each thread traces its pixel's
-    // samples in turn), or rays of a ray file.
-    const uint64_t paths = w.kind == WorkloadKind::RayFile ? w.ray_file.size() : uint64_t(spec.params.width) * uint64_t(spec.params.height);
-    const uint64_t clusters = frame_clusters((paths + spec.hw.warp_size - 1) / spec.hw.warp_size, spec.hw);
+    const uint64_t clusters = frame_clusters(frame_warps(w), spec.hw);
     if (5 * (spec.check_error + 1) > clusters)
         throw InputError("--check-error " + std::to_string(spec.check_error) + ": the check simulates " + std::to_string(spec.check_error + 1) +
                          " clusters (the first wave and N drawn) of this frame's " + std::to_string(clusters) + " (of " +
                          std::to_string(gpu_warp_capacity(spec.hw)) + " shader warps each) in this fidelity and in AT; more than a fifth "
                          "of the frame costs about as much as the frame in AT, so run --fidelity at (the reference)" +
                          (clusters >= 25 ? ", or give N at most " + std::to_string(clusters / 5 - 1) : std::string(": the frame is too small for a check")));
+}
+
+// A pilot's terms from its statistics' timing.sampling (a child run: AT, LT), `clusters` set to the frame's.
+PilotTerms pilot_terms_of(const nlohmann::json& s, double bias, uint64_t& clusters) {
+    PilotTerms p;
+    clusters = (s["warps_total"].get<uint64_t>() + s["cluster_warps"].get<uint64_t>() - 1) / s["cluster_warps"].get<uint64_t>();
+    p.relative_se = s["relative_se"].get<double>();
+    p.degrees = s["variance_degrees"].get<double>();
+    p.model_error = s["schedule_model_error"].get<double>();
+    const double stratified = s["work_estimate_stratified_residence_cycles"].get<double>();
+    p.extrapolation_gap = stratified > 0 ? std::fabs(s["work_estimate_residence_cycles"].get<double>() / stratified - 1.0) : 0.0;
+    p.first_reads_gap = s["first_reads"]["gap"].get<double>();
+    p.design_bias = bias;
+    p.strata = s["strata"].get<uint64_t>();
+    p.candidates = clusters - std::min(clusters, s["first_wave_clusters"].get<uint64_t>() + s["empty_clusters"].get<uint64_t>());
+    return p;
+}
+
+// --sample-width W (docs/sampling.md, "A sample of a given width"): the frame sampled at the rate
+// whose 95 % interval should be within +-W. The design's bias bound is known before anything
+// runs: where it alone is W or more, refused at once. Else a pilot samples kMinStrata strata of
+// the frame; its interval's parts that no rate narrows (PilotTerms::floor) are taken as the
+// frame's at any rate, and its sampling term is carried to more strata (PilotTerms::half_width).
+// Refused where the floor reaches W, or where only the whole frame would. The interval fidelity
+// (plain C++) runs the pilot in this process, and where the pilot reaches W it is the run; AT and
+// LT (SystemC elaborates once per process) run it as a child process that traces the frame for
+// the plan this run reads, and this run simulates the rate chosen (the pilot's clusters again
+// where it reached W). `to.sample_rate` is set to the rate of the run returned; the workload of
+// `w` is the run's (the pilot's where it is the run).
+TimingResult sample_of_width(WorkloadStage& w, const BvhImage& image, TimingOptions& to, SampleWidth& planned) {
+    const RunSpec& spec = w.spec;
+    const double asked = spec.sample_width;
+    const std::string workload = spec.rays.empty() ? spec.workload : "";
+    const std::string ask = "--sample-width " + percent_text(asked);
+    const double bias = SamplingBias::built_in().value(workload);
+    if (asked <= bias)
+        throw InputError(ask + ": every sampled interval of this workload holds " + SamplingBias::built_in().basis(workload) +
+                         ", which no rate narrows: ask for more than " + percent_text(bias) + ", or run the whole frame (no --sample-width)");
+    if (const std::optional<std::string> why = sample_refusal(spec.hw, image)) throw InputError(ask + ": " + *why);
+    uint64_t clusters = frame_clusters(frame_warps(w), spec.hw);
+    std::optional<double> rate = rate_for_strata(clusters, clusters ? clusters - 1 : 0, kMinStrata);
+    // A sample of more than kWidthMaxRate of the frame costs about what the frame costs.
+    const std::string beyond = " more than " + percent_text(kWidthMaxRate) + ", beyond which the whole frame costs about as much (docs/sampling.md): "
+                               "run it whole (no --sample-width)";
+    if (!rate || *rate > kWidthMaxRate)
+        throw InputError(ask + ": this frame has " + std::to_string(clusters) + " clusters of " + std::to_string(gpu_warp_capacity(spec.hw)) +
+                         " shader warps, and a pilot of " + std::to_string(kMinStrata) + " strata beside the first wave would sample " +
+                         percent_text(rate.value_or(1.0)) + " of it," + beyond);
+    const bool here = spec.run.fidelity == Fidelity::Interval;
+    std::optional<TimingResult> pilot;  // here: the last pilot's run, and its workload (its frame's pixels)
+    std::unique_ptr<Workload> pilot_workload;
+    // A pilot at `r`: its terms, and what the statistics say of it. Here, false where it was stopped
+    // (the pilot so far is then the run).
+    PilotTerms p;
+    const auto measure = [&](double r) {
+        planned.pilot_rate = r;
+        ++planned.pilots;
+        if (spec.run.progress) std::cerr << "planning the sample's width: a pilot sample of " << percent_text(r) << " of the frame\n";
+        if (here) {
+            const auto t0 = Clock::now();
+            TimingOptions po = to;
+            po.sample_rate = r;
+            po.sample_unchecked = true;  // its strata are read below
+            pilot.reset();
+            pilot_workload = w.fresh();
+            try {
+                pilot = run_timing(spec.hw, image, *pilot_workload, po);
+            } catch (const std::invalid_argument& e) {
+                throw InputError(e.what());
+            }
+            planned.pilot_s += seconds_since(t0);
+            if (pilot->interrupted) return false;
+            pilot->estimate.design_bias = bias;
+            const double cw = double(std::max<uint64_t>(1, pilot->estimate.design.cluster_warps));
+            clusters = uint64_t(std::ceil(double(pilot->estimate.warps_total) / cw));
+            p = pilot_terms(pilot->estimate, double(pilot->cycles_simulated));
+            planned.pilot_half_width = pilot->estimate.relative_half_width(double(pilot->cycles_simulated));
+        } else {
+            const nlohmann::json j = spec.run_pilot(r);
+            p = pilot_terms_of(j, bias, clusters);
+            planned.pilot_half_width = j["cycles_ci95"].is_array() ? j["cycles_ci95"][1].get<double>() / j["cycles"].get<double>() - 1.0 : 0.0;
+            planned.pilot_s += j["pilot_s"].get<double>();
+        }
+        planned.pilot_strata = p.strata;
+        planned.floor = p.floor();
+        return true;
+    };
+    const auto stopped = [&] {  // the pilot so far is the run
+        to.sample_rate = planned.pilot_rate;
+        w.workload = std::move(pilot_workload);
+        return std::move(*pilot);
+    };
+    if (!measure(*rate)) return stopped();
+    // Clusters that read no node are not strata: where the frame has some, the pilot drew fewer
+    // than it was asked for, and once more at the rate that draws them.
+    if (p.strata < kMinStrata && p.strata < p.candidates)
+        if ((rate = rate_for_strata(clusters, p.candidates, kMinStrata))) {
+            if (*rate > kWidthMaxRate)
+                throw InputError(ask + ": this frame has " + std::to_string(p.candidates) + " clusters with work beside the first wave, and a pilot of " +
+                                 std::to_string(kMinStrata) + " strata would sample " + percent_text(*rate) + " of it," + beyond);
+            if (!measure(*rate)) return stopped();
+        }
+    if (p.strata >= p.candidates)
+        throw InputError(ask + ": the pilot sample simulated every one of this frame's " + std::to_string(p.candidates) +
+                         " clusters with work: the frame is too small to sample; run it whole (no --sample-width)");
+    if (p.strata < kMinStrata)
+        throw InputError(ask + ": this frame has " + std::to_string(p.candidates) + " clusters with work beside the first wave; a sample's interval needs " +
+                         std::to_string(kMinStrata) + ": run it whole (no --sample-width)");
+    planned.asked = asked;
+    const auto said = [&] {
+        char terms[256];
+        std::snprintf(terms, sizeof terms, "the schedule model's error %s, the extrapolation gap %s, the first reads' gap %s and the design's bias bound %s",
+                      percent_text(1.96 * std::sqrt(2.0) * p.model_error).c_str(), percent_text(1.96 * p.extrapolation_gap).c_str(),
+                      percent_text(p.first_reads_gap).c_str(), percent_text(bias).c_str());
+        return std::string(planned.pilots > 1 ? "its second pilot sample (" : "its pilot sample (") + percent_text(planned.pilot_rate) +
+               " of the frame, " + std::to_string(p.strata) + " strata) states +-" + percent_text(planned.pilot_half_width) + ", of which +-" +
+               percent_text(planned.floor) + " no larger rate is taken to narrow (" + terms + ")";
+    };
+    // Where the floor reaches W, the model's term may still fall with the sample's size: where it
+    // would reach W if it fell as 1 / sqrt(strata), a second pilot at that size measures it.
+    if (planned.floor >= asked) {
+        const std::optional<uint64_t> n = strata_for_width(p, asked, true);
+        if (!n)
+            throw InputError(ask + " is not reachable on this frame: " + said() + ", and even were the model's error to fall as 1 / sqrt(strata), only the whole frame would reach it; ask for more than " +
+                             percent_text(planned.floor) + ", or run the whole frame (no --sample-width)");
+        if (spec.run.progress)
+            std::cerr << said() << "; were the model's error to fall with the sample's size, " << *n << " strata would reach +-" << percent_text(asked) << "\n";
+        const double second = rate_for_strata(clusters, p.candidates, *n).value_or(1.0);
+        if (second > kWidthMaxRate)
+            throw InputError(ask + " is not reachable on this frame: " + said() + "; only were the model's error to fall as 1 / sqrt(strata) would " +
+                             std::to_string(*n) + " strata reach it, and a second pilot of them would sample " + percent_text(second) + " of the frame," + beyond);
+        if (!measure(second)) return stopped();
+        if (planned.floor >= asked)
+            throw InputError(ask + " is not reachable on this frame: " + said() + "; ask for more than " + percent_text(planned.floor) +
+                             ", or run the whole frame (no --sample-width)");
+    }
+    const std::optional<uint64_t> n = strata_for_width(p, asked);
+    if (!n)
+        throw InputError(ask + " is not reachable with a sample of this frame: " + said() + ", and its sampling error would need every one of its " +
+                         std::to_string(p.candidates) + " clusters with work: run it whole (no --sample-width)");
+    planned.predicted = p.half_width(*n);
+    const bool pilots = *n == p.strata;  // the pilot reaches W
+    to.sample_rate = pilots ? planned.pilot_rate : rate_for_strata(clusters, p.candidates, *n).value_or(1.0);
+    if (to.sample_rate > kWidthMaxRate)
+        throw InputError(ask + " is not reachable on this frame: " + said() + "; " + std::to_string(*n) + " strata should reach it, a sample of " +
+                         percent_text(to.sample_rate) + " of the frame," + beyond);
+    if (spec.run.progress)
+        std::cerr << said()
+                  << (pilots ? (here ? "; the pilot is the run" : "; the run simulates the pilot's clusters")
+                             : "; sampling " + percent_text(to.sample_rate) + " of the frame (" + std::to_string(*n) + " strata)")
+                  << " for a predicted +-" << percent_text(planned.predicted) << "\n";
+    if (pilot && pilots) {
+        w.workload = std::move(pilot_workload);
+        return std::move(*pilot);
+    }
+    pilot.reset();
+    pilot_workload.reset();
+    try {
+        return run_timing(spec.hw, image, *w.workload, to);
+    } catch (const std::invalid_argument& e) {
+        throw InputError(e.what());
+    }
 }
 
 // A timing run's error against AT (docs/accuracy.md); after the run's own time, so that
@@ -526,10 +708,12 @@ RunResult run_simulation(const RunSpec& spec, std::ostream* log) {
     dump_stage(w, image, out);
     Ran ran;
     const auto t0 = Clock::now();
+    SampleWidth width;
+    if (timing && spec.sample_width > 0) rec.width = &width;
     if (!timing) {
         functional_stage(w, image, reference.get(), ran, rec, out);
     } else {
-        timing_stage(w, image, ran, rec);
+        timing_stage(w, image, ran, rec, rec.width ? &width : nullptr);
         out.rays = std::move(ran.timing.rays);
         if (!spec.timeline.empty()) out.files.emplace_back(spec.timeline, std::move(ran.timing.timeline));
         if (reference) verify_stage(scene, *reference, out.rays, spec.run.threads, ran);

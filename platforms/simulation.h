@@ -63,6 +63,12 @@ struct RunSpec {
     // time so far, decides whether the check would cost less than AT's full run (CheckRefused).
     uint64_t check_error = 0;
     std::function<ErrorCheck(double rate, double run_s)> run_check;
+    // --sample-width W (docs/sampling.md, "A sample of a given width"): the 95 % half-width asked,
+    // relative (0: not asked); the run samples the frame at the rate planned from a pilot sample,
+    // which run_pilot simulates at `rate` (rtsim: a child process with the run's fidelity, seed and
+    // plan) and whose statistics' timing.sampling it returns.
+    double sample_width = 0;
+    std::function<nlohmann::json(double rate)> run_pilot;
     // A stop requested through run.stop (rtsim: SIGINT, SIGTERM) ends the run at its next clean
     // point with what it simulated so far (RunResult::interrupted); before the simulation
     // starts, Interrupted is thrown instead (model/stop_request.h).

@@ -154,7 +154,7 @@ void TimingProgress::finish() {
     printed_ = false;
 }
 
-void write_sampling(StatsOut& out, const SampleEstimate& est, double rate, uint64_t cycles, uint64_t cycles_simulated) {
+void write_sampling(StatsOut& out, const SampleEstimate& est, double rate, uint64_t cycles, uint64_t cycles_simulated, const SampleWidth* width) {
     // Cycles and their 95 % interval: SampleEstimate (docs/sampling.md).
     // The interval is never below the cycles already simulated: the frame holds the sample's
     // work and more, so a symmetric interval reaching below them only says the estimate is
@@ -227,6 +227,20 @@ void write_sampling(StatsOut& out, const SampleEstimate& est, double rate, uint6
     }
     s.value("design_bias", est.design_bias, "ratio",
             "the sample design's bias bound in the interval: the largest bias beyond the draws' noise on the project's grids, for this workload (platforms/configs/sampling_bias.json)");
+    if (width) {
+        StatsOut w = s.child("width", "--sample-width: the rate planned from a pilot sample (docs/sampling.md, \"A sample of a given width\")");
+        w.value("asked", width->asked, "ratio", "the 95 % half-width asked, relative to the cycles");
+        w.value("pilots", width->pilots, "runs", "pilot samples: 1, or 2 where the first's floor reached the width asked but its model term might fall with more strata");
+        w.value("pilot_rate", width->pilot_rate, "ratio", "the (last) pilot sample's share of the frame");
+        w.value("pilot_strata", width->pilot_strata, "strata", "the (last) pilot's drawn strata");
+        w.value("pilot_half_width", width->pilot_half_width, "ratio", "the relative half-width the (last) pilot stated");
+        w.value("pilot_s", width->pilot_s, "s", "the pilots' wall time (interval: in this process; at, lt: child runs, each loading the scene, the first tracing the frame for the plan this run reads)");
+        w.value("floor", width->floor, "ratio", "the (last) pilot's half-width without its sampling term: what no larger rate is taken to narrow");
+        w.value("predicted", width->predicted, "ratio", "the half-width predicted for this run's strata");
+        const double delivered = est.relative_half_width(double(cycles_simulated));
+        w.value("delivered", delivered, "ratio", "the half-width this run states (its 95 % interval's, relative)");
+        w.value("reached", delivered <= width->asked, "", "whether the run's half-width is within the one asked");
+    }
 }
 
 }  // namespace rtu

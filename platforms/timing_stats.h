@@ -13,6 +13,7 @@
 #include "model/sector_cache.h"
 #include "model/stats.h"
 #include "sampling/estimator.h"
+#include "sampling/width.h"
 #include "workloads/workload_driver.h"
 
 namespace rtu {
@@ -39,7 +40,9 @@ void write_hierarchy(StatsOut& out, const HwConfig& cfg, const HierarchyCounts& 
 
 // A sampled run's estimate of the frame's `cycles` with its 95 % interval and every ingredient of
 // the estimate (docs/sampling.md).
-void write_sampling(StatsOut& out, const SampleEstimate& est, double rate, uint64_t cycles, uint64_t cycles_simulated);
+// `width`: what --sample-width planned (null: not asked).
+void write_sampling(StatsOut& out, const SampleEstimate& est, double rate, uint64_t cycles, uint64_t cycles_simulated,
+                    const SampleWidth* width = nullptr);
 
 // A timing run's progress on stderr, at most every 2 s: cycle, rays retired, share of pixel warps
 // done, rays/s and an estimate of the time left.

@@ -38,12 +38,11 @@ PairsVariance collapsed_pairs(const std::vector<double>& d, const std::vector<do
     return p;
 }
 
-// Student's t for a two-sided 95 % interval; one pair (or none) leaves one degree of freedom at the least.
+}  // namespace
+
 double t95(double degrees) {
     return boost::math::quantile(boost::math::complement(boost::math::students_t(std::max(1.0, degrees)), 0.025));
 }
-
-}  // namespace
 
 PairedDifference paired_work_difference(const StrataWork& fast, const StrataWork& reference) {
     if (fast.work.size() != reference.work.size() || fast.weight != reference.weight)

@@ -11,6 +11,9 @@
 
 namespace rtu {
 
+// Student's t for a two-sided 95 % interval; one pair (or none) leaves one degree of freedom at the least.
+double t95(double degrees);
+
 // What the estimator knows of one simulated shader warp.
 struct WarpRecord {
     double weight = 1.0;   // warps of the frame this one stands for (its stratum's size)

@@ -9,6 +9,7 @@
 #include "sampling/plan.h"
 #include "sampling/prepass.h"
 #include "sampling/schedule_model.h"
+#include "sampling/width.h"
 #include "workloads/workload_driver.h"
 #include "workloads/bvh_builder.h"
 #include "workloads/scenes.h"
@@ -135,6 +136,59 @@ TEST(SampleEstimateInterval, DesignBiasJoinsInQuadrature) {
     // Alone (a sample that fits its model exactly and has no sampling error), the bias is the interval.
     e.misfit_per_sm = {0.0};
     EXPECT_DOUBLE_EQ(e.relative_half_width(1000), 0.04);
+}
+
+// --sample-width's prediction (sampling/width.h). At the pilot's own strata it is the interval the
+// pilot stated, term for term (SampleEstimate::relative_half_width computes it independently).
+// Hand-worked at 40 strata of 100 candidates from a pilot of 10 with relative se 0.02 over 4
+// degrees: the pairs' variance scales by (10/40) x (1 - 40/100) / (1 - 10/100) = 1/6, Student's
+// t over 16 degrees is 2.1199 (tables: 2.120), so the sampling term is 2.1199 x 0.02 x 0.40825 =
+// 0.017309; the floor is sqrt((1.96 sqrt2 x 0.01)^2 + (1.96 x 0.005)^2 + 0.01^2 + 0.05^2) =
+// 0.058859, and the half-width sqrt(0.058859^2 + 0.017309^2) = 0.061351.
+TEST(SampleWidth, PredictionCarriesThePilotsTerms) {
+    PilotTerms p;
+    p.relative_se = 0.02, p.degrees = 4, p.model_error = 0.01, p.extrapolation_gap = 0.005, p.first_reads_gap = 0.01, p.design_bias = 0.05;
+    p.strata = 10, p.candidates = 100;
+    SampleEstimate e;
+    e.schedule = true;
+    e.model_sample = 1000;
+    e.misfit_per_sm = {0.01, -0.01};
+    e.relative_se = 0.02, e.variance_degrees = 4;
+    e.work_estimate = 1.005, e.work_estimate_stratified = 1.0;
+    e.first_reads_rest = 1, e.first_reads_estimate = 0, e.first_read_cost = 0.01 * 1.005;  // gap: 0.01 x 1.005 x |1 - 0| / 1.005
+    e.design_bias = 0.05;
+    EXPECT_NEAR(p.half_width(10), e.relative_half_width(1000), 1e-12);
+    EXPECT_NEAR(p.floor(), 0.058859, 1e-6);
+    EXPECT_NEAR(p.half_width(40), 0.061351, 2e-6);
+    // More strata narrow only the sampling term: toward the floor, never below it; the whole frame is exact.
+    double last = p.half_width(10);
+    for (uint64_t n = 11; n < 100; ++n) {
+        EXPECT_LT(p.half_width(n), last) << n;
+        EXPECT_GT(p.half_width(n), p.floor()) << n;
+        last = p.half_width(n);
+    }
+    EXPECT_EQ(p.half_width(100), 0.0);
+}
+
+TEST(SampleWidth, FewestStrataThatReachTheWidth) {
+    PilotTerms p;
+    p.relative_se = 0.05, p.degrees = 5, p.model_error = 0, p.design_bias = 0.04;
+    p.strata = 10, p.candidates = 200;
+    // Every width between the floor and the pilot's own: the smallest n whose prediction reaches it.
+    for (const double w : {0.06, 0.08, 0.1, 0.12}) {
+        const std::optional<uint64_t> n = strata_for_width(p, w);
+        ASSERT_TRUE(n) << w;
+        EXPECT_LE(p.half_width(*n), w) << w;
+        EXPECT_GT(p.half_width(*n - 1), w) << w;
+    }
+    // At or above the pilot's: the pilot's strata; at or below the floor: none; and none where only
+    // every candidate (the whole frame) would reach it.
+    EXPECT_EQ(strata_for_width(p, p.half_width(10)), 10u);
+    EXPECT_EQ(strata_for_width(p, 0.5), 10u);
+    EXPECT_FALSE(strata_for_width(p, 0.04));
+    EXPECT_FALSE(strata_for_width(p, 0.03));
+    EXPECT_FALSE(strata_for_width(p, p.half_width(199) * (1 - 1e-9)));
+    EXPECT_EQ(strata_for_width(p, p.half_width(199)), 199u);
 }
 
 // The first reads' term: the frame's first reads of nodes outside the first wave against the
