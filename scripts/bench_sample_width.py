@@ -99,9 +99,8 @@ for sc, wl, n, pre in cells:
 print()
 if rows:
     ratio = sorted(r["delivered"] / r["predicted"] for r in rows)
-    print(f"{len(rows) + len(refusals)} runs: {len(refusals)} refused ("
-          + ", ".join(f"{k} {n}" for k in ("bias bound", "first pilot", "second pilot", "whole frame", "over half the frame", "not sampled")
-                    for n in [sum(1 for x in refusals if x[2] == k)] if n) + f"), {len(rows)} ran; "
+    print(f"{len(rows) + len(refusals)} runs: {len(refusals)} refused" + ("" if not refusals else " (" + ", ".join(f"{k} {n}" for k in ("bias bound", "first pilot", "second pilot", "whole frame", "over half the frame", "not sampled")
+                    for n in [sum(1 for x in refusals if x[2] == k)] if n) + ")") + f", {len(rows)} ran; "
           f"{sum(r['reached'] for r in rows)} of {len(rows)} reached the width asked; delivered / predicted median {statistics.median(ratio):.2f} "
           f"(range {ratio[0]:.2f}-{ratio[-1]:.2f}); {sum(r['holds'] for r in rows)} of {len(rows)} intervals hold the full run; "
           f"mean |error| {pct(statistics.mean(abs(r['error']) for r in rows))} %, worst {pct(max(abs(r['error']) for r in rows))} %; "
