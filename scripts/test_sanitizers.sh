@@ -14,6 +14,9 @@
 #   RtsimSampling.IntervalCarriesTheDesignBias, RtsimSampling.IntervalFidelitySampledAsAt,
 #   RtsimSampling.PrimaryRaysOfASparseFrame (37-48 s under ASan; the per-SM warming it checks
 #   the estimate of runs here in SampleWarming.EachSmIsWarmedWhenItStartsTheCluster),
+#   RtsimSampling.SampleWidthPlansItsRateFromAPilot (36 s under ASan; a width's pilot that is
+#   the run, and its statistics, run here in RtsimStats.SchemaListsEveryKeyWrittenAndNothingElse;
+#   the child pilots of AT and LT run in the Release suite only),
 #   RtsimTiming.IntervalIsWithinTheStatedBoundOfAt, RtsimTiming.IntervalShaderReadsKeepAtsPace (the
 #   shaders' reads in every fidelity run here in RtsimTiming.ShaderReadsGoThroughL1L2AndDram),
 #   RtsimPresets.TtpSpeedsUpPathTracingOnEveryPreset
@@ -42,7 +45,7 @@
 # there are cores: many of them wait on rtsim child processes or poll for a signal's answer.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-left='^(Sweeps\.|RtsimSampling\.(IntervalCoversTheFullRun|IntervalCarriesTheDesignBias|IntervalFidelitySampledAsAt|PrimaryRaysOfASparseFrame)$|RtsimTiming\.(IntervalIsWithinTheStatedBoundOfAt|IntervalShaderReadsKeepAtsPace|TracingChangesNoStatistic|TimelineChangesNoStatistic)$|RtsimPresets\.TtpSpeedsUpPathTracingOnEveryPreset$|RtsimError\.(EveryTimingRunStatesItsError|CheckErrorPairsTheSameClustersInAt)$)'
+left='^(Sweeps\.|RtsimSampling\.(IntervalCoversTheFullRun|IntervalCarriesTheDesignBias|IntervalFidelitySampledAsAt|PrimaryRaysOfASparseFrame|SampleWidthPlansItsRateFromAPilot)$|RtsimTiming\.(IntervalIsWithinTheStatedBoundOfAt|IntervalShaderReadsKeepAtsPace|TracingChangesNoStatistic|TimelineChangesNoStatistic)$|RtsimPresets\.TtpSpeedsUpPathTracingOnEveryPreset$|RtsimError\.(EveryTimingRunStatesItsError|CheckErrorPairsTheSameClustersInAt)$)'
 if [ "${1:-}" = "--all" ]; then left='^$'; shift; fi
 scripts/setup.sh
 cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_UNITY_BUILD=ON -DRTU_SANITIZE=address,undefined \
