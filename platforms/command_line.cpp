@@ -284,8 +284,10 @@ std::optional<int> parse_command_line(int argc, char** argv, Args& a) {
          "which clusters --sample and --check-error draw (default: --seed, which also seeds the rays)")
         ("sample-width", po::value<double>()->notifier([&a](double v) { a.sample_width = v; }),
          "at, lt, interval: sample the frame at the smallest rate whose 95 % interval should be within +-W % of its cycles, "
-         "planned from a pilot sample of 10 strata (a child run); refused where the sample design's bias bound alone is W or "
-         "more, or where the pilot's parts that no rate narrows reach W (docs/sampling.md, \"A sample of a given width\")")
+         "planned from a pilot sample of 10 strata (in AT and LT a child run; a second pilot where the first's model term "
+         "might fall with more strata); refused where the sample design's bias bound alone is W or more, where the pilot's "
+         "parts that no larger rate is taken to narrow reach W, or where a pilot or the run would sample more than half "
+         "the frame (docs/sampling.md, \"A sample of a given width\")")
         ("sample-unchecked", po::bool_switch(&a.sample_unchecked),
          "run a sample too small for a 95 % interval (fewer than 10 strata) and report no interval")
         ("sample-segments", po::value(&a.sample_segments), "simulate the sample as K independent segments and merge them "
