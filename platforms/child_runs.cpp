@@ -89,18 +89,23 @@ void run_child(std::vector<std::string> args, const std::string& err, const std:
     check_child(reap(spawn_child(std::move(args), err, what)), err, what);
 }
 
+nlohmann::json run_child_stats(std::vector<std::string> args, const std::string& fidelity, std::optional<uint64_t> quantum,
+                               const std::filesystem::path& dir, const std::string& name, const std::string& what) {
+    const std::string stats = (dir / (name + ".json")).string(), err = (dir / (name + ".err")).string();
+    args.insert(args.end(), {"--fidelity", fidelity, "--stats", stats});
+    if (fidelity == "lt" && quantum) args.insert(args.end(), {"--quantum", std::to_string(*quantum)});
+    run_child(std::move(args), err, what);
+    return nlohmann::json::parse(std::ifstream(stats));
+}
+
 nlohmann::json run_width_pilot(const std::vector<std::string>& frame_args, const std::string& fidelity, std::optional<uint64_t> quantum,
                                double rate, uint64_t sample_seed, const std::string& plan, bool quiet) {
     const auto start = std::chrono::steady_clock::now();
     const TempFolder dir("--sample-width");
-    const std::string stats = (dir.path / "pilot.json").string(), err = (dir.path / "pilot.err").string();
     std::vector<std::string> args = frame_args;
-    args.insert(args.end(), {"--fidelity", fidelity, "--sample", exact(rate), "--sample-seed", std::to_string(sample_seed), "--sample-unchecked",
-                             "--sample-plan", plan, "--stats", stats});
-    if (fidelity == "lt" && quantum) args.insert(args.end(), {"--quantum", std::to_string(*quantum)});
+    args.insert(args.end(), {"--sample", exact(rate), "--sample-seed", std::to_string(sample_seed), "--sample-unchecked", "--sample-plan", plan});
     if (!quiet) std::cerr << "planning the sample's width: a pilot sample of " << exact(100.0 * rate) << " % of the frame\n";
-    run_child(args, err, "--sample-width: the pilot sample");
-    const nlohmann::json j = nlohmann::json::parse(std::ifstream(stats));
+    const nlohmann::json j = run_child_stats(args, fidelity, quantum, dir.path, "pilot", "--sample-width: the pilot sample");
     nlohmann::json s = j["timing"]["sampling"];
     s["cycles"] = j["cycles"];
     s["pilot_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -125,16 +130,12 @@ ErrorCheck run_error_check(const std::vector<std::string>& frame_args, const std
     };
     auto child = [&](const std::string& fid) {
         const auto child_start = std::chrono::steady_clock::now();
-        std::vector<std::string> args = base;
-        const std::string stats = (dir.path / (fid + ".json")).string(), err = (dir.path / (fid + ".err")).string();
-        args.insert(args.end(), {"--fidelity", fid, "--stats", stats});
-        if (fid == "lt" && quantum) args.insert(args.end(), {"--quantum", std::to_string(*quantum)});
+        nlohmann::json j;
         try {
-            run_child(args, err, "--check-error: the " + fid + " run of the check");
+            j = run_child_stats(base, fid, quantum, dir.path, fid, "--check-error: the " + fid + " run of the check");
         } catch (const InputError& e) {
             throw std::runtime_error(e.what());  // the run itself was accepted: not the user's input
         }
-        const nlohmann::json j = nlohmann::json::parse(std::ifstream(stats));
         const nlohmann::json& s = j["timing"]["sampling"];
         Child c;
         c.cycles = s["cycles_simulated"].get<uint64_t>();

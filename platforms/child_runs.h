@@ -30,6 +30,11 @@ struct TempFolder {
 // text, if it does not exit 0 (InputError for its exit status 2).
 void run_child(std::vector<std::string> args, const std::string& err, const std::string& what);
 
+// run_child in `fidelity` (`quantum`: LT's, passed on), its statistics and standard error written
+// into `dir` as NAME.json and NAME.err; returns the statistics.
+nlohmann::json run_child_stats(std::vector<std::string> args, const std::string& fidelity, std::optional<uint64_t> quantum,
+                               const std::filesystem::path& dir, const std::string& name, const std::string& what);
+
 // --check-error: the frame sampled at `rate` with `sample_seed` (the same clusters, the same
 // functional warming, one pre-pass through a plan in the check's temporary folder), once in
 // `fidelity` and once in AT; the sample's cycles, their strata paired, and the times. `quantum`:

@@ -451,10 +451,9 @@ void check_error_refusal(const WorkloadStage& w, const BvhImage& image) {
                          (clusters >= 25 ? ", or give N at most " + std::to_string(clusters / 5 - 1) : std::string(": the frame is too small for a check")));
 }
 
-// A pilot's terms from its statistics' timing.sampling (a child run: AT, LT), `clusters` set to the frame's.
-PilotTerms pilot_terms_of(const nlohmann::json& s, double bias, uint64_t& clusters) {
+// A pilot's terms from its statistics' timing.sampling (a child run: AT, LT).
+PilotTerms pilot_terms_of(const nlohmann::json& s, double bias) {
     PilotTerms p;
-    clusters = (s["warps_total"].get<uint64_t>() + s["cluster_warps"].get<uint64_t>() - 1) / s["cluster_warps"].get<uint64_t>();
     p.relative_se = s["relative_se"].get<double>();
     p.degrees = s["variance_degrees"].get<double>();
     p.model_error = s["schedule_model_error"].get<double>();
@@ -463,7 +462,8 @@ PilotTerms pilot_terms_of(const nlohmann::json& s, double bias, uint64_t& cluste
     p.first_reads_gap = s["first_reads"]["gap"].get<double>();
     p.design_bias = bias;
     p.strata = s["strata"].get<uint64_t>();
-    p.candidates = clusters - std::min(clusters, s["first_wave_clusters"].get<uint64_t>() + s["empty_clusters"].get<uint64_t>());
+    p.set_frame(s["warps_total"].get<uint64_t>(), s["cluster_warps"].get<uint64_t>(), s["first_wave_clusters"].get<uint64_t>(),
+                s["empty_clusters"].get<uint64_t>());
     return p;
 }
 
@@ -488,7 +488,7 @@ TimingResult sample_of_width(WorkloadStage& w, const BvhImage& image, TimingOpti
         throw InputError(ask + ": every sampled interval of this workload holds " + SamplingBias::built_in().basis(workload) +
                          ", which no rate narrows: ask for more than " + percent_text(bias) + ", or run the whole frame (no --sample-width)");
     if (const std::optional<std::string> why = sample_refusal(spec.hw, image)) throw InputError(ask + ": " + *why);
-    uint64_t clusters = frame_clusters(frame_warps(w), spec.hw);
+    const uint64_t clusters = frame_clusters(frame_warps(w), spec.hw);
     std::optional<double> rate = rate_for_strata(clusters, clusters ? clusters - 1 : 0, kMinStrata);
     // A sample of more than kWidthMaxRate of the frame costs about what the frame costs.
     const std::string beyond = " more than " + percent_text(kWidthMaxRate) + ", beyond which the whole frame costs about as much (docs/sampling.md): "
@@ -522,13 +522,11 @@ TimingResult sample_of_width(WorkloadStage& w, const BvhImage& image, TimingOpti
             planned.pilot_s += seconds_since(t0);
             if (pilot->interrupted) return false;
             pilot->estimate.design_bias = bias;
-            const double cw = double(std::max<uint64_t>(1, pilot->estimate.design.cluster_warps));
-            clusters = uint64_t(std::ceil(double(pilot->estimate.warps_total) / cw));
             p = pilot_terms(pilot->estimate, double(pilot->cycles_simulated));
             planned.pilot_half_width = pilot->estimate.relative_half_width(double(pilot->cycles_simulated));
         } else {
             const nlohmann::json j = spec.run_pilot(r);
-            p = pilot_terms_of(j, bias, clusters);
+            p = pilot_terms_of(j, bias);
             planned.pilot_half_width = j["cycles_ci95"].is_array() ? j["cycles_ci95"][1].get<double>() / j["cycles"].get<double>() - 1.0 : 0.0;
             planned.pilot_s += j["pilot_s"].get<double>();
         }
@@ -545,7 +543,7 @@ TimingResult sample_of_width(WorkloadStage& w, const BvhImage& image, TimingOpti
     // Clusters that read no node are not strata: where the frame has some, the pilot drew fewer
     // than it was asked for, and once more at the rate that draws them.
     if (p.strata < kMinStrata && p.strata < p.candidates)
-        if ((rate = rate_for_strata(clusters, p.candidates, kMinStrata))) {
+        if ((rate = rate_for_strata(p.clusters, p.candidates, kMinStrata))) {
             if (*rate > kWidthMaxRate)
                 throw InputError(ask + ": this frame has " + std::to_string(p.candidates) + " clusters with work beside the first wave, and a pilot of " +
                                  std::to_string(kMinStrata) + " strata would sample " + percent_text(*rate) + " of it," + beyond);
@@ -576,7 +574,7 @@ TimingResult sample_of_width(WorkloadStage& w, const BvhImage& image, TimingOpti
                              percent_text(planned.floor) + ", or run the whole frame (no --sample-width)");
         if (spec.run.progress)
             std::cerr << said() << "; were the model's error to fall with the sample's size, " << *n << " strata would reach +-" << percent_text(asked) << "\n";
-        const double second = rate_for_strata(clusters, p.candidates, *n).value_or(1.0);
+        const double second = rate_for_strata(p.clusters, p.candidates, *n).value_or(1.0);
         if (second > kWidthMaxRate)
             throw InputError(ask + " is not reachable on this frame: " + said() + "; only were the model's error to fall as 1 / sqrt(strata) would " +
                              std::to_string(*n) + " strata reach it, and a second pilot of them would sample " + percent_text(second) + " of the frame," + beyond);
@@ -591,7 +589,7 @@ TimingResult sample_of_width(WorkloadStage& w, const BvhImage& image, TimingOpti
                          std::to_string(p.candidates) + " clusters with work: run it whole (no --sample-width)");
     planned.predicted = p.half_width(*n);
     const bool pilots = *n == p.strata;  // the pilot reaches W
-    to.sample_rate = pilots ? planned.pilot_rate : rate_for_strata(clusters, p.candidates, *n).value_or(1.0);
+    to.sample_rate = pilots ? planned.pilot_rate : rate_for_strata(p.clusters, p.candidates, *n).value_or(1.0);
     if (to.sample_rate > kWidthMaxRate)
         throw InputError(ask + " is not reachable on this frame: " + said() + "; " + std::to_string(*n) + " strata should reach it, a sample of " +
                          percent_text(to.sample_rate) + " of the frame," + beyond);

@@ -270,11 +270,13 @@ SampleEstimate SampleEstimator::estimate(const std::vector<WarpRecord>& warps, u
     return e;
 }
 
+double interval_half_width(double sampling, double model_error, double extrapolation_gap, double first_reads_gap, double design_bias) {
+    const double model = 1.96 * std::sqrt(2.0) * model_error, gap = 1.96 * extrapolation_gap;
+    return std::sqrt(sampling * sampling + model * model + gap * gap + first_reads_gap * first_reads_gap + design_bias * design_bias);
+}
+
 double SampleEstimate::relative_half_width(double cycles_simulated) const {
-    const double t = t95(variance_degrees);
-    const double model = 1.96 * std::sqrt(2.0) * model_error(cycles_simulated);
-    const double gap = 1.96 * extrapolation_gap(), first = first_reads_gap();
-    return std::sqrt(t * relative_se * t * relative_se + model * model + gap * gap + first * first + design_bias * design_bias);
+    return interval_half_width(t95(variance_degrees) * relative_se, model_error(cycles_simulated), extrapolation_gap(), first_reads_gap(), design_bias);
 }
 
 }  // namespace rtu

@@ -14,6 +14,14 @@ namespace rtu {
 // Student's t for a two-sided 95 % interval; one pair (or none) leaves one degree of freedom at the least.
 double t95(double degrees);
 
+// The 95 % interval's relative half-width from its five terms (docs/sampling.md, "The interval"),
+// in quadrature: the sampling term (t x the work's relative standard error) as it is; the
+// schedule model's error on both sides, the frame's and the sample's, taken independent (1.96 x
+// sqrt(2) x it); the extrapolation gap (1.96 x it); the first reads' gap (a bias estimate) and the
+// design's bias bound (already a 95 % figure) as they are. SampleEstimate::relative_half_width
+// and --sample-width's prediction (sampling/width.h) both take it.
+double interval_half_width(double sampling, double model_error, double extrapolation_gap, double first_reads_gap, double design_bias);
+
 // What the estimator knows of one simulated shader warp.
 struct WarpRecord {
     double weight = 1.0;   // warps of the frame this one stands for (its stratum's size)

@@ -3,29 +3,27 @@
 #include <algorithm>
 #include <cmath>
 
-#include "estimator.h"  // t95
+#include "estimator.h"  // t95, interval_half_width
 
 namespace rtu {
 
-double PilotTerms::floor() const {
-    // As SampleEstimate::relative_half_width: the model's error on both sides (1.96 x sqrt(2)),
-    // the extrapolation gap (1.96 x it), the first reads' gap and the bias bound as they are.
-    const double model = 1.96 * std::sqrt(2.0) * model_error, gap = 1.96 * extrapolation_gap;
-    return std::sqrt(model * model + gap * gap + first_reads_gap * first_reads_gap + design_bias * design_bias);
-}
+double PilotTerms::floor() const { return interval_half_width(0.0, model_error, extrapolation_gap, first_reads_gap, design_bias); }
 
 double PilotTerms::half_width(uint64_t n, bool model_falls) const {
     if (n >= candidates) return 0.0;  // the whole frame
-    PilotTerms at = *this;
     if (strata == 0 || n == 0) return floor();
     const double K = double(candidates), n0 = double(strata), m = double(n);
-    if (model_falls) at.model_error = model_error * std::sqrt(n0 / m);
-    const double f = at.floor();
     // The variance per stratum pair scales as (1/n)(1 - n/K): its ratio to the pilot's.
     const double fpc0 = 1.0 - n0 / K, fpc = 1.0 - m / K;
     const double scale = fpc0 > 0 ? std::sqrt((n0 / m) * (fpc / fpc0)) : 0.0;
-    const double se = t95(degrees * m / n0) * relative_se * scale;
-    return std::sqrt(f * f + se * se);
+    const double model = model_falls ? model_error * std::sqrt(n0 / m) : model_error;
+    return interval_half_width(t95(degrees * m / n0) * relative_se * scale, model, extrapolation_gap, first_reads_gap, design_bias);
+}
+
+void PilotTerms::set_frame(uint64_t warps_total, uint64_t cluster_warps, uint64_t first_wave_clusters, uint64_t empty_clusters) {
+    const uint64_t cw = std::max<uint64_t>(1, cluster_warps);
+    clusters = (warps_total + cw - 1) / cw;
+    candidates = clusters - std::min(clusters, first_wave_clusters + empty_clusters);
 }
 
 PilotTerms pilot_terms(const SampleEstimate& e, double cycles_simulated) {
@@ -37,8 +35,7 @@ PilotTerms pilot_terms(const SampleEstimate& e, double cycles_simulated) {
     p.first_reads_gap = e.first_reads_gap();
     p.design_bias = e.design_bias;
     p.strata = e.design.strata;
-    const uint64_t cw = std::max<uint64_t>(1, e.design.cluster_warps), clusters = (e.warps_total + cw - 1) / cw;
-    p.candidates = clusters - std::min(clusters, e.design.first_wave_clusters + e.design.empty_clusters);
+    p.set_frame(e.warps_total, e.design.cluster_warps, e.design.first_wave_clusters, e.design.empty_clusters);
     return p;
 }
 

@@ -15,10 +15,15 @@ struct PilotTerms {
     double model_error = 0;   // the schedule model's error (root mean square of the per-SM misfits)
     double extrapolation_gap = 0, first_reads_gap = 0, design_bias = 0;
     uint64_t strata = 0;      // drawn by the pilot
-    uint64_t candidates = 0;  // the frame's clusters that can be drawn (neither the first wave nor empty)
+    uint64_t clusters = 0;    // the frame's clusters
+    uint64_t candidates = 0;  // of them, those that can be drawn (neither the first wave nor empty)
+
+    // clusters and candidates from the sample's design: the frame's shader warps, its clusters'
+    // warps, and its first-wave and empty clusters.
+    void set_frame(uint64_t warps_total, uint64_t cluster_warps, uint64_t first_wave_clusters, uint64_t empty_clusters);
 
     // The parts of the half-width no rate narrows: the model's error, the gaps and the bias bound,
-    // in quadrature as the interval takes them. Measured on the ten grids of docs/sampling.md
+    // in quadrature as the interval takes them (interval_half_width, sampling/estimator.h). Measured on the ten grids of docs/sampling.md
     // ("Where the width, the error and the time come from"): from the lowest rate to the highest
     // the median cell's model term is 0.90 times what it was (it grew in 15 of 38 cells), so the
     // pilot's is taken as the frame's at any rate.

@@ -18,23 +18,13 @@ import re
 import statistics
 import sys
 
-from bench_util import run_stats, scene_args
+from bench_util import cell_name as cell, grid_env, run_stats, scene_args
 
 rtsim, out, scenes = sys.argv[1], sys.argv[2], sys.argv[3].split(",")
 SC = scene_args()
-sizes = [int(x) for x in os.environ.get("SIZES", "512").split(",")]
-presets = os.environ.get("PRESETS", "mobile").split(",")
+sizes, presets, seeds, fid, workloads = grid_env("512", "mobile", "3", "interval")
 widths = os.environ.get("WIDTHS", "15,20,25").split(",")
-first_seed = int(os.environ.get("FIRST_SEED", "1"))
-seeds = range(first_seed, first_seed + int(os.environ.get("SEEDS", "3")))
-fid = os.environ.get("FID", "interval")
-workloads = os.environ.get("WORKLOADS", "pt").split(",")
 os.makedirs(out, exist_ok=True)
-
-
-def cell(sc, wl):
-    return sc if wl == "pt" else f"{sc}-{wl}"
-
 
 jobs = []
 cells = list(itertools.product(scenes, workloads, sizes, presets))

@@ -13,23 +13,16 @@ The grids of docs/sampling.md:
   SIZES=128,256 RATES=0.25,0.5 scripts/bench_sampling_grid.py build/rtsim out/grid
   SIZES=256 RATES=0.1,0.25 PRESETS=mobile,paper scripts/bench_sampling_grid.py build/rtsim out/heldout ship,sprng"""
 import json, os, sys, itertools, concurrent.futures as cf
-from bench_util import run_stats, scene_args
+from bench_util import cell_name as cell, grid_env, run_stats, scene_args
 rtsim, out = sys.argv[1], sys.argv[2]
 SC = scene_args()
 scenes = sys.argv[3].split(",") if len(sys.argv) > 3 else ["mesh", "bunny", "cornell"]
-sizes = [int(x) for x in os.environ.get("SIZES", "64,128").split(",")]
-presets = os.environ.get("PRESETS", "mobile,desktop").split(",")
+sizes, presets, seeds, fid, workloads = grid_env("64,128", "mobile,desktop", "4", "at")
 rates = os.environ.get("RATES", "0.1,0.25").split(",")
-first_seed = int(os.environ.get("FIRST_SEED", "1"))
-seeds = range(first_seed, first_seed + int(os.environ.get("SEEDS", "4")))
-fid = os.environ.get("FID", "at")
-workloads = os.environ.get("WORKLOADS", "pt").split(",")
 os.makedirs(out, exist_ok=True)
 def run(key, args):
     return (key,) + run_stats(rtsim, f"{out}/{key}.json", args)
 jobs = []
-def cell(sc, wl):  # a run's name: the scene, and the workload where it is not path tracing
-    return sc if wl == "pt" else f"{sc}-{wl}"
 for sc, wl, n, pre in itertools.product(scenes, workloads, sizes, presets):
     base = f"{SC[sc]} --workload {wl} --width {n} --height {n} --config {pre} --fidelity {fid}"
     jobs.append((f"{cell(sc, wl)}_{n}_{pre}_full", base))

@@ -1,6 +1,7 @@
 """What the benchmark scripts that run rtsim on the shared scenes share (bench_error_grid.py,
 bench_sensitivity.py, bench_sampling_grid.py) and the scripts that read their folders: the
-scenes' arguments, a preset with its prefetcher, one resumable run, and a sampling grid's runs."""
+scenes' arguments, a preset with its prefetcher, a grid's axes, one resumable run, and a sampling
+grid's runs."""
 import glob
 import os
 import re
@@ -22,6 +23,21 @@ def config_args(config):
     """`NAME` or `NAME+PREFETCHER` as rtsim's --config (and --prefetcher) arguments."""
     name, _, pf = config.partition("+")
     return f"--config {name}" + (f" --prefetcher {pf}" if pf else "")
+
+
+def grid_env(sizes, presets, seeds, fid):
+    """A grid's axes from the environment, with these defaults where a variable is not set: SIZES
+    (comma-separated frame sides), PRESETS, SEEDS (how many) from FIRST_SEED (1), FID, WORKLOADS
+    (pt). Returns (sizes, presets, seeds, fid, workloads)."""
+    first = int(os.environ.get("FIRST_SEED", "1"))
+    return ([int(x) for x in os.environ.get("SIZES", sizes).split(",")], os.environ.get("PRESETS", presets).split(","),
+            range(first, first + int(os.environ.get("SEEDS", seeds))), os.environ.get("FID", fid),
+            os.environ.get("WORKLOADS", "pt").split(","))
+
+
+def cell_name(scene, workload):
+    """A grid run's name: the scene, and the workload where it is not path tracing."""
+    return scene if workload == "pt" else f"{scene}-{workload}"
 
 
 def run_stats(rtsim, path, args, skip=False):
