@@ -170,7 +170,15 @@ private:
     std::vector<uint32_t> rr_next_;       // per SM, round robin: the slot the scheduler looks at first
     std::vector<std::vector<uint8_t>> slot_busy_;  // per SM and warp-buffer slot: holds a trace
     uint64_t next_age_ = 0;
-    std::vector<Event> batch_;            // the events of one cycle, in the order they run
+    std::vector<Event> batch_;            // the events of one cycle, in the order the wheel gave them
+    struct BatchOrder {                   // an event of batch_ and its place in the cycle (run_next)
+        uint64_t scheduler, age;
+        uint32_t index;
+        bool operator<(const BatchOrder& o) const {
+            return scheduler != o.scheduler ? scheduler < o.scheduler : age != o.age ? age < o.age : index < o.index;
+        }
+    };
+    std::vector<BatchOrder> batch_order_;  // the order they run in
     // The shader reads (set_shader_reads): per SM, what is owed and the cycle its shader port is
     // free; empty: none.
     std::vector<ShaderLoads> shader_;

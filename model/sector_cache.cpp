@@ -52,9 +52,23 @@ SectorCache::Way* SectorCache::find(uint64_t line) {
 }
 
 SectorCache::Mshr* SectorCache::on_its_way(const Way* w, uint64_t sector, uint32_t bit) {
-    if (!on_fill_) return w && (w->pending & bit) ? &mshr_.at(sector) : nullptr;
+    if (!on_fill_) return w && (w->pending & bit) ? &mshr_pool_[mshr_.at(sector)] : nullptr;
     auto it = mshr_.find(sector);
-    return it == mshr_.end() ? nullptr : &it->second;
+    return it == mshr_.end() ? nullptr : &mshr_pool_[it->second];
+}
+
+SectorCache::Mshr& SectorCache::new_mshr(uint64_t sector) {
+    uint32_t i;
+    if (mshr_unused_.empty()) {
+        i = uint32_t(mshr_pool_.size());
+        mshr_pool_.emplace_back();
+    } else {
+        i = mshr_unused_.back();
+        mshr_unused_.pop_back();
+        mshr_pool_[i] = Mshr{};
+    }
+    mshr_.emplace(sector, i);
+    return mshr_pool_[i];
 }
 
 bool SectorCache::would_miss(uint64_t addr) const {
@@ -112,7 +126,7 @@ CacheOutcome SectorCache::read(uint64_t addr, uint64_t token, ReqKind kind) {
         w->pending |= bit;
         touch(*w);
     }
-    Mshr& m = mshr_[sector];
+    Mshr& m = new_mshr(sector);
     m.tokens.push_back(token);
     m.kind = kind;
     m.prefetch = kind == ReqKind::Prefetch;
@@ -189,10 +203,12 @@ bool SectorCache::warm(uint64_t addr) {
 SectorCache::Tokens SectorCache::fill(uint64_t sector_addr) {
     auto it = mshr_.find(sector_addr);
     if (it == mshr_.end()) throw std::logic_error("fill of a sector without MSHR");
-    Tokens tokens = std::move(it->second.tokens);
-    const bool unused_prefetch = it->second.prefetch && !it->second.demanded;
-    const bool by_prefetch = it->second.prefetch;
-    const ReqKind kind = it->second.kind;
+    Mshr& m = mshr_pool_[it->second];
+    Tokens tokens = std::move(m.tokens);
+    const bool unused_prefetch = m.prefetch && !m.demanded;
+    const bool by_prefetch = m.prefetch;
+    const ReqKind kind = m.kind;
+    mshr_unused_.push_back(it->second);
     mshr_.erase(it);
     const auto [line, bit] = place_of(sector_addr);
     Way* w = find(line);

@@ -191,7 +191,15 @@ private:
     std::vector<Set> set_;
     std::unique_ptr<ReplacementPolicy> policy_;
     absl::flat_hash_map<uint64_t, uint32_t> where_;  // line address -> way index
-    absl::flat_hash_map<uint64_t, Mshr> mshr_;       // sector address -> waiting tokens
+    // sector address -> its MSHR's place in mshr_pool_. The MSHRs (88 B each, their tokens
+    // inline) live in a pool whose freed places are reused last in, first out, so that a miss
+    // writes an MSHR the host's caches hold and the map's slots stay 16 B: with the MSHRs in the
+    // map's slots, the first touch of a new slot took 43 % of read()'s time in the interval
+    // fidelity on party (docs/performance.md, "Where the time goes").
+    absl::flat_hash_map<uint64_t, uint32_t> mshr_;
+    std::vector<Mshr> mshr_pool_;
+    std::vector<uint32_t> mshr_unused_;  // places in mshr_pool_ free for the next miss
+    Mshr& new_mshr(uint64_t sector);     // a cleared MSHR for the miss of `sector`
     CacheCounts counts_;
 };
 
