@@ -195,7 +195,7 @@ private:
     // inline) live in a pool whose freed places are reused last in, first out, so that a miss
     // writes an MSHR the host's caches hold and the map's slots stay 16 B: with the MSHRs in the
     // map's slots, the first touch of a new slot took 43 % of read()'s time in the interval
-    // fidelity on party (docs/performance.md, "Where the time goes").
+    // fidelity on party (docs/performance.md, "Earlier speed work").
     absl::flat_hash_map<uint64_t, uint32_t> mshr_;
     std::vector<Mshr> mshr_pool_;
     std::vector<uint32_t> mshr_unused_;  // places in mshr_pool_ free for the next miss

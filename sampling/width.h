@@ -23,10 +23,10 @@ struct PilotTerms {
     void set_frame(uint64_t warps_total, uint64_t cluster_warps, uint64_t first_wave_clusters, uint64_t empty_clusters);
 
     // The parts of the half-width no rate narrows: the model's error, the gaps and the bias bound,
-    // in quadrature as the interval takes them (interval_half_width, sampling/estimator.h). Measured on the ten grids of docs/sampling.md
-    // ("Where the width, the error and the time come from"): from the lowest rate to the highest
-    // the median cell's model term is 0.90 times what it was (it grew in 15 of 38 cells), so the
-    // pilot's is taken as the frame's at any rate.
+    // in quadrature as the interval takes them (interval_half_width, sampling/estimator.h).
+    // Measured on the ten grids of docs/sampling.md ("Where the width, the error and the time
+    // come from"): from the lowest rate to the highest the median cell's model term is 0.90 times
+    // what it was (it grew in 15 of 38 cells), so the pilot's is taken as the frame's at any rate.
     double floor() const;
     // The half-width a sample of n strata (pilot.strata <= n < candidates) of this frame should
     // state: the floor and the sampling term carried from the pilot's. Collapsed pairs of equal
