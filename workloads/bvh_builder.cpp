@@ -125,6 +125,12 @@ Aabb mesa_header_bounds(const BuildNode* root) {
     return out;
 }
 
+// The node type of child `i` of `n` in its child block: its leaf's (`leaf_type`) or internal.
+template <typename LeafType>
+NodeType child_type(const BuildNode* n, uint32_t i, const LeafType& leaf_type) {
+    return n->child[i]->leaf ? leaf_type(as_leaf(n->child[i])) : NodeType::Internal;
+}
+
 class ImageWriter {
 public:
     std::vector<uint8_t> bytes;
@@ -146,7 +152,7 @@ public:
         NodeType types[kMaxChildren];
         uint64_t block = 0;
         for (uint32_t i = 0; i < n->count; ++i) {
-            types[i] = n->child[i]->leaf ? leaf_type(as_leaf(n->child[i])) : NodeType::Internal;
+            types[i] = child_type(n, i, leaf_type);
             block += node_bytes(types[i]);
         }
         const uint64_t base = alloc(block);
@@ -171,8 +177,10 @@ public:
 template <typename LeafType>
 uint64_t subtree_bytes(const BuildNode* n, const LeafType& leaf_type) {
     uint64_t bytes = 0;
-    for (uint32_t i = 0; i < n->count; ++i)
-        bytes += n->child[i]->leaf ? node_bytes(leaf_type(as_leaf(n->child[i]))) : node_bytes(NodeType::Internal) + subtree_bytes(as_node(n->child[i]), leaf_type);
+    for (uint32_t i = 0; i < n->count; ++i) {
+        const NodeType t = child_type(n, i, leaf_type);
+        bytes += node_bytes(t) + (t == NodeType::Internal ? subtree_bytes(as_node(n->child[i]), leaf_type) : 0);
+    }
     return bytes;
 }
 
