@@ -16,15 +16,14 @@ namespace rtu {
 
 using namespace sc_core;
 
-namespace {
-
 // Watchdog and progress. It wakes every `period` cycles only while rays are
-// still in flight, so an idle platform has no pending events and sc_start() returns.
-class Monitor : public sc_module {
+// still in flight, so an idle platform has no pending events and sc_start() returns. (Outside an
+// anonymous namespace: GpuPlatform::Impl, declared in the header, holds one.)
+class PlatformMonitor : public sc_module {
 public:
-    SC_HAS_PROCESS(Monitor);
-    Monitor(sc_module_name n, WorkloadDriver& driver, const ClockDomain& clock, uint64_t watchdog, bool show_progress, uint64_t period,
-            StopRequest stop)
+    SC_HAS_PROCESS(PlatformMonitor);
+    PlatformMonitor(sc_module_name n, WorkloadDriver& driver, const ClockDomain& clock, uint64_t watchdog, bool show_progress,
+                    uint64_t period, StopRequest stop)
         : sc_module(n), progress(show_progress), driver_(driver), clock_(clock), watchdog_(watchdog), period_(period), stop_(stop) {
         SC_METHOD(check);
     }
@@ -68,8 +67,6 @@ private:
     StopRequest stop_;
 };
 
-}  // namespace
-
 struct GpuPlatform::Impl {
     HwConfig cfg;
     const BvhImage& image;
@@ -79,7 +76,7 @@ struct GpuPlatform::Impl {
     WorkloadDriver driver;
     RtComplex gpu;
     const ClockDomain &core, &mem;
-    std::unique_ptr<Monitor> monitor;
+    std::unique_ptr<PlatformMonitor> monitor;
     sc_trace_file* tf = nullptr;
     // Traced values (sampled into the VCD when tracing is on).
     struct RtTrace {
@@ -267,7 +264,7 @@ GpuPlatform::GpuPlatform(const HwConfig& cfg, const BvhImage& image, Workload& w
     }
     // The monitor's period does not depend on tracing (see sample_windows).
     const uint64_t period = std::max<uint64_t>(1, std::min<uint64_t>(cfg.watchdog / 4, 100000));
-    m.monitor.reset(new Monitor("monitor", m.driver, m.core, cfg.watchdog, opt.progress, period, opt.stop));
+    m.monitor.reset(new PlatformMonitor("monitor", m.driver, m.core, cfg.watchdog, opt.progress, period, opt.stop));
     if (opt.snapshot)
         m.monitor->snapshot = [this](uint64_t c) {
             Impl& i = *impl_;
