@@ -65,7 +65,12 @@ SectorCache::Mshr& SectorCache::new_mshr(uint64_t sector) {
     } else {
         i = mshr_unused_.back();
         mshr_unused_.pop_back();
-        mshr_pool_[i] = Mshr{};
+        // Cleared field by field (fill() moved its tokens out): assigning a fresh Mshr moved an
+        // inline vector whose storage GCC saw as uninitialized (-Wmaybe-uninitialized).
+        Mshr& m = mshr_pool_[i];
+        m.tokens.clear();
+        m.kind = ReqKind::Demand;
+        m.prefetch = m.demanded = false;
     }
     mshr_.emplace(sector, i);
     return mshr_pool_[i];
