@@ -20,11 +20,24 @@ uint64_t pack_bits(uint64_t mask, uint64_t value) {
     return out;
 }
 
+BitPacker::BitPacker(uint64_t mask) {
+    uint32_t packed = 0;  // bits of the mask below the run
+    while (mask) {
+        const uint32_t low = uint32_t(__builtin_ctzll(mask));
+        const uint64_t above = mask >> low;  // the run starts at bit 0 of `above`
+        const uint32_t len = ~above ? uint32_t(__builtin_ctzll(~above)) : 64 - low;
+        const uint64_t bits = (len == 64 ? ~uint64_t(0) : (uint64_t(1) << len) - 1) << low;
+        run_[runs_++] = {bits, low - packed};
+        packed += len;
+        mask &= ~bits;
+    }
+}
+
 uint64_t SliceLocal::operator()(uint64_t addr) const {
     if (radix == 1 && !drop) return addr;
     const uint64_t low = addr & ((uint64_t(1) << at) - 1);
     const uint64_t taken = (((addr >> at) / radix) << at) | low;
-    return drop ? pack_bits(~drop, taken) : taken;
+    return drop ? keep(taken) : taken;
 }
 
 AddressMap::AddressMap(const std::string& spec, uint32_t channels, uint32_t banks, uint32_t row_bytes, uint32_t slices, uint32_t line)
@@ -81,6 +94,9 @@ AddressMap::AddressMap(const std::string& spec, uint32_t channels, uint32_t bank
     const uint64_t placed = sub_mask_ | (uint64_t(1) << at_);
     if (placed & (line - 1)) bad("a slice, channel or sub-partition bit lies inside a " + std::to_string(line) + " B line");
     local_ = {at_, channels, sub_mask_};
+    bank_ = BitPacker(bank_mask_);
+    row_ = BitPacker(row_mask_);
+    sub_bits_ = BitPacker(sub_mask_);
 }
 
 uint64_t AddressMap::without_channel(uint64_t addr) const {
@@ -91,7 +107,7 @@ uint64_t AddressMap::without_channel(uint64_t addr) const {
 uint32_t AddressMap::slice(uint64_t addr) const {
     if (line_map_) return uint32_t((addr / line_) % slices_);
     const uint32_t channel = uint32_t((addr >> at_) % channels_);
-    return channel * sub_ + uint32_t(pack_bits(sub_mask_, without_channel(addr)));
+    return channel * sub_ + uint32_t(sub_bits_(without_channel(addr)));
 }
 
 DramCoord AddressMap::dram(uint64_t addr) const {
@@ -109,8 +125,8 @@ DramCoord AddressMap::dram(uint64_t addr) const {
     // bits shifted up); with a remainder it is its 'gap' path. One formula for both.
     const uint64_t rest = without_channel(addr);
     d.channel = uint32_t((addr >> at_) % channels_);
-    d.bank = uint32_t(pack_bits(bank_mask_, rest));
-    d.row = pack_bits(row_mask_, rest);
+    d.bank = uint32_t(bank_(rest));
+    d.row = row_(rest);
     return d;
 }
 
@@ -124,14 +140,21 @@ uint32_t ipoly_index(uint64_t higher, uint32_t index, uint32_t sets) {
     static const std::initializer_list<std::initializer_list<int>> k64 = {
         {18, 17, 16, 15, 12, 10, 6, 5, 0}, {15, 13, 12, 11, 10, 7, 5, 1, 0}, {16, 14, 13, 12, 11, 8, 6, 2, 1},
         {17, 15, 14, 13, 12, 9, 7, 3, 2}, {18, 16, 15, 14, 13, 10, 8, 4, 3}, {17, 16, 15, 14, 11, 9, 5, 4}};
-    const auto& table = sets == 16 ? k16 : sets == 32 ? k32 : sets == 64 ? k64
-                                                                    : throw std::invalid_argument("IPOLY needs 16, 32 or 64 sets");
-    uint32_t out = 0, k = 0;
-    for (const auto& bits : table) {
-        uint32_t b = (index >> k) & 1;
-        for (int h : bits) b ^= uint32_t(higher >> h) & 1;
-        out |= b << k++;
-    }
+    // Each index bit's list as a mask: the XOR of the listed bits is the parity of `higher` under it.
+    struct Masks {
+        uint64_t bit[6] = {};
+        uint32_t n = 0;
+        explicit Masks(const std::initializer_list<std::initializer_list<int>>& table) {
+            for (const auto& bits : table) {
+                for (int h : bits) bit[n] |= uint64_t(1) << h;
+                ++n;
+            }
+        }
+    };
+    static const Masks m16(k16), m32(k32), m64(k64);
+    const Masks& m = sets == 16 ? m16 : sets == 32 ? m32 : sets == 64 ? m64 : throw std::invalid_argument("IPOLY needs 16, 32 or 64 sets");
+    uint32_t out = 0;
+    for (uint32_t k = 0; k < m.n; ++k) out |= (((index >> k) & 1) ^ uint32_t(__builtin_parityll(higher & m.bit[k]))) << k;
     return out;
 }
 

@@ -408,7 +408,33 @@ TEST(SectorCache, AnL2SliceUsesAllItsSets) {
     EXPECT_EQ(ipoly_index(1, 0, 64), 3u);
     EXPECT_EQ(ipoly_index(1, 0, 16), 3u);
     EXPECT_EQ(ipoly_index(0, 5, 32), 5u);
+    // Bit 18 of the higher bits is in IPOLY(67)'s rows 0 and 4; bit 12 in IPOLY(5)'s row 1 only.
+    EXPECT_EQ(ipoly_index(uint64_t(1) << 18, 0, 64), 17u);
+    EXPECT_EQ(ipoly_index(uint64_t(1) << 12, 1, 16), 3u);
     EXPECT_THROW(ipoly_index(0, 0, 8), std::invalid_argument);
+}
+
+// BitPacker packs a mask's bits as pack_bits does, bit by bit: hand-worked, then against
+// pack_bits on masks of every shape (empty, full, one bit, alternating, the presets' row and bank
+// masks, random) and random values.
+TEST(AddressMap, BitPackerPacksAsPackBits) {
+    // Bits 4, 5 and 7 of 0b1010'0000: 0, 1, 1.
+    EXPECT_EQ(BitPacker(0b1011'0000)(0b1010'0000), 0b110u);
+    EXPECT_EQ(BitPacker(0)(~uint64_t(0)), 0u);
+    EXPECT_EQ(BitPacker(~uint64_t(0))(0x0123'4567'89ab'cdefull), 0x0123'4567'89ab'cdefull);
+    EXPECT_EQ(BitPacker(uint64_t(1) << 63)(~uint64_t(0)), 1u);  // bit 63 alone
+    std::mt19937_64 rng(47);
+    std::vector<uint64_t> masks = {0, ~uint64_t(0), 1, uint64_t(1) << 63, 0x5555'5555'5555'5555ull, 0xaaaa'aaaa'aaaa'aaaaull,
+                                   ~(uint64_t(1) << 7), 0x0fff'8000ull, 0x7080ull, 0xffff'ffff'0000'0001ull};
+    for (int i = 0; i < 200; ++i) masks.push_back(rng() & rng());  // sparse
+    for (int i = 0; i < 200; ++i) masks.push_back(rng() | rng());  // dense
+    for (const uint64_t mask : masks) {
+        const BitPacker pack(mask);
+        for (int v = 0; v < 20; ++v) {
+            const uint64_t value = rng();
+            ASSERT_EQ(pack(value), pack_bits(mask, value)) << std::hex << "mask " << mask << " value " << value;
+        }
+    }
 }
 
 // A configuration file whose number JSON cannot hold (1e400) is bad input naming the file, not an
