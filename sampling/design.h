@@ -19,6 +19,15 @@ constexpr uint64_t kMinStrata = 10;
 // with 4 misses narrower than +-10 %, those of 30 or more 99 % with 1.
 constexpr uint64_t kAimStrata = 30;
 
+// A frame's clusters of `cluster_warps` shader warps (the last one may hold fewer), and of them the
+// candidates a sample draws from: neither the first wave nor empty.
+struct FrameClusters {
+    uint64_t clusters = 0, candidates = 0;
+    FrameClusters(uint64_t warps_total, uint64_t cluster_warps, uint64_t first_wave_clusters, uint64_t empty_clusters)
+        : clusters((warps_total + std::max<uint64_t>(1, cluster_warps) - 1) / std::max<uint64_t>(1, cluster_warps)),
+          candidates(clusters - std::min(clusters, first_wave_clusters + empty_clusters)) {}
+};
+
 // The smallest rate, rounded up to 0.1 %, at which a frame of `clusters` clusters (the first wave
 // among them; `candidates` of them neither the first wave nor empty) draws `strata` strata, or
 // none where it has fewer candidates than that. A design simulates round(clusters x rate)

@@ -21,9 +21,9 @@ double PilotTerms::half_width(uint64_t n, bool model_falls) const {
 }
 
 void PilotTerms::set_frame(uint64_t warps_total, uint64_t cluster_warps, uint64_t first_wave_clusters, uint64_t empty_clusters) {
-    const uint64_t cw = std::max<uint64_t>(1, cluster_warps);
-    clusters = (warps_total + cw - 1) / cw;
-    candidates = clusters - std::min(clusters, first_wave_clusters + empty_clusters);
+    const FrameClusters f(warps_total, cluster_warps, first_wave_clusters, empty_clusters);
+    clusters = f.clusters;
+    candidates = f.candidates;
 }
 
 PilotTerms pilot_terms(const SampleEstimate& e, double cycles_simulated) {
