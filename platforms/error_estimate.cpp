@@ -54,19 +54,21 @@ bool preset_hardware(const Config& config) {
 
 // A sample of fewer than kAimStrata drawn strata (and not every cluster): its interval rests on
 // few strata, and the rate that draws kAimStrata, where the frame has that many clusters to draw.
-std::string few_strata(const SampleEstimate& e) {
+// `width`: the run's --sample-width (0: none), which chose the fewest strata predicted to reach
+// it; the rate that draws kAimStrata is then the other way to more strata.
+std::string few_strata(const SampleEstimate& e, double width) {
     const SampleEstimate::Design& d = e.design;
     if (d.cluster_warps == 0 || d.strata >= kAimStrata) return "";
-    const uint64_t clusters = (e.warps_total + d.cluster_warps - 1) / d.cluster_warps;
-    const uint64_t candidates = clusters - std::min(clusters, d.first_wave_clusters + d.empty_clusters);
+    const auto [clusters, candidates] = FrameClusters(e.warps_total, d.cluster_warps, d.first_wave_clusters, d.empty_clusters);
     if (d.strata >= candidates) return "";  // every cluster simulated: no sampling error
     std::string s = "; " + std::to_string(d.strata) + " drawn strata, fewer than " + std::to_string(kAimStrata) +
                     ": intervals of so few strata missed more often in the project's grids (docs/sampling.md, \"How many strata\"); ";
+    if (width > 0) s += "--sample-width planned the fewest strata predicted to reach +-" + percent_text(width) + "; ";
     const std::optional<double> rate = rate_for_strata(clusters, candidates, kAimStrata);
     if (rate && *rate < 1.0) {
         char r[16];
         std::snprintf(r, sizeof r, "%.3g", *rate);
-        s += "--sample " + std::string(r) + " draws " + std::to_string(kAimStrata);
+        s += (width > 0 ? "a narrower width draws more, and --sample " : "--sample ") + std::string(r) + " draws " + std::to_string(kAimStrata);
     } else {
         s += "this frame has " + std::to_string(candidates) + " clusters to draw from: a larger frame draws more";
     }
@@ -178,7 +180,7 @@ ErrorEstimate estimate_of(const RunSpec& spec, const TimingResult& t, const std:
         if (t.estimate.design_bias > 0 && !preset_hardware(spec.config))
             sampled_basis += "; the bias bound was measured on the presets (" + join(Config::presets()) +
                              "), not on this configuration";
-        sampled_basis += few_strata(t.estimate);
+        sampled_basis += few_strata(t.estimate, spec.sample_width);
     }
     const std::string fid = fidelity_name(spec.run.fidelity);
     if (spec.run.fidelity == Fidelity::AT) {

@@ -2009,6 +2009,7 @@ TEST(RtsimError, EveryTimingRunStatesItsError) {
     EXPECT_EQ(f["timing"]["sampling"]["strata"], 12);
     EXPECT_NE(f["error_estimate"]["basis"].get<std::string>().find("12 drawn strata, fewer than 30"), std::string::npos) << f["error_estimate"].dump();
     EXPECT_NE(few.out.find("--sample 0.239 draws 30"), std::string::npos) << few.out;
+    EXPECT_EQ(few.out.find("--sample-width"), std::string::npos) << few.out;  // a --sample run: no width planned it
     const Result thirty = rtsim(dir, "--scene cornell --fidelity interval --width 512 --height 256 --spp 1 --sample 0.239 --stats " + dir.file("t.json"));
     ASSERT_EQ(thirty.status, 0) << thirty.err;
     EXPECT_EQ(nlohmann::json::parse(read_text(dir.file("t.json")))["timing"]["sampling"]["strata"], 30);
@@ -2142,7 +2143,7 @@ TEST(RtsimSampling, SampleWidthPlansItsRateFromAPilot) {
     EXPECT_NE(small.err.find("more than 50 %"), std::string::npos) << small.err;
     EXPECT_EQ(small.err.find("pilot sample ("), std::string::npos) << small.err;
 
-    int larger = 0;
+    int larger = 0, few_plans = 0;
     for (int seed = 1; seed <= 6; ++seed) {
         const std::string stats = dir.file("w" + std::to_string(seed) + ".json");
         const Result r = rtsim(dir, cornell + "--fidelity interval --sample-width 20 --sample-seed " + std::to_string(seed) + " --stats " + stats);
@@ -2158,6 +2159,12 @@ TEST(RtsimSampling, SampleWidthPlansItsRateFromAPilot) {
         EXPECT_GE(w["pilot_strata"].get<int>(), 10) << seed;
         EXPECT_LT(w["floor"].get<double>(), 0.2) << seed;
         EXPECT_LE(w["predicted"].get<double>(), 0.2) << seed;
+        // A plan of fewer than 30 strata says the width chose them, and how to draw more.
+        const std::string basis = j["error_estimate"]["basis"].get<std::string>();
+        const bool few = basis.find("drawn strata, fewer than 30") != std::string::npos;
+        few_plans += few;
+        EXPECT_EQ(few, basis.find("--sample-width planned the fewest strata predicted to reach +-20 %; a narrower width draws more") != std::string::npos)
+            << seed << ": " << basis;
         if (rate == pilot) {
             // The pilot reached W and is the run: exactly the sample --sample draws at its rate.
             EXPECT_EQ(w["predicted"].get<double>(), w["delivered"].get<double>()) << seed;
@@ -2175,6 +2182,7 @@ TEST(RtsimSampling, SampleWidthPlansItsRateFromAPilot) {
         }
     }
     EXPECT_GE(larger, 1);  // seeds 1, 4 and 5 draw pilots wider than 20 % at this commit
+    EXPECT_GE(few_plans, 1);
 
     // LT: the pilot a child run (SystemC elaborates once per process), its plan this run's; where
     // it reaches W the run simulates its clusters again.
