@@ -179,6 +179,19 @@ TEST(Traversal, NodesDecodedUpFrontChangeNoResult) {
                 EXPECT_NE(top.decoded_internal(r->addr[i]), nullptr) << name;
             }
         }
+        // Seven nodes decoded, found at their own addresses (the bit map's count of the decoded
+        // blocks before each), and nowhere else.
+        uint64_t found = 0;
+        for (uint64_t a = 0; a + kBlockBytes <= l.image.size(); a += kBlockBytes) {
+            const InternalNode* n = top.decoded_internal(a);
+            if (!n) continue;
+            ++found;
+            const InternalNode d = decode_internal(l.image.at(a, kBlockBytes));
+            EXPECT_EQ(n->count, d.count) << name << " at " << a;
+            EXPECT_EQ(n->addr, d.addr) << name << " at " << a;
+            EXPECT_EQ(n->lo, d.lo) << name << " at " << a;
+        }
+        EXPECT_EQ(found, 7u) << name;
         const FunctionalResult pt = run(l, WorkloadKind::PathTrace, TraversalOrder::DFS, nullptr, 32);
         for (TraversalOrder order : {TraversalOrder::DFS, TraversalOrder::BFS})
             for (size_t i = 0; i < pt.rays.size(); ++i) {
