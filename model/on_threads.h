@@ -34,23 +34,33 @@ inline void on_threads(unsigned threads, const std::function<void(unsigned)>& bo
         if (e) std::rethrow_exception(e);
 }
 
-// Runs body(i) for every i in [0, n) on `threads` threads (0 counts as 1; never more threads than
-// blocks), in blocks of 64 taken in turn; a thread that throws makes the others stop at their
-// next block. Each i must write only its own slots, so that the results do not depend on the
-// thread count.
-inline void for_each_index(unsigned threads, size_t n, const std::function<void(size_t)>& body) {
-    constexpr size_t kBlock = 64;
+// for_each_index's threads for `n` indices: `threads` (0 counts as 1), never more than blocks.
+constexpr size_t kIndexBlock = 64;
+inline unsigned index_threads(unsigned threads, size_t n) {
+    return unsigned(std::max<size_t>(1, std::min<size_t>(threads, (n + kIndexBlock - 1) / kIndexBlock)));
+}
+
+// Runs body(t, i) for every i in [0, n) on index_threads(threads, n) threads, in blocks of 64
+// taken in turn, each the next block not yet taken (so a costly part of [0, n) does not leave the
+// other threads waiting); t is the thread running it, for state a thread keeps across its indices.
+// A thread that throws makes the others stop at their next block. Each i must write only its own
+// slots, so that the results do not depend on the thread count.
+inline void for_each_index(unsigned threads, size_t n, const std::function<void(unsigned, size_t)>& body) {
     std::atomic<size_t> next{0};
-    const unsigned used = unsigned(std::max<size_t>(1, std::min<size_t>(threads, (n + kBlock - 1) / kBlock)));
-    on_threads(used, [&](unsigned) {
+    on_threads(index_threads(threads, n), [&](unsigned t) {
         try {
-            for (size_t b; (b = next.fetch_add(kBlock)) < n;)
-                for (size_t i = b; i < std::min(n, b + kBlock); ++i) body(i);
+            for (size_t b; (b = next.fetch_add(kIndexBlock)) < n;)
+                for (size_t i = b; i < std::min(n, b + kIndexBlock); ++i) body(t, i);
         } catch (...) {
             next = n;
             throw;
         }
     });
+}
+
+// The same, for a body without state per thread.
+inline void for_each_index(unsigned threads, size_t n, const std::function<void(size_t)>& body) {
+    for_each_index(threads, n, std::function<void(unsigned, size_t)>([&](unsigned, size_t i) { body(i); }));
 }
 
 }  // namespace rtu

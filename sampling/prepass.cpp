@@ -101,12 +101,12 @@ PrepassWorkload::Hold::Hold(PrepassWorkload& w, uint64_t warp) : busy_(w.busy(wa
 
 PrepassWorkload::Hold::~Hold() { busy_.store(false, std::memory_order_release); }
 
-// Contiguous ranges of warps go to the threads; the results are put together in frame order, so
-// they do not depend on the number of threads.
+// The warps go to the threads in blocks, each thread taking the next (for_each_index); each warp's
+// results land in its own slots, so they do not depend on the number of threads.
 PrepassResult run_prepass(const FrameWarps& frame, const SamplingOptions& opt, PrepassWorkload& shared) {
     const auto t0 = std::chrono::steady_clock::now();
     const size_t n_warps = frame.warps();
-    const unsigned threads = unsigned(std::max<size_t>(1, std::min<size_t>(opt.threads, (n_warps + 63) / 64)));
+    const unsigned threads = index_threads(opt.threads, n_warps);
     PrepassResult result;
     result.threads = threads;
     result.trace_nodes.resize(n_warps);
@@ -122,50 +122,44 @@ PrepassResult run_prepass(const FrameWarps& frame, const SamplingOptions& opt, P
     const std::unique_ptr<std::atomic<uint64_t>[]> in_rounds(new std::atomic<uint64_t>[blocks]), by_warp(new std::atomic<uint64_t>[blocks]);
     for (size_t b = 0; b < blocks; ++b) in_rounds[b].store(kUnread, std::memory_order_relaxed), by_warp[b].store(kUnread, std::memory_order_relaxed);
     std::atomic<size_t> done{0};
-    // The threads take the warps in chunks of kChunk, each the next chunk not yet taken: with fixed
-    // shares of the frame (its first half to one thread, ...) a thread waited while the other
-    // traced the costlier part of the image (party 512x512 under `paper` on 2 threads: 0.92x the
-    // pre-pass's time in chunks, median of 9 interleaved pairs). Each warp writes only its own
-    // slots and lowers the first-read keys, whose minimum does not depend on the order, so the
-    // results do not depend on which thread traced which warp.
-    constexpr size_t kChunk = 16;
-    std::atomic<size_t> next{0};
-    on_threads(threads, [&](unsigned t) {
-        WarpTracer tracer{frame, opt, {}, {}, {}, {}};
+    // The threads take the warps in blocks, each the next block not yet taken (for_each_index):
+    // with fixed shares of the frame (its first half to one thread, ...) a thread waited while the
+    // other traced the costlier part of the image (party 512x512 under `paper` on 2 threads: 0.92x
+    // the pre-pass's time in blocks of 16, median of 9 interleaved pairs; blocks of 64 the same as
+    // 16, 4.19 against 4.17 s, 5 pairs). Each warp writes only
+    // its own slots and lowers the first-read keys, whose minimum does not depend on the order, so
+    // the results do not depend on which thread traced which warp.
+    struct PerThread {
+        WarpTracer tracer;
         std::vector<WarmFetch> fetches;
-        auto last = t0;
+        std::chrono::steady_clock::time_point last;
         bool printed = false;
-        const auto trace_warp = [&](size_t wi) {
-            if (opt.stop.requested()) throw Interrupted{opt.stop.signal()};
-            fetches.clear();
-            tracer.trace(shared, wi, result.trace_nodes[wi], count_first ? &fetches : nullptr);
-            for (const WarmFetch& f : fetches) {
-                const uint64_t b = f.addr / kBlockBytes;
-                if (b >= blocks) continue;
-                lower(in_rounds[b], (uint64_t(f.trace) << 32) | wi);
-                lower(by_warp[b], wi);
-            }
-            const size_t d = ++done;
-            if (opt.progress && t == 0 && (d & 63) == 0) {
-                const auto now = std::chrono::steady_clock::now();
-                if (std::chrono::duration<double>(now - last).count() > 2.0) {
-                    last = now;
-                    const double f = double(d) / double(n_warps), wall = std::chrono::duration<double>(now - t0).count();
-                    std::cerr << "\r  sampling pre-pass: " << d << " of " << n_warps << " shader warps traced (" << threads
-                              << " threads), ETA " << int(wall * (1.0 - f) / std::max(f, 1e-9)) << " s   " << std::flush;
-                    printed = true;
-                }
-            }
-        };
-        try {
-            for (size_t lo; (lo = next.fetch_add(kChunk)) < n_warps;)
-                for (size_t wi = lo; wi < std::min(n_warps, lo + kChunk); ++wi) trace_warp(wi);
-        } catch (...) {
-            next = n_warps;  // the other threads stop at their next chunk
-            throw;
+    };
+    std::vector<PerThread> per(threads, PerThread{WarpTracer{frame, opt, {}, {}, {}, {}}, {}, t0, false});
+    for_each_index(threads, n_warps, [&](unsigned t, size_t wi) {
+        PerThread& p = per[t];
+        if (opt.stop.requested()) throw Interrupted{opt.stop.signal()};
+        p.fetches.clear();
+        p.tracer.trace(shared, wi, result.trace_nodes[wi], count_first ? &p.fetches : nullptr);
+        for (const WarmFetch& f : p.fetches) {
+            const uint64_t b = f.addr / kBlockBytes;
+            if (b >= blocks) continue;
+            lower(in_rounds[b], (uint64_t(f.trace) << 32) | wi);
+            lower(by_warp[b], wi);
         }
-        if (printed) std::cerr << "\n";
+        const size_t d = ++done;
+        if (opt.progress && t == 0 && (d & 63) == 0) {
+            const auto now = std::chrono::steady_clock::now();
+            if (std::chrono::duration<double>(now - p.last).count() > 2.0) {
+                p.last = now;
+                const double f = double(d) / double(n_warps), wall = std::chrono::duration<double>(now - t0).count();
+                std::cerr << "\r  sampling pre-pass: " << d << " of " << n_warps << " shader warps traced (" << threads
+                          << " threads), ETA " << int(wall * (1.0 - f) / std::max(f, 1e-9)) << " s   " << std::flush;
+                p.printed = true;
+            }
+        }
     });
+    if (per[0].printed) std::cerr << "\n";
     result.critical_nodes_total = critical_nodes_total(result.trace_nodes);
     if (count_first) {
         result.first_reads_in_rounds.assign(n_warps, 0);
