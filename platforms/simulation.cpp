@@ -418,8 +418,8 @@ void verify_stage(const Scene& scene, const EmbreeReference& reference, const st
 }
 
 uint64_t frame_clusters(uint64_t warps, const HwConfig& hw) {
-    const uint64_t capacity = gpu_warp_capacity(hw);
-    return (warps + capacity - 1) / capacity;
+    const uint64_t cluster = sample_cluster_warps(hw);
+    return (warps + cluster - 1) / cluster;
 }
 
 // The frame's shader warps: a shader warp is warp_size neighbouring paths (pixels: each thread
@@ -446,7 +446,7 @@ void check_error_refusal(const WorkloadStage& w, const BvhImage& image) {
     if (5 * (spec.check_error + 1) > clusters)
         throw InputError("--check-error " + std::to_string(spec.check_error) + ": the check simulates " + std::to_string(spec.check_error + 1) +
                          " clusters (the first wave and N drawn) of this frame's " + std::to_string(clusters) + " (of " +
-                         std::to_string(gpu_warp_capacity(spec.hw)) + " shader warps each) in this fidelity and in AT; more than a fifth "
+                         std::to_string(sample_cluster_warps(spec.hw)) + " shader warps each) in this fidelity and in AT; more than a fifth "
                          "of the frame costs about as much as the frame in AT, so run --fidelity at (the reference)" +
                          (clusters >= 25 ? ", or give N at most " + std::to_string(clusters / 5 - 1) : std::string(": the frame is too small for a check")));
 }
@@ -494,7 +494,7 @@ TimingResult sample_of_width(WorkloadStage& w, const BvhImage& image, TimingOpti
     const std::string beyond = " more than " + percent_text(kWidthMaxRate) + ", beyond which the whole frame costs about as much (docs/sampling.md): "
                                "run it whole (no --sample-width)";
     if (!rate || *rate > kWidthMaxRate)
-        throw InputError(ask + ": this frame has " + std::to_string(clusters) + " clusters of " + std::to_string(gpu_warp_capacity(spec.hw)) +
+        throw InputError(ask + ": this frame has " + std::to_string(clusters) + " clusters of " + std::to_string(sample_cluster_warps(spec.hw)) +
                          " shader warps, and a pilot of " + std::to_string(kMinStrata) + " strata beside the first wave would sample " +
                          percent_text(rate.value_or(1.0)) + " of it," + beyond);
     const bool here = spec.run.fidelity == Fidelity::Interval;

@@ -33,6 +33,7 @@ SamplingOptions sampling_options(const HwConfig& c, const BvhImage& img, const T
     s.seed = o.sample_seed;
     s.unchecked = o.sample_unchecked;
     s.capacity = gpu_warp_capacity(c);
+    s.cluster = sample_cluster_warps(c);
     s.node_blocks = (img.size() + kBlockBytes - 1) / kBlockBytes;
     s.make_workload = o.sample_workload;
     s.shared_workload = o.prepass_workload;

@@ -2,6 +2,7 @@
 // LT run on the SystemC platform (platforms/gpu_platform.h), the interval fidelity without a
 // kernel (platforms/interval_run.h); both take and return these. Plain C++ (no SystemC).
 #pragma once
+#include <algorithm>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -95,8 +96,22 @@ struct TimingResult {
     bool interrupted = false;
 };
 
-// Shader warps the GPU keeps in flight at once (SMs x warp-buffer slots): a sampled run's cluster.
+// Shader warps the RT units hold at once (SMs x warp-buffer slots): the slots of a sampled run's
+// schedule model.
 inline uint32_t gpu_warp_capacity(const HwConfig& c) { return c.sms * c.warp_buffer; }
+// Shader warps a sampled run's cluster holds (docs/sampling.md, "Clusters"): the warps that run
+// together on the GPU, so that a simulated cluster runs beside its neighbours in the frame. With a
+// limit of resident warps (workload.resident_warps, `paper` and `desktop`) those are the warps
+// resident on the SMs, SMs x the limit (or the warp buffer, if larger); a cluster of the warp
+// buffers' warps alone ran beside other clusters' warps, resident with it, that in the frame lie
+// far away: 10 % samples of primary rays at 1024x1024 (6 scenes, 3 draws, interval fidelity) ran
+// 4.9 % from the full run on average under `paper`, 2.2 % with clusters of the resident warps
+// (`desktop`, held out: 4.5 -> 3.4 %); path tracing at 512x512 and 25 % under `paper` 0.7 and
+// 0.9 % (docs/sampling.md, "Clusters"). With every warp resident (`mobile`) an SM takes its warps'
+// traces in rounds, and a cluster is what the warp buffers hold.
+inline uint32_t sample_cluster_warps(const HwConfig& c) {
+    return c.resident_warps ? c.sms * std::max(c.warp_buffer, c.resident_warps) : gpu_warp_capacity(c);
+}
 
 // A timing run's sample (docs/sampling.md), or null for a run of the whole frame: clusters of as
 // many warps as the GPU holds, the functional pre-pass on `image`, warming enough to refill every

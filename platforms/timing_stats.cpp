@@ -167,7 +167,7 @@ void write_sampling(StatsOut& out, const SampleEstimate& est, double rate, uint6
             "the share of the frame's warps simulated (whole clusters, one per stratum)");
     s.value("warps_total", est.warps_total, "shader warps", "of the frame");
     s.value("warps_simulated", est.warps_simulated, "shader warps", "simulated");
-    s.value("cluster_warps", est.design.cluster_warps, "shader warps", "warps per cluster (as many as the GPU holds at once)");
+    s.value("cluster_warps", est.design.cluster_warps, "shader warps", "warps per cluster: those that run together (with a limit of resident warps the SMs' resident warps, else the RT units' warp-buffer slots)");
     s.value("strata", est.design.strata, "strata", "drawn strata (clusters sorted by the pre-pass's work), one cluster simulated each");
     s.value("first_wave_clusters", est.design.first_wave_clusters, "clusters", "the frame's first wave, simulated whole on cold caches");
     s.value("empty_clusters", est.design.empty_clusters, "clusters", "clusters that read no BVH node: no RT work, not simulated");

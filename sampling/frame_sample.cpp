@@ -81,7 +81,7 @@ FrameSample::FrameSample(const SamplingOptions& opt, uint32_t sms, const ShaderT
 std::vector<uint64_t> FrameSample::select(const FrameWarps& frame) {
     const auto t0 = std::chrono::steady_clock::now();
     const SamplingOptions& o = opt_;
-    const uint64_t warps = frame.warps(), cluster = std::max<uint32_t>(1, o.capacity);
+    const uint64_t warps = frame.warps(), cluster = std::max<uint32_t>(1, o.cluster ? o.cluster : o.capacity);
     warps_total_ = warps;
     sampled_ = true;
     check_sample_size(SampleDesign(warps, cluster, o.rate, o.seed), warps, cluster, o);

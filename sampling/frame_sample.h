@@ -19,8 +19,8 @@ namespace rtu {
 
 class FrameSample : public WarpSelection {
 public:
-    // `sms`, `timing`: the GPU the driver runs the frame on (as given to it); `opt.capacity` warps
-    // make a cluster.
+    // `sms`, `timing`: the GPU the driver runs the frame on (as given to it); `opt.cluster` warps
+    // make a cluster, `opt.capacity` are the RT units' warp-buffer slots.
     FrameSample(const SamplingOptions& opt, uint32_t sms, const ShaderTiming& timing);
 
     std::vector<uint64_t> select(const FrameWarps& frame) override;

@@ -16,9 +16,9 @@ struct PrepassResult;    // sampling/prepass.h
 class PrepassWorkload;  // sampling/prepass.h
 
 // rate < 1 (docs/sampling.md): the frame's shader warps (groups of warp_size neighbouring pixel
-// samples) are cut into clusters of `capacity` consecutive warps (as many as the GPU holds, so
-// that the warps running together are neighbours, as in the full frame; smaller clusters drew
-// more strata but ran 5-80 % off, docs/sampling.md). The first wave (the first cluster that reads
+// samples) are cut into clusters of `cluster` consecutive warps (as many as run together on the
+// GPU, so that the warps running together are neighbours, as in the full frame; smaller clusters
+// drew more strata but ran 5-80 % off, docs/sampling.md). The first wave (the first cluster that reads
 // a BVH node, whose warps start together on cold caches) is always simulated;
 // clusters whose traces read no BVH node are never simulated (their RT work is known: none); the
 // rest are sorted by the functional pre-pass's work and split into equal strata, one cluster each
@@ -30,7 +30,8 @@ struct SamplingOptions {
     // an InputError naming the smallest rate and frame that work; true (--sample-unchecked): it
     // runs and reports no interval.
     bool unchecked = false;
-    uint32_t capacity = 32;  // shader warps the GPU keeps in flight at once (SMs x warp-buffer slots)
+    uint32_t capacity = 32;  // shader warps the RT units hold at once (SMs x warp-buffer slots)
+    uint32_t cluster = 0;    // shader warps a cluster holds (0: `capacity`)
     // Functional pre-pass of the schedule estimator: a maker of a fresh instance of the run's
     // workload (the pre-pass's and the warming's threads share it) and a functional tracer that
     // may be called from several threads at once. Without them the clusters are stratified by

@@ -16,6 +16,7 @@
 #include "workloads/rays.h"
 #include "model/traversal.h"
 #include "platforms/sample_segments.h"
+#include "platforms/timing_run.h"
 #include "workloads/input_error.h"
 #include "test_util.h"
 #include <fstream>
@@ -876,4 +877,21 @@ TEST(SampleWarming, FirstTracesWarmTheFirstRoundLaterTracesTheLater) {
         EXPECT_GT(later_warmings[sm], 0u) << "SM " << sm;
         EXPECT_LE(later_warmings[sm], first_warmings[sm]) << "SM " << sm;
     }
+}
+
+// A cluster holds the warps that run together (docs/sampling.md, "Clusters"): with a limit of
+// resident warps, the SMs' resident warps (`paper`: 8 SMs x 16; `desktop`: 30 x 8), or the warp
+// buffers' where those are more; with every warp resident (`mobile`), the warp buffers' (8 x 4).
+// The schedule model's slots stay the warp buffers' in every case.
+TEST(SampleDesign, ClustersHoldTheWarpsThatRunTogether) {
+    const HwConfig mobile = Config::load("mobile").resolve(), paper = Config::load("paper").resolve(),
+                   desktop = Config::load("desktop").resolve();
+    EXPECT_EQ(sample_cluster_warps(mobile), 32u);
+    EXPECT_EQ(sample_cluster_warps(paper), 128u);
+    EXPECT_EQ(sample_cluster_warps(desktop), 240u);
+    EXPECT_EQ(gpu_warp_capacity(paper), 32u);
+    EXPECT_EQ(gpu_warp_capacity(desktop), 120u);
+    HwConfig few = paper;
+    few.resident_warps = 2;  // fewer resident than the warp buffer holds
+    EXPECT_EQ(sample_cluster_warps(few), 32u);
 }
