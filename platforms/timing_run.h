@@ -113,10 +113,10 @@ inline uint32_t sample_cluster_warps(const HwConfig& c) {
     return c.resident_warps ? c.sms * std::max(c.warp_buffer, c.resident_warps) : gpu_warp_capacity(c);
 }
 
-// A timing run's sample (docs/sampling.md), or null for a run of the whole frame: clusters of as
-// many warps as the GPU holds, the functional pre-pass on `image`, warming enough to refill every
-// cache twice. `treelets` as for the run's traversal (may be null). The run's driver takes it as
-// its warp selection; the run sets its on_warm.
+// A timing run's sample (docs/sampling.md), or null for a run of the whole frame: clusters of the
+// warps that run together (sample_cluster_warps), the functional pre-pass on `image`, warming
+// enough to refill every cache twice. `treelets` as for the run's traversal (may be null). The
+// run's driver takes it as its warp selection; the run sets its on_warm.
 std::unique_ptr<FrameSample> frame_sample(const HwConfig& cfg, const BvhImage& image, const TimingOptions& opt, const Treelets* treelets,
                                           const Workload& workload);
 // Why a frame cannot be sampled on this hardware (its schedule model would leave out part of the
