@@ -78,9 +78,11 @@ struct ErrorBounds {
     // The side of the square frame with as many pixel samples at the grid's spp as `spec`'s frame.
     double side(const RunSpec& spec) const;
     // Over the whole grid; with `side`, the worst of the grid's frame sizes on either side of it
-    // (one size on the grid's own).
+    // (one size on the grid's own). `scene` (rtsim's --scene): a size added later without a scene
+    // of the grid does not bound that scene, which the whole grid's bound does then.
     std::optional<Bound> bound(const std::string& fidelity, const std::string& workload) const;
-    std::optional<Bound> bound(const std::string& fidelity, const std::string& workload, double side) const;
+    std::optional<Bound> bound(const std::string& fidelity, const std::string& workload, double side,
+                               const std::string& scene = "") const;
     static ErrorBounds parse(const std::string& json);
     static const ErrorBounds& built_in();
 };

@@ -2040,6 +2040,16 @@ TEST(ErrorBounds, AddedSizesNameTheirScenesAndCommit) {
     const auto whole = b.bound("interval", "pt");  // the whole grid's, added sizes among them
     ASSERT_TRUE(whole);
     EXPECT_EQ(whole->added, at512->added);
+    // A scene of the grid that the added size left out takes the whole grid's bound there; a
+    // scene of the size, or one the grid never had, that size's.
+    const auto c512 = b.bound("interval", "pt", 512, "c");
+    ASSERT_TRUE(c512);
+    EXPECT_EQ(c512->runs, 6u);
+    EXPECT_EQ(c512->worst, 0.05);
+    EXPECT_EQ(c512->added.back(), "512x512 was added later without c: the whole grid's bound");
+    EXPECT_EQ(b.bound("interval", "pt", 512, "a")->worst, 0.02);
+    EXPECT_EQ(b.bound("interval", "pt", 512, "mine.obj")->worst, 0.02);
+    EXPECT_EQ(b.bound("interval", "pt", 128, "c")->worst, 0.01);  // a size of the whole grid
 }
 
 // The sample design's bias bound: per workload kind, and the larger of the two for what the grids
