@@ -105,6 +105,7 @@ std::optional<ErrorBounds::Bound> ErrorBounds::bound(const std::string& fidelity
     if (!all || !bounds[fidelity][workload].contains("by_size")) return all;
     const std::vector<int>& sizes = this->sizes(workload);
     Bound b;
+    b.nearest = true;
     for (size_t i = 0; i < sizes.size(); ++i) {
         // The sizes bracketing `side`: the largest at or below it and the smallest at or above it.
         const bool below = sizes[i] <= side && (i + 1 == sizes.size() || sizes[i + 1] > side);
@@ -211,7 +212,7 @@ ErrorEstimate estimate_of(const RunSpec& spec, const TimingResult& t, const std:
     if (!outside) {
         const ErrorBounds::Bound b = *bounds.bound(fid, spec.workload, bounds.side(spec), spec.scene);
         const std::string bound_basis = "worst |cycles error| against AT in the " + std::to_string(b.runs) + " runs of " + fid + " on " +
-                                        spec.workload + " at the nearest frame sizes of the error grid (" +
+                                        spec.workload + (b.nearest ? " at the nearest frame sizes" : " at every frame size") + " of the error grid (" +
                                         std::to_string(bounds.scenes.size()) + " scenes, configurations " + join(bounds.configs) +
                                         "; rtsim " + bounds.measured_on + (b.added.empty() ? "" : "; " + join(b.added)) +
                                         "; docs/accuracy.md)";

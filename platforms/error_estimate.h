@@ -67,6 +67,8 @@ struct ErrorBounds {
         // Frame sizes added to the grid later (scripts/bench_error_grid.py, EXTEND), as
         // "512x512 added later: 5 scenes (mesh, ...), rtsim COMMIT": their own scenes and commit.
         std::vector<std::string> added;
+        // Taken from the grid's frame sizes nearest the run's (false: over the whole grid).
+        bool nearest = false;
     };
     std::string measured_on;
     std::vector<std::string> scenes, configs;  // configs as NAME or NAME+PREFETCHER

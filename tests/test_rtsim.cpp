@@ -2027,6 +2027,7 @@ TEST(ErrorBounds, AddedSizesNameTheirScenesAndCommit) {
     ASSERT_TRUE(at64);
     EXPECT_EQ(at64->runs, 3u);
     EXPECT_TRUE(at64->added.empty());
+    EXPECT_TRUE(at64->nearest);
     const auto at512 = b.bound("interval", "pt", 512);
     ASSERT_TRUE(at512);
     EXPECT_EQ(at512->runs, 2u);
@@ -2047,6 +2048,7 @@ TEST(ErrorBounds, AddedSizesNameTheirScenesAndCommit) {
     EXPECT_EQ(c512->runs, 6u);
     EXPECT_EQ(c512->worst, 0.05);
     EXPECT_EQ(c512->added.back(), "512x512 was added later without c: the whole grid's bound");
+    EXPECT_FALSE(c512->nearest);  // the basis then says "at every frame size"
     EXPECT_EQ(b.bound("interval", "pt", 512, "a")->worst, 0.02);
     EXPECT_EQ(b.bound("interval", "pt", 512, "mine.obj")->worst, 0.02);
     EXPECT_EQ(b.bound("interval", "pt", 128, "c")->worst, 0.01);  // a size of the whole grid
