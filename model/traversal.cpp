@@ -123,8 +123,7 @@ bool TraversalThread::take_hit(float t, float app_t, float u, float v, uint32_t 
     return true;
 }
 
-void TraversalThread::select_space(const BvhImage& image, uint32_t inst_block) {
-    if (inst_block == space_inst_) return;
+void TraversalThread::enter_space(const BvhImage& image, uint32_t inst_block) {
     space_inst_ = inst_block;
     if (inst_block == kNoId) {
         org_ = ray_.org;

@@ -100,7 +100,12 @@ public:
     const std::deque<StackEntry>& stack() const { return stack_; }
 
 private:
-    void select_space(const BvhImage& image, uint32_t inst_block);
+    // The ray in the space of `inst_block` (kNoId: the world's), as the node to be tested needs;
+    // most steps stay in the space of the step before, tested here inline.
+    void select_space(const BvhImage& image, uint32_t inst_block) {
+        if (inst_block != space_inst_) enter_space(image, inst_block);
+    }
+    void enter_space(const BvhImage& image, uint32_t inst_block);
     // Tests an internal node's child boxes and pushes the children hit (see the file comment).
     void push_children(const InternalNode& n, uint32_t inst_block, StepInfo& info);
     void finish() {

@@ -119,8 +119,13 @@ PrepassResult run_prepass(const FrameWarps& frame, const SamplingOptions& opt, P
     const bool count_first = opt.node_blocks > 0 && n_warps < (uint64_t(1) << 32);
     constexpr uint64_t kUnread = ~uint64_t(0);
     const size_t blocks = count_first ? opt.node_blocks : 0;
-    const std::unique_ptr<std::atomic<uint64_t>[]> in_rounds(new std::atomic<uint64_t>[blocks]), by_warp(new std::atomic<uint64_t>[blocks]);
-    for (size_t b = 0; b < blocks; ++b) in_rounds[b].store(kUnread, std::memory_order_relaxed), by_warp[b].store(kUnread, std::memory_order_relaxed);
+    // A block's two keys side by side: a read looks up both, in one line of the host's cache (two
+    // tables of one key each cost a cache miss in each on a large image).
+    struct alignas(16) FirstRead {
+        std::atomic<uint64_t> in_rounds, by_warp;
+    };
+    const std::unique_ptr<FirstRead[]> first(new FirstRead[blocks]);
+    for (size_t b = 0; b < blocks; ++b) first[b].in_rounds.store(kUnread, std::memory_order_relaxed), first[b].by_warp.store(kUnread, std::memory_order_relaxed);
     std::atomic<size_t> done{0};
     // The threads take the warps in blocks, each the next block not yet taken (for_each_index):
     // with fixed shares of the frame (its first half to one thread, ...) a thread waited while the
@@ -144,8 +149,8 @@ PrepassResult run_prepass(const FrameWarps& frame, const SamplingOptions& opt, P
         for (const WarmFetch& f : p.fetches) {
             const uint64_t b = f.addr / kBlockBytes;
             if (b >= blocks) continue;
-            lower(in_rounds[b], (uint64_t(f.trace) << 32) | wi);
-            lower(by_warp[b], wi);
+            lower(first[b].in_rounds, (uint64_t(f.trace) << 32) | wi);
+            lower(first[b].by_warp, wi);
         }
         const size_t d = ++done;
         if (opt.progress && t == 0 && (d & 63) == 0) {
@@ -165,7 +170,7 @@ PrepassResult run_prepass(const FrameWarps& frame, const SamplingOptions& opt, P
         result.first_reads_in_rounds.assign(n_warps, 0);
         result.first_reads_by_warp.assign(n_warps, 0);
         for (size_t b = 0; b < blocks; ++b) {
-            const uint64_t r = in_rounds[b].load(std::memory_order_relaxed), w = by_warp[b].load(std::memory_order_relaxed);
+            const uint64_t r = first[b].in_rounds.load(std::memory_order_relaxed), w = first[b].by_warp.load(std::memory_order_relaxed);
             if (r != kUnread) ++result.first_reads_in_rounds[r & 0xffffffffu];
             if (w != kUnread) ++result.first_reads_by_warp[w];
         }
