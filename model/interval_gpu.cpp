@@ -123,7 +123,6 @@ void IntervalGpu::start_trace(uint32_t sm, const std::vector<WarpRay>& rays, uin
     *free_slot = 1;
     tr.slot = uint32_t(free_slot - busy.begin());
     tr.live = 0;
-    tr.chunks.clear();
     tr.threads.resize(rays.size());
     for (uint32_t i = 0; i < rays.size(); ++i) {
         Thread& t = tr.threads[i];
@@ -169,6 +168,9 @@ void IntervalGpu::finish(uint32_t id, std::vector<Finished>& finished) {
         f.rays.push_back(t.rt.retired());
     }
     finished.push_back(std::move(f));
+    // Its chunks have all drained: every one is a fetch's of this trace, and its threads are done.
+    for (const Trace::Chunk& c : tr.chunks) free_chunk_wait(c.wait);
+    tr.chunks.clear();
     slot_busy_[tr.sm][tr.slot] = 0;
     free_traces_.push_back(id);
 }
@@ -211,7 +213,7 @@ void IntervalGpu::send_prefetch(uint32_t sm, uint64_t cycle) {
         const Served s = read(sm, chunk, cycle, ReqKind::Prefetch);
         // Its response takes a cycle of the response FIFO's drain, as a demand's does
         // (model/response_fifo.h).
-        drain_[sm].book(std::max(s.at, cycle + 1));
+        queue_drain(sm, std::max(s.at, cycle + 1), kNone);
         ++rt_[sm].prefetch_queue.sent;
         ++rt_[sm].prefetch_queue.answered;
     }
@@ -231,7 +233,118 @@ void IntervalGpu::send_shader_read(uint32_t sm, uint64_t cycle) {
     if (loads.owed()) events_.push({cycle + 1, next_seq_++, sm, kShader});
 }
 
-uint64_t IntervalGpu::next_event() const { return events_.empty() ? ~0ull : events_.top().at; }
+// The response FIFO (AT's model/response_fifo.h) drains one chunk a cycle in the order the chunks
+// reach it. A fetch knows when its chunks arrive as soon as it runs, but a chunk of a later fetch
+// may arrive before one of an earlier fetch (an L1 hit before an earlier miss), so a chunk's drain
+// cycle is booked only when no chunk that reaches the FIFO before it can still be sent: a fetch
+// scheduled in cycle c sends its chunks from c + 1, which reach the FIFO from c + 2, so before
+// the fetches of cycle c run, every chunk that may drain by c + 1 is known, and is booked in
+// arrival order (drain_until). Booked at once when the fetch ran, two threads' reads of a
+// two-chunk node one cycle apart drained back to back instead of interleaved, which split
+// fetches AT coalesces (docs/interval.md).
+void IntervalGpu::queue_drain(uint32_t sm, uint64_t at, uint32_t wait) { drains_.push({at, next_drain_seq_++, sm, wait}); }
+
+// The pools' records are reused: a free list each, so that a frame allocates only its peak in flight.
+template <class T>
+static uint32_t take(std::vector<T>& pool, std::vector<uint32_t>& free) {
+    if (free.empty()) {
+        pool.emplace_back();
+        return uint32_t(pool.size() - 1);
+    }
+    const uint32_t id = free.back();
+    free.pop_back();
+    return id;
+}
+
+uint32_t IntervalGpu::new_fetch(uint64_t ready) {
+    const uint32_t id = take(fetch_waits_, free_fetch_waits_);
+    FetchWait& f = fetch_waits_[id];
+    f.done = ready;
+    f.pending = 0;
+    f.first = f.last = kNone;
+    f.l1_miss = f.dram = false;
+    f.in_cycle = true;
+    return id;
+}
+
+uint32_t IntervalGpu::new_chunk_wait(uint32_t fetch) {
+    const uint32_t id = take(chunk_waits_, free_chunk_waits_);
+    chunk_waits_[id] = {~0ull, fetch, kNone};
+    return id;
+}
+
+void IntervalGpu::free_chunk_wait(uint32_t c) { free_chunk_waits_.push_back(c); }
+
+void IntervalGpu::join(uint32_t chunk, uint32_t fetch) {
+    const uint32_t j = take(joins_, free_joins_);
+    joins_[j] = {fetch, chunk_waits_[chunk].joins};
+    chunk_waits_[chunk].joins = j;
+}
+
+void IntervalGpu::drain_until(uint64_t upto, std::vector<Finished>& finished) {
+    while (!drains_.empty() && drains_.top().at <= upto) {
+        const Drain d = drains_.top();
+        drains_.pop();
+        // In (at, seq) order: each takes the first free drain cycle from `at`, as a FIFO.
+        const uint64_t drained = drain_[d.sm].book(d.at);
+        if (d.wait == kNone) continue;  // a prefetch's: no thread waits for it
+        ChunkWait& c = chunk_waits_[d.wait];
+        c.drained = drained;
+        const uint32_t sender = c.fetch;
+        uint32_t j = c.joins;
+        c.joins = kNone;
+        // Without rt.merge_in_flight no later read joins it; with it, the trace's list holds it
+        // until it is dropped there (run_event) or the trace ends (finish).
+        if (!cfg_.merge_in_flight) free_chunk_wait(d.wait);
+        // Its sender, then the fetches that joined it (none is freed before all are told).
+        const auto answer = [&](uint32_t id) {
+            FetchWait& f = fetch_waits_[id];
+            f.done = std::max(f.done, drained);
+            if (--f.pending == 0) fetched(id, finished);
+        };
+        answer(sender);
+        while (j != kNone) {
+            const Join n = joins_[j];
+            free_joins_.push_back(j);
+            answer(n.fetch);
+            j = n.next;
+        }
+    }
+}
+
+void IntervalGpu::fetched(uint32_t id, std::vector<Finished>& finished) {
+    const FetchWait f = fetch_waits_[id];
+    if (!f.in_cycle) free_fetch_waits_.push_back(id);
+    Trace& tr = traces_[f.trace];
+    for (uint32_t th = f.first; th != kNone;) {
+        const uint32_t next = tr.threads[th].next_waiting;  // read before the thread moves on
+        thread_fetched(f.trace, th, f.done, finished);
+        if (th == f.last) break;
+        th = next;
+    }
+}
+
+// A thread's fetch has drained at `done`: its tests (or the descriptor's decode) take `after`
+// cycles, then it fetches its next node, or is done.
+void IntervalGpu::thread_fetched(uint32_t trace, uint32_t thread, uint64_t done, std::vector<Finished>& finished) {
+    Trace& tr = traces_[trace];
+    Thread& t = tr.threads[thread];
+    rt_[tr.sm].thread_cycles[ThreadStatus::WaitMemory] += done - t.ready;
+    t.ready = done + t.after;
+    if (t.descriptor_done || !t.rt.trav.done()) {
+        events_.push({t.ready, next_seq_++, trace, thread});
+        return;
+    }
+    tr.end = std::max(tr.end, t.ready);
+    if (--tr.live == 0) finish(trace, finished);
+}
+
+// The next scheduled fetch, or the cycle before the earliest queued chunk may drain.
+uint64_t IntervalGpu::next_event() const {
+    const uint64_t fetch = events_.empty() ? ~0ull : events_.top().at;
+    const uint64_t drain = drains_.empty() ? ~0ull : drains_.top().at - 1;
+    return std::min(fetch, drain);
+}
 
 // The events of one cycle run together, in the warp scheduler's order (model/warp_scheduler.h):
 // the prefetch queues first (they only try the request port in this cycle, which no demand of
@@ -241,7 +354,20 @@ uint64_t IntervalGpu::next_event() const { return events_.empty() ? ~0ull : even
 // shader ports. No event of a cycle schedules another in the same cycle, but for a shader port's
 // first read at a trace's end, which runs after the cycle's batch, as the shader ports run last.
 void IntervalGpu::run_next(std::vector<Finished>& finished) {
-    const uint64_t at = events_.top().at;
+    const uint64_t at = next_event();
+    if (at != coalesce_at_) {
+        for (uint32_t id : coalesced_) {
+            FetchWait& f = fetch_waits_[id];
+            f.in_cycle = false;
+            if (f.pending == 0) free_fetch_waits_.push_back(id);  // drained, or joined drained chunks only
+        }
+        coalescer_.clear();
+        coalesced_.clear();
+        coalesce_at_ = at;
+    }
+    // The responses that may drain by the cycle after: none of this cycle's fetches comes before them.
+    drain_until(at + 1, finished);
+    if (events_.empty() || events_.top().at != at) return;
     batch_.clear();
     while (!events_.empty() && events_.top().at == at) {
         batch_.push_back(events_.top());
@@ -274,11 +400,6 @@ void IntervalGpu::run_event(const Event& ev, std::vector<Finished>& finished) {
     advance(ev.at);  // every later fetch is scheduled at or after this one
     if (ev.thread == kPrefetch) return send_prefetch(ev.trace, ev.at);
     if (ev.thread == kShader) return send_shader_read(ev.trace, ev.at);
-    if (ev.at != coalesce_at_) {
-        coalescer_.clear();
-        coalesced_.clear();
-        coalesce_at_ = ev.at;
-    }
     Trace& tr = traces_[ev.trace];
     Thread& t = tr.threads[ev.thread];
     const uint32_t sm = tr.sm;
@@ -297,7 +418,6 @@ void IntervalGpu::run_event(const Event& ev, std::vector<Finished>& finished) {
     sched_cycle_[sm] = ev.at;
     sched_trace_[sm] = ev.trace;
     PortCalendar& issue = issue_[sm];
-    PortCalendar& drain = drain_[sm];
     const StackEntry e = t.rt.trav.peek();
     // The read this event makes: a whole node, a leaf's descriptor (the first of a two-step leaf
     // read, model/node_fetch.h), or the leaf after its descriptor.
@@ -319,28 +439,40 @@ void IntervalGpu::run_event(const Event& ev, std::vector<Finished>& finished) {
     const uint32_t chunks = descriptor ? kDescriptorChunks : chunks_of(e.type);
     // Threads of one trace that make the same read scheduled in the same cycle share one fetch.
     const auto [g, fresh] = coalescer_.add({ev.trace, e.addr | (descriptor ? 2ull : 0ull)});
+    uint32_t id;
     if (!fresh) {
         ++rt_[sm].coalesced_fetches;
+        id = coalesced_[g];
     } else {
-        // Built in place, field by field (a Fetch built on the stack and copied in is read back as
-        // one word after narrow stores, which the host's store buffer cannot forward).
-        Fetch& f = coalesced_.emplace_back();
-        f.done = t.ready;
-        f.l1_miss = f.dram = false;
+        id = new_fetch(t.ready);
+        coalesced_.push_back(id);
+        FetchWait& f = fetch_waits_[id];
         uint32_t sent_chunks = 0;
         if (cfg_.merge_in_flight)
-            tr.chunks.erase(std::remove_if(tr.chunks.begin(), tr.chunks.end(), [&](const auto& k) { return k.second.at <= ev.at; }),
+            tr.chunks.erase(std::remove_if(tr.chunks.begin(), tr.chunks.end(),
+                                           [&](const Trace::Chunk& k) {
+                                               const uint64_t drained = chunk_waits_[k.wait].drained;
+                                               if (drained > ev.at) return false;  // (~0: not drained yet)
+                                               free_chunk_wait(k.wait);
+                                               return true;
+                                           }),
                             tr.chunks.end());
         for (uint32_t c = 0; c < chunks; ++c) {
             const uint64_t addr = chunk_address(e.addr, c);
             if (cfg_.merge_in_flight) {
                 // The warp has this chunk queued or in flight: its response serves this read too
                 // (as RtUnitCore::schedule_warp).
-                const auto it = std::find_if(tr.chunks.begin(), tr.chunks.end(), [&](const auto& k) { return k.first == addr; });
+                const auto it = std::find_if(tr.chunks.begin(), tr.chunks.end(), [&](const Trace::Chunk& k) { return k.addr == addr; });
                 if (it != tr.chunks.end()) {
-                    f.done = std::max(f.done, it->second.at);
-                    f.l1_miss |= it->second.l1_miss;
-                    f.dram |= it->second.dram;
+                    const uint64_t drained = chunk_waits_[it->wait].drained;
+                    if (drained != ~0ull) {
+                        f.done = std::max(f.done, drained);
+                    } else {
+                        join(it->wait, id);
+                        ++f.pending;
+                    }
+                    f.l1_miss |= it->l1_miss;
+                    f.dram |= it->dram;
                     ++rt_[sm].merged_in_flight;
                     continue;
                 }
@@ -351,49 +483,53 @@ void IntervalGpu::run_event(const Event& ev, std::vector<Finished>& finished) {
             const Served s = read(sm, addr, sent, ReqKind::Demand);
             // Drained from the response FIFO one per cycle, at the earliest in the cycle after
             // the request left (an L1 hit's answer comes in that same cycle).
-            const uint64_t drained = drain.book(std::max(s.at, sent + 1));
-            f.done = std::max(f.done, drained);
+            const uint32_t w = new_chunk_wait(id);
+            queue_drain(sm, std::max(s.at, sent + 1), w);
+            ++f.pending;
             f.l1_miss |= s.l1_miss;
             f.dram |= s.dram;
             if (cfg_.merge_in_flight) {  // none was in flight (above)
-                // Written field by field in place: a pair built on the stack and copied in is read
-                // back as one word just after its narrow stores, which the host's store buffer
+                // Written field by field in place: an entry built on the stack and copied in is
+                // read back as one word just after its narrow stores, which the host's store buffer
                 // cannot forward (perf: a fifth of this function's samples on that load).
-                auto& k = tr.chunks.emplace_back();
-                k.first = addr;
-                k.second.at = drained;
-                k.second.l1_miss = s.l1_miss;
-                k.second.dram = s.dram;
+                Trace::Chunk& k = tr.chunks.emplace_back();
+                k.addr = addr;
+                k.wait = w;
+                k.l1_miss = s.l1_miss;
+                k.dram = s.dram;
             }
             ++sent_chunks;
         }
         rt_[sm].chunk_requests += sent_chunks;
         rt_[sm].responses += sent_chunks;
     }
-    const Fetch& f = coalesced_[g];
+    FetchWait& f = fetch_waits_[id];
     t.fetch_l1_miss |= f.l1_miss;
     t.fetch_dram |= f.dram;
-    rt_[sm].thread_cycles[ThreadStatus::WaitMemory] += f.done - t.ready;
     if (descriptor) {
         // Decode the descriptor, then read the leaf.
         const uint32_t decode = std::max<uint32_t>(1, cfg_.lat.leaf_descriptor);
         rt_[sm].thread_cycles[ThreadStatus::InMath] += decode;
-        t.ready = f.done + decode;
+        t.after = decode;
         t.descriptor_done = true;
-        events_.push({t.ready, next_seq_++, ev.trace, ev.thread});
-        return;
+    } else {
+        // The node's tests run when its data has drained; what they find does not depend on when.
+        t.descriptor_done = false;
+        const StepInfo info = t.rt.complete_fetch(rt_[sm], t.fetch_class, t.fetch_l1_miss, t.fetch_dram, image_, *prefetcher_);
+        const uint32_t math = rt_math_latency(cfg_.lat, info, cfg_.leaf_descriptor_read);
+        rt_[sm].thread_cycles[ThreadStatus::InMath] += math;
+        t.after = math;
     }
-    t.descriptor_done = false;
-    const StepInfo info = t.rt.complete_fetch(rt_[sm], t.fetch_class, t.fetch_l1_miss, t.fetch_dram, image_, *prefetcher_);
-    const uint32_t math = rt_math_latency(cfg_.lat, info, cfg_.leaf_descriptor_read);
-    rt_[sm].thread_cycles[ThreadStatus::InMath] += math;
-    t.ready = f.done + math;
-    if (!t.rt.trav.done()) {
-        events_.push({t.ready, next_seq_++, ev.trace, ev.thread});
-        return;
+    FetchWait& w = fetch_waits_[id];
+    if (w.pending == 0) return thread_fetched(ev.trace, ev.thread, w.done, finished);  // it joined drained chunks only
+    // Waits, after the threads that joined the fetch before it.
+    if (w.first == kNone) {
+        w.trace = ev.trace;
+        w.first = ev.thread;
+    } else {
+        tr.threads[w.last].next_waiting = ev.thread;
     }
-    tr.end = std::max(tr.end, t.ready);
-    if (--tr.live == 0) finish(ev.trace, finished);
+    w.last = ev.thread;
 }
 
 }  // namespace rtu

@@ -16,7 +16,11 @@
 // sector remembers the cycle its data arrives (a later read before then waits for it, as an
 // MSHR merge would), and MSHR counts are kept (a miss waits for a free one, as in LT). An L1 read
 // past the MSHR's merge limit is a reservation fail: it retries when the sector arrives, and the
-// RT unit's request port is held until then (END_REQ withheld, as in AT). The warp scheduler picks
+// RT unit's request port is held until then (END_REQ withheld, as in AT). The response FIFO
+// drains one chunk per cycle in the order the chunks arrive, as AT's: a chunk's drain cycle is
+// booked once every chunk that can arrive before it is known (the cycle before it arrives; a
+// fetch books its chunks from the cycle after its own), and the thread's next fetch is scheduled
+// when its last chunk has drained. The warp scheduler picks
 // one trace per SM and cycle, by rt.warp_scheduler (round robin over the warp-buffer slots, or
 // oldest first); threads of the others wait a cycle. Not modelled, against AT: the L2's merge
 // limit, the DRAM's request queue and FR-FCFS reordering.
@@ -122,7 +126,9 @@ private:
 
     struct Thread {
         RtThread rt;
-        uint64_t ready = 0;  // cycle its next fetch is scheduled
+        uint64_t ready = 0;  // cycle its next fetch is scheduled; while it waits for a fetch, the cycle it was
+        uint32_t after = 0;  // while it waits for a fetch: the cycles from the fetch's last drain to its next
+        uint32_t next_waiting = 0;  // while it waits for a fetch: the next thread of the trace waiting for it
         uint8_t fetch_class = 0;           // pop-streak class of the node being read
         bool fetch_l1_miss = false, fetch_dram = false;
         bool descriptor_done = false;      // a two-step leaf read: the descriptor is read, the leaf is next
@@ -133,12 +139,17 @@ private:
         uint64_t age = 0;   // order of entry into a warp buffer (the warp scheduler's oldest first)
         uint32_t slot = 0;  // its warp-buffer slot (the scheduler's round robin)
         std::vector<Thread> threads;
-        // rt.merge_in_flight: the trace's demand chunks in flight, by address, where each was
-        // served and the cycle its response drains (`at`; a read scheduled before then joins it).
-        // Fetches run in time order, so a chunk once drained is never joined again: each fetch
+        // rt.merge_in_flight: the trace's demand chunks in flight, by address: where each was
+        // served and its response (`wait`, in chunk_waits_; a read scheduled before it drains joins
+        // it). Fetches run in time order, so a chunk once drained is never joined again: each fetch
         // drops those first, which keeps the list as short as the trace's reads in flight (a map
         // of every chunk the trace read cost 15 % of party's run in host cache misses).
-        std::vector<std::pair<uint64_t, Served>> chunks;
+        struct Chunk {
+            uint64_t addr;
+            uint32_t wait;
+            bool l1_miss, dram;
+        };
+        std::vector<Chunk> chunks;
     };
     // A thread's next node fetch, scheduled at `at`; or, with thread == kPrefetch, SM `trace`'s
     // prefetch queue trying to send its oldest chunk in cycle `at`; or, with thread == kShader,
@@ -148,10 +159,41 @@ private:
         uint64_t at, seq;  // seq: scheduling order, for ties
         uint32_t trace, thread;
     };
-    struct Fetch {  // a node fetch scheduled in the current cycle, for coalescing
-        uint64_t done;  // the cycle its last chunk drained
-        bool l1_miss, dram;
+    // A node fetch: the threads that share it (coalesced in its cycle, all of one trace) wait until
+    // the last of its chunks' responses, its own and those it joined (rt.merge_in_flight), has
+    // drained. Its threads in the order they joined it: first, then each Thread::next_waiting.
+    static constexpr uint32_t kNone = ~0u;
+    struct FetchWait {
+        uint64_t done = 0;      // the latest drain cycle known so far
+        uint32_t pending = 0;   // chunk responses not drained yet
+        uint32_t trace = 0, first = kNone, last = kNone;
+        bool l1_miss = false, dram = false;
+        bool in_cycle = false;  // still in coalesced_ (its cycle's fetches); freed after both
     };
+    // A demand chunk's response: the cycle it drained (~0: not yet), the fetch that sent it, and
+    // the later fetches that joined it (a list in joins_).
+    struct ChunkWait {
+        uint64_t drained = ~0ull;
+        uint32_t fetch = 0, joins = kNone;
+    };
+    struct Join {
+        uint32_t fetch, next;
+    };
+    // A chunk's response queued for the response FIFO's drain: it may drain from cycle `at` (its
+    // data is at the RT unit, at the earliest the cycle after it left), in the order of (at, the
+    // order the chunks were sent in: seq). wait: its ChunkWait, or kNone for a prefetch's.
+    struct Drain {
+        uint64_t at, seq;
+        uint32_t sm, wait;
+    };
+    void queue_drain(uint32_t sm, uint64_t at, uint32_t wait);
+    void drain_until(uint64_t upto, std::vector<Finished>& finished);  // drains every response that may drain by `upto`
+    void fetched(uint32_t fetch, std::vector<Finished>& finished);     // a fetch's last chunk drained
+    void thread_fetched(uint32_t trace, uint32_t thread, uint64_t done, std::vector<Finished>& finished);
+    uint32_t new_fetch(uint64_t ready);
+    uint32_t new_chunk_wait(uint32_t fetch);
+    void free_chunk_wait(uint32_t c);
+    void join(uint32_t chunk, uint32_t fetch);  // `fetch` waits for `chunk` too (rt.merge_in_flight)
     void finish(uint32_t trace, std::vector<Finished>& finished);
     void run_event(const Event& ev, std::vector<Finished>& finished);
     void send_prefetch(uint32_t sm, uint64_t cycle);
@@ -161,10 +203,18 @@ private:
     std::vector<uint32_t> free_traces_;
     EventWheel<Event> events_;
     uint64_t next_seq_ = 0;
-    // Fetches scheduled at coalesce_at_, by (trace, node address).
+    // Fetches scheduled at coalesce_at_, by (trace, node address): their FetchWait.
     FetchCoalescer<std::pair<uint32_t, uint64_t>> coalescer_;
-    std::vector<Fetch> coalesced_;
+    std::vector<uint32_t> coalesced_;
     uint64_t coalesce_at_ = ~0ull;
+    std::vector<FetchWait> fetch_waits_;
+    std::vector<uint32_t> free_fetch_waits_;
+    std::vector<ChunkWait> chunk_waits_;
+    std::vector<uint32_t> free_chunk_waits_;
+    std::vector<Join> joins_;
+    std::vector<uint32_t> free_joins_;
+    EventWheel<Drain> drains_;
+    uint64_t next_drain_seq_ = 0;
     std::vector<uint64_t> sched_cycle_;   // per SM: the last cycle its warp scheduler picked a trace
     std::vector<uint32_t> sched_trace_;   // per SM: that trace
     std::vector<uint32_t> rr_next_;       // per SM, round robin: the slot the scheduler looks at first

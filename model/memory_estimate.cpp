@@ -17,11 +17,13 @@ namespace {
 // - per thread in flight (SMs x warp-buffer slots x warp size, at most the frame's paths):
 //   --set gpu.sms=1024 --set rt.warp_buffer=64 against gpu.sms=8, 1448x1448 at 1 spp: 2.3 KiB
 //   (interval) to 2.5 KiB (AT) per thread: three std::deque (traversal stack, deferred entries,
-//   recent prefetches) of a 512 B block and a 64 B map each, and the thread's state;
+//   recent prefetches) of a 512 B block and a 64 B map each, and the thread's state. Measured
+//   again on 2026-12-03 for the interval fidelity, whose chunks in flight now wait in a queue for
+//   the response FIFO's drain (model/interval_gpu.h): 3.3 KiB per thread (rtsim 3d0f1e4: 2.7 KiB);
 // - per path: the 8-SM run above against an 8x8 frame: 167 B per path (the first rays, the
 //   shader warps and their records in the workload driver).
 constexpr uint64_t kPerSmSystemC = 364 << 10, kPerSmInterval = 30 << 10;
-constexpr uint64_t kPerThread = 2560;
+constexpr uint64_t kPerThreadSystemC = 2560, kPerThreadInterval = 3400;
 constexpr uint64_t kPerPath = 176;
 // Functional: cornell primary rays (one ray a path) at 1024x1024 against 64x64, 298 B a path
 // (the traced ray kept, its pixel, the workload's state); path tracing keeps every bounce's ray
@@ -68,7 +70,7 @@ MemoryEstimate estimate_memory(const HwConfig& cfg, Fidelity fidelity, uint64_t 
     e.parts.push_back({"RT units (gpu.sms " + std::to_string(cfg.sms) + ")", cfg.sms * per_sm});
     const uint64_t threads = std::min<uint64_t>(uint64_t(cfg.sms) * cfg.warp_buffer * cfg.warp_size, paths);
     e.parts.push_back({"threads in flight (gpu.sms x rt.warp_buffer x rt.warp_size, at most the frame's paths: " + std::to_string(threads) + ")",
-                       threads * kPerThread});
+                       threads * (fidelity == Fidelity::Interval ? kPerThreadInterval : kPerThreadSystemC)});
     e.parts.push_back({"the frame's paths (width x height x spp, or the ray file's rays: " + std::to_string(paths) + ")", paths * kPerPath});
     std::stable_sort(e.parts.begin(), e.parts.end(), [](const MemoryEstimate::Part& a, const MemoryEstimate::Part& b) { return a.bytes > b.bytes; });
     return e;

@@ -35,7 +35,10 @@ sizes = {"primary": [int(x) for x in os.environ.get("PRIMARY_SIZES", "64,128,256
          "pt": [int(x) for x in os.environ.get("PT_SIZES", "64,128,256").split(",") if x]}
 configs = os.environ.get("CONFIGS", "mobile,paper,paper+ttp,desktop,mobile+ttp").split(",")
 seed = int(os.environ.get("SEED", "1"))
-fids = ["at", "lt", "interval"]
+fast = [f for f in os.environ.get("FIDS", "lt,interval").split(",") if f]
+if not fast or not set(fast) <= {"lt", "interval"}:
+    sys.exit(f"FIDS: comma-separated from lt and interval, not {os.environ['FIDS']!r}")
+fids = ["at"] + fast
 os.makedirs(out, exist_ok=True)
 
 
@@ -153,7 +156,7 @@ bounds = {"measured_on": commit, "date": datetime.date.today().isoformat(),
           "command": command(), "grid": grid, "bounds": {}}
 # Per fidelity and workload: over the whole grid and per frame size (rtsim takes the worst of the
 # grid's frame sizes on either side of a run's frame).
-for fid in ("lt", "interval"):
+for fid in fast:
     bounds["bounds"][fid] = {}
     for wl in ("primary", "pt"):
         sel = [r for r in rows if r["fidelity"] == fid and r["workload"] == wl]
