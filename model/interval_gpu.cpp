@@ -282,33 +282,48 @@ void IntervalGpu::join(uint32_t chunk, uint32_t fetch) {
 }
 
 void IntervalGpu::drain_until(uint64_t upto, std::vector<Finished>& finished) {
-    while (!drains_.empty() && drains_.top().at <= upto) {
-        const Drain d = drains_.top();
-        drains_.pop();
-        // In (at, seq) order: each takes the first free drain cycle from `at`, as a FIFO.
-        const uint64_t drained = drain_[d.sm].book(d.at);
-        if (d.wait == kNone) continue;  // a prefetch's: no thread waits for it
-        ChunkWait& c = chunk_waits_[d.wait];
-        c.drained = drained;
-        const uint32_t sender = c.fetch;
-        uint32_t j = c.joins;
-        c.joins = kNone;
-        // Without rt.merge_in_flight no later read joins it; with it, the trace's list holds it
-        // until it is dropped there (run_event) or the trace ends (finish).
-        if (!cfg_.merge_in_flight) free_chunk_wait(d.wait);
-        // Its sender, then the fetches that joined it (none is freed before all are told).
-        const auto answer = [&](uint32_t id) {
-            FetchWait& f = fetch_waits_[id];
-            f.done = std::max(f.done, drained);
-            if (--f.pending == 0) fetched(id, finished);
-        };
-        answer(sender);
-        while (j != kNone) {
-            const Join n = joins_[j];
-            free_joins_.push_back(j);
-            answer(n.fetch);
-            j = n.next;
-        }
+    while (!drains_.empty() && drains_.top().at <= upto) drain_next(finished);
+}
+
+// The responses that the next cycles' stops would drain before anything else happens: one whose
+// cycle before it comes no later than the next fetch and before the next trace starts (`slot`,
+// or a slot a trace finished here frees) is drained now, in the same order, and the caller runs
+// one stop fewer for it (rtsim's loop: a slot's trace starts before the fetches of its cycle).
+void IntervalGpu::drain_ahead(uint64_t slot, std::vector<Finished>& finished) {
+    for (size_t seen = 0; !drains_.empty();) {
+        for (; seen < finished.size(); ++seen) slot = std::min(slot, finished[seen].end + 1);
+        const uint64_t at = drains_.top().at;
+        if (at > slot || (!events_.empty() && at > events_.top().at + 1)) return;
+        drain_next(finished);
+    }
+}
+
+void IntervalGpu::drain_next(std::vector<Finished>& finished) {
+    const Drain d = drains_.top();
+    drains_.pop();
+    // In (at, seq) order: each takes the first free drain cycle from `at`, as a FIFO.
+    const uint64_t drained = drain_[d.sm].book(d.at);
+    if (d.wait == kNone) return;  // a prefetch's: no thread waits for it
+    ChunkWait& c = chunk_waits_[d.wait];
+    c.drained = drained;
+    const uint32_t sender = c.fetch;
+    uint32_t j = c.joins;
+    c.joins = kNone;
+    // Without rt.merge_in_flight no later read joins it; with it, the trace's list holds it
+    // until it is dropped there (run_event) or the trace ends (finish).
+    if (!cfg_.merge_in_flight) free_chunk_wait(d.wait);
+    // Its sender, then the fetches that joined it (none is freed before all are told).
+    const auto answer = [&](uint32_t id) {
+        FetchWait& f = fetch_waits_[id];
+        f.done = std::max(f.done, drained);
+        if (--f.pending == 0) fetched(id, finished);
+    };
+    answer(sender);
+    while (j != kNone) {
+        const Join n = joins_[j];
+        free_joins_.push_back(j);
+        answer(n.fetch);
+        j = n.next;
     }
 }
 
@@ -353,7 +368,12 @@ uint64_t IntervalGpu::next_event() const {
 // authors' scheduler, the first non-stalled warp in uid order, shader.cc l.3254-3267), then the
 // shader ports. No event of a cycle schedules another in the same cycle, but for a shader port's
 // first read at a trace's end, which runs after the cycle's batch, as the shader ports run last.
-void IntervalGpu::run_next(std::vector<Finished>& finished) {
+void IntervalGpu::run_next(std::vector<Finished>& finished, uint64_t slot) {
+    run_cycle(finished);
+    drain_ahead(slot, finished);
+}
+
+void IntervalGpu::run_cycle(std::vector<Finished>& finished) {
     const uint64_t at = next_event();
     if (at != coalesce_at_) {
         for (uint32_t id : coalesced_) {

@@ -74,8 +74,9 @@ public:
     // The cycle of the earliest scheduled node fetch (~0: none).
     uint64_t next_event() const;
     // Runs that fetch: its chunks, the node's tests, and the thread's next fetch. A trace whose
-    // last thread is done is appended to `finished`.
-    void run_next(std::vector<Finished>& finished);
+    // last thread is done is appended to `finished`. `slot`: the cycle the next trace may start
+    // (start_trace), ~0 if none is due.
+    void run_next(std::vector<Finished>& finished, uint64_t slot = ~0ull);
 
     // RT-unit statistics per SM (thread_cycles: WaitMemory from a fetch's scheduling to its
     // data, InMath, and Idle for finished threads waiting for their trace).
@@ -188,6 +189,9 @@ private:
     };
     void queue_drain(uint32_t sm, uint64_t at, uint32_t wait);
     void drain_until(uint64_t upto, std::vector<Finished>& finished);  // drains every response that may drain by `upto`
+    void drain_ahead(uint64_t slot, std::vector<Finished>& finished);
+    void drain_next(std::vector<Finished>& finished);  // the first response queued
+    void run_cycle(std::vector<Finished>& finished);  // run_next less drain_ahead
     void fetched(uint32_t fetch, std::vector<Finished>& finished);     // a fetch's last chunk drained
     void thread_fetched(uint32_t trace, uint32_t thread, uint64_t done, std::vector<Finished>& finished);
     uint32_t new_fetch(uint64_t ready);

@@ -75,7 +75,7 @@ TimingResult run_interval(const HwConfig& cfg, const BvhImage& image, Workload& 
                     ++idle[sm];
             }
         } else {
-            gpu.run_next(finished);
+            gpu.run_next(finished, slot_at);
         }
         for (IntervalGpu::Finished& f : finished) {
             driver.retire(f.sm, f.rays, f.end);
