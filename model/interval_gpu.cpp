@@ -540,16 +540,15 @@ void IntervalGpu::run_event(const Event& ev, std::vector<Finished>& finished) {
         rt_[sm].thread_cycles[ThreadStatus::InMath] += math;
         t.after = math;
     }
-    FetchWait& w = fetch_waits_[id];
-    if (w.pending == 0) return thread_fetched(ev.trace, ev.thread, w.done, finished);  // it joined drained chunks only
+    if (f.pending == 0) return thread_fetched(ev.trace, ev.thread, f.done, finished);  // it joined drained chunks only
     // Waits, after the threads that joined the fetch before it.
-    if (w.first == kNone) {
-        w.trace = ev.trace;
-        w.first = ev.thread;
+    if (f.first == kNone) {
+        f.trace = ev.trace;
+        f.first = ev.thread;
     } else {
-        tr.threads[w.last].next_waiting = ev.thread;
+        tr.threads[f.last].next_waiting = ev.thread;
     }
-    w.last = ev.thread;
+    f.last = ev.thread;
 }
 
 }  // namespace rtu
