@@ -130,6 +130,11 @@ std::optional<ErrorBounds::Bound> ErrorBounds::bound(const std::string& fidelity
     return b;
 }
 
+std::string ErrorBounds::measured_on_for(const std::string& fidelity) const {
+    if (bounds.contains(fidelity) && bounds[fidelity].contains("measured_on")) return bounds[fidelity]["measured_on"].get<std::string>();
+    return measured_on;
+}
+
 ErrorBounds ErrorBounds::parse(const std::string& text) {
     const nlohmann::json j = nlohmann::json::parse(text);
     ErrorBounds b;
@@ -214,7 +219,7 @@ ErrorEstimate estimate_of(const RunSpec& spec, const TimingResult& t, const std:
         const std::string bound_basis = "worst |cycles error| against AT in the " + std::to_string(b.runs) + " runs of " + fid + " on " +
                                         spec.workload + (b.nearest ? " at the nearest frame sizes" : " at every frame size") + " of the error grid (" +
                                         std::to_string(bounds.scenes.size()) + " scenes, configurations " + join(bounds.configs) +
-                                        "; rtsim " + bounds.measured_on + (b.added.empty() ? "" : "; " + join(b.added)) +
+                                        "; rtsim " + bounds.measured_on_for(fid) + (b.added.empty() ? "" : "; " + join(b.added)) +
                                         "; docs/accuracy.md)";
         // A check whose interval reaches beyond the bound may show the bound does not hold here:
         // the larger stands.

@@ -71,6 +71,9 @@ struct ErrorBounds {
         bool nearest = false;
     };
     std::string measured_on;
+    // The commit a fidelity's bounds were measured on: its own where its whole grid was run again
+    // after a change to it alone (scripts/bench_error_grid.py, REPLACE), else the file's.
+    std::string measured_on_for(const std::string& fidelity) const;
     std::vector<std::string> scenes, configs;  // configs as NAME or NAME+PREFETCHER
     std::vector<int> primary_sizes, pt_sizes;  // square frames
     int spp = 2;

@@ -17,7 +17,11 @@ frame sizes added, each size's entry naming its own scenes and commit; the confi
 the file's, and a size it already has is refused), WIDEN (a bounds file of the whole grid, e.g.
 platforms/configs/error_bounds.json: this grid reruns some of its configurations after a change
 that leaves the others bit-identical; OUTDIR/error_bounds.json is then that file with each frame
-size's worst raised to this grid's where larger, and its commit naming the rerun)."""
+size's worst raised to this grid's where larger, and its commit naming the rerun), FIDS (the fast
+fidelities to run beside AT: lt,interval), REPLACE (a bounds file of the whole grid, e.g.
+platforms/configs/error_bounds.json: this grid reruns every configuration, scene and frame size
+of the FIDS fidelities after a change to them alone; OUTDIR/error_bounds.json is then that file
+with those fidelities' bounds replaced by this grid's, each naming the commit it was measured on)."""
 import concurrent.futures as cf
 import datetime
 import itertools
@@ -140,10 +144,25 @@ def widen(base, new):
     return base
 
 
+def replace(base, new):
+    """`base` (the whole grid's bounds) with the bounds of the fidelities `new` ran replaced by
+    `new`'s: a change to those fidelities alone, whose whole grid was run again (every scene,
+    configuration and frame size of `base`). Each replaced fidelity names its own commit
+    (`measured_on`, which rtsim states in the bound's basis); the others keep the file's, and
+    `replaced` lists the reruns."""
+    for k in ("scenes", "configs", "primary_sizes", "pt_sizes", "seed"):
+        if new["grid"][k] != base["grid"][k]:
+            sys.exit(f"REPLACE: the grid's {k} {new['grid'][k]} are not the file's {base['grid'][k]} (run the whole grid)")
+    for fid, b in new["bounds"].items():
+        base["bounds"][fid] = b | {"measured_on": new["measured_on"]}
+    base.setdefault("replaced", []).append({k: new[k] for k in ("measured_on", "date", "command")} | {"fidelities": list(new["bounds"])})
+    return base
+
+
 def command():
     """How to make this grid again: the settings that shape it, and the scenes; RTSIM and OUTDIR
     as placeholders (the paths of one machine say nothing elsewhere)."""
-    env = [f"{k}={os.environ[k]}" for k in ("PRIMARY_SIZES", "PT_SIZES", "CONFIGS", "SEED") if k in os.environ]
+    env = [f"{k}={os.environ[k]}" for k in ("PRIMARY_SIZES", "PT_SIZES", "CONFIGS", "SEED", "FIDS") if k in os.environ]
     return " ".join(env + ["scripts/bench_error_grid.py RTSIM OUTDIR"] + sys.argv[3:4])
 
 
@@ -167,6 +186,8 @@ if os.environ.get("EXTEND"):
     bounds = extend(json.load(open(os.environ["EXTEND"])), bounds)
 if os.environ.get("WIDEN"):
     bounds = widen(json.load(open(os.environ["WIDEN"])), bounds)
+if os.environ.get("REPLACE"):
+    bounds = replace(json.load(open(os.environ["REPLACE"])), bounds)
 with open(f"{out}/error_bounds.json", "w") as f:
     json.dump(bounds, f, indent=2)
     f.write("\n")

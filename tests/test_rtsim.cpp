@@ -2029,6 +2029,20 @@ TEST(RtsimError, EveryTimingRunStatesItsError) {
     EXPECT_EQ(nlohmann::json::parse(read_text(dir.file("t.json")))["timing"]["sampling"]["strata"], 30);
 }
 
+// A fidelity whose whole grid was run again after a change to it alone (scripts/bench_error_grid.py,
+// REPLACE) names its own commit; the others the file's.
+TEST(ErrorBounds, AReplacedFidelityNamesItsCommit) {
+    const auto b = rtu::ErrorBounds::parse(R"({"measured_on": "base", "grid": {"scenes": ["a"],
+        "configs": ["mobile"], "primary_sizes": [], "pt_sizes": [64]}, "bounds": {
+        "lt": {"pt": {"runs": 1, "worst": 0.01, "by_size": {"64": {"runs": 1, "worst": 0.01}}}},
+        "interval": {"measured_on": "new", "pt": {"runs": 1, "worst": 0.02, "by_size": {"64": {"runs": 1, "worst": 0.02}}}}}})");
+    EXPECT_EQ(b.measured_on_for("interval"), "new");
+    EXPECT_EQ(b.measured_on_for("lt"), "base");
+    const auto i = b.bound("interval", "pt", 64);
+    ASSERT_TRUE(i);
+    EXPECT_EQ(i->worst, 0.02);
+}
+
 // Frame sizes added to the error grid later (scripts/bench_error_grid.py, EXTEND) carry their own
 // scenes and commit, and a bound that takes one of them names them in its basis.
 TEST(ErrorBounds, AddedSizesNameTheirScenesAndCommit) {
