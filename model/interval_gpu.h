@@ -71,7 +71,8 @@ public:
     // units issue them (tlm/rt_unit.h): per_ray sectors per ray of a finished trace, of data no
     // cache holds, through the SM's L1 from the trace's end, one per cycle per SM.
     void set_shader_reads(const ShaderReads& reads);
-    // The cycle of the earliest scheduled node fetch (~0: none).
+    // The cycle of the next thing to run: the earliest scheduled node fetch, or the cycle before
+    // a queued response may drain (~0: none).
     uint64_t next_event() const;
     // Runs that fetch: its chunks, the node's tests, and the thread's next fetch. A trace whose
     // last thread is done is appended to `finished`. `slot`: the cycle the next trace may start
