@@ -103,15 +103,20 @@ IntervalGpu::Served IntervalGpu::read(uint32_t sm, uint64_t addr, uint64_t cycle
     return {done, true, r.dram};
 }
 
-void IntervalGpu::start_trace(uint32_t sm, const std::vector<WarpRay>& rays, uint64_t start, std::vector<Finished>& finished) {
-    uint32_t id;
-    if (!free_traces_.empty()) {
-        id = free_traces_.back();
-        free_traces_.pop_back();
-    } else {
-        id = uint32_t(traces_.size());
-        traces_.emplace_back();
+// Traces and the pools' records are reused: a free list each, so that a frame allocates only its peak in flight.
+template <class T>
+static uint32_t take(std::vector<T>& pool, std::vector<uint32_t>& free) {
+    if (free.empty()) {
+        pool.emplace_back();
+        return uint32_t(pool.size() - 1);
     }
+    const uint32_t id = free.back();
+    free.pop_back();
+    return id;
+}
+
+void IntervalGpu::start_trace(uint32_t sm, const std::vector<WarpRay>& rays, uint64_t start, std::vector<Finished>& finished) {
+    const uint32_t id = take(traces_, free_traces_);
     Trace& tr = traces_[id];
     tr.sm = sm;
     tr.start = tr.end = start;
@@ -243,18 +248,6 @@ void IntervalGpu::send_shader_read(uint32_t sm, uint64_t cycle) {
 // two-chunk node one cycle apart drained back to back instead of interleaved, which split
 // fetches AT coalesces (docs/interval.md).
 void IntervalGpu::queue_drain(uint32_t sm, uint64_t at, uint32_t wait) { drains_.push({at, next_drain_seq_++, sm, wait}); }
-
-// The pools' records are reused: a free list each, so that a frame allocates only its peak in flight.
-template <class T>
-static uint32_t take(std::vector<T>& pool, std::vector<uint32_t>& free) {
-    if (free.empty()) {
-        pool.emplace_back();
-        return uint32_t(pool.size() - 1);
-    }
-    const uint32_t id = free.back();
-    free.pop_back();
-    return id;
-}
 
 uint32_t IntervalGpu::new_fetch(uint64_t ready) {
     const uint32_t id = take(fetch_waits_, free_fetch_waits_);
